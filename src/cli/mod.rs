@@ -1,0 +1,62 @@
+//! Command-line interface: clap derive structs that only parse, and one function per
+//! command that calls the library and prints.
+
+mod bench;
+mod simulate;
+
+use clap::{Parser, Subcommand};
+use std::process::ExitCode;
+
+/// Simulate, fit and plan experiments on a Painleve-Appell friction rig.
+#[derive(Debug, Parser)]
+#[command(name = "appell", version, about)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Debug, Subcommand)]
+enum Command {
+    /// Simulate a scene and print its event timeline.
+    Simulate(simulate::Args),
+    /// Time the simulator on a scene (median of repeats).
+    Bench(bench::Args),
+}
+
+/// A failed command: bad input (exit code 2) or a run that could not finish (exit code 1).
+#[derive(Debug)]
+pub enum Failure {
+    /// The user's input is unusable: a file, a key, a value.
+    Input(anyhow::Error),
+    /// The input was fine but the computation failed (numerics, I/O on output).
+    Run(anyhow::Error),
+}
+
+impl Failure {
+    fn code(&self) -> u8 {
+        match self {
+            Failure::Input(_) => 2,
+            Failure::Run(_) => 1,
+        }
+    }
+}
+
+/// Parse arguments, run the command, print errors with their causes.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Simulate(args) => simulate::run(args),
+        Command::Bench(args) => bench::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(failure) => {
+            let (Failure::Input(e) | Failure::Run(e)) = &failure;
+            eprintln!("error: {e}");
+            for cause in e.chain().skip(1) {
+                eprintln!("  caused by: {cause}");
+            }
+            ExitCode::from(failure.code())
+        }
+    }
+}

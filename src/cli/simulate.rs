@@ -1,0 +1,58 @@
+//! `appell simulate SCENE.toml [--json] [--out FILE.csv]`.
+
+use super::Failure;
+use anyhow::anyhow;
+use appell::report;
+use appell::scene::Scene;
+use appell::sim::simulate;
+use std::path::PathBuf;
+
+/// Arguments of `appell simulate`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Scene file (TOML with [rig], [initial], [run] and optional [output]).
+    scene: PathBuf,
+    /// Print one JSON object instead of the timeline.
+    #[arg(long)]
+    json: bool,
+    /// Write the sampled trajectory to this CSV (needs output.frame_rate in the scene).
+    #[arg(long, value_name = "FILE.csv")]
+    out: Option<PathBuf>,
+}
+
+pub fn run(args: Args) -> Result<(), Failure> {
+    let mut scene = Scene::from_path(&args.scene).map_err(|e| Failure::Input(e.into()))?;
+    if args.out.is_some() && scene.output.frame_rate.is_none() {
+        // A trajectory was asked for on the command line: sample at a sensible default.
+        scene.output.frame_rate = Some(1000.0);
+    }
+    let sol = simulate(
+        &scene.rig,
+        &scene.initial,
+        scene.duration,
+        &scene.options,
+        &scene.request(),
+    )
+    .map_err(|e| {
+        Failure::Run(anyhow!(e).context(format!("simulating {}", args.scene.display())))
+    })?;
+    if let Some(path) = &args.out {
+        report::write_atomic(path, |w| {
+            report::write_trajectory_csv(w, &scene.rig, &scene, &sol)
+        })
+        .map_err(|e| Failure::Run(anyhow!(e).context(format!("writing {}", path.display()))))?;
+    }
+    if args.json {
+        println!("{}", report::simulation_json(&scene, &sol));
+    } else {
+        print!("{}", report::timeline(&scene, &sol));
+        if let Some(path) = &args.out {
+            println!(
+                "trajectory: {} samples written to {}",
+                sol.samples.len(),
+                path.display()
+            );
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,50 @@
+//! The rig and its physics: parameters, modes, contact forces and the regions where each
+//! model holds. Every formula of `../shared/PHYSICS.md` lives here once; the integrator, the
+//! fit, the planner and the region analysis all call these functions.
+
+mod forces;
+mod markers;
+mod mode;
+pub mod regions;
+mod rig;
+mod transition;
+
+pub use forces::{energy, momentum, Shorthands, SlideBranches, SlideDynamics};
+pub use markers::markers;
+pub use mode::{Direction, Mode};
+pub use rig::{Rig, RigError};
+pub use transition::{choose_at_rest, RestChoice};
+
+use num_dual::DualNum;
+
+/// A scalar the physics can be evaluated in: `f64`, or a dual number when the fit
+/// differentiates a run with respect to its parameters.
+pub trait Scalar: DualNum<f64> + Copy + Send + Sync {}
+impl<T: DualNum<f64> + Copy + Send + Sync> Scalar for T {}
+
+/// The state (x, theta, x', theta') in the paper's convention (y down, radians).
+pub type State<T> = [T; 4];
+
+/// Index of the slider position x in a [`State`].
+pub const X: usize = 0;
+/// Index of the rod angle theta in a [`State`].
+pub const THETA: usize = 1;
+/// Index of the slider velocity x' in a [`State`].
+pub const X_DOT: usize = 2;
+/// Index of the angular velocity theta' in a [`State`].
+pub const THETA_DOT: usize = 3;
+
+/// Real parts of a state, for reports and for decisions that must not depend on derivatives.
+pub fn re_state<T: Scalar>(y: &[T]) -> State<f64> {
+    [y[0].re(), y[1].re(), y[2].re(), y[3].re()]
+}
+
+/// Sign as +1/-1 with +1 for zero: the convention for sigma = sign(N) and s = sign(x').
+#[inline]
+pub fn sign(v: f64) -> f64 {
+    if v < 0.0 {
+        -1.0
+    } else {
+        1.0
+    }
+}

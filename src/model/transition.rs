@@ -1,0 +1,60 @@
+//! Which motion follows a state with the slider at rest (PHYSICS.md, "Transitions"): at t = 0,
+//! after a slide stops, and (by the loop) when a stick ends.
+
+use super::{sign, Direction, Mode, Rig, Shorthands, State};
+
+/// The motions consistent with a state whose slider is at rest.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RestChoice {
+    /// Exactly one consistent motion.
+    Unique(Mode),
+    /// Several consistent motions (only above mu*): the future is not unique.
+    Indeterminate {
+        /// Every consistent motion, stick first when it is one of them.
+        alternatives: Vec<Mode>,
+    },
+    /// No consistent motion was found (a state on the edge of the paradox band).
+    Inconsistent,
+}
+
+/// Choose the motion from rest: stick while the needed friction is within mu_s |N|
+/// (|c| <= mu_s |b|); otherwise slide in the direction s = sign(c) the slider accelerates
+/// without friction. Above mu* every candidate is checked for consistency (a slide from rest
+/// must accelerate in its own direction on a consistent branch).
+pub fn choose_at_rest(rig: &Rig<f64>, y: &State<f64>) -> RestChoice {
+    let sh = Shorthands::at(rig, y);
+    let stick_ok = sh.stick_margin(rig.mu_static) >= 0.0;
+    let slide_ok = |dir: Direction| {
+        let s = dir.sign();
+        let b = rig.slide_branches(&sh, s);
+        [(b.plus, 1.0), (b.minus, -1.0)]
+            .iter()
+            .any(|&(ok, sigma)| ok && s * rig.slide(&sh, s, sigma).x_ddot > 0.0)
+    };
+    let paradox_possible = sh.band_margin(rig.mu_kinetic) < 0.0;
+    if !paradox_possible {
+        if stick_ok {
+            return RestChoice::Unique(Mode::Stick);
+        }
+        let dir = Direction::of(sign(sh.c));
+        return if slide_ok(dir) {
+            RestChoice::Unique(Mode::Slide(dir))
+        } else {
+            RestChoice::Inconsistent
+        };
+    }
+    let mut alternatives = Vec::new();
+    if stick_ok {
+        alternatives.push(Mode::Stick);
+    }
+    for dir in [Direction::Positive, Direction::Negative] {
+        if slide_ok(dir) {
+            alternatives.push(Mode::Slide(dir));
+        }
+    }
+    match alternatives.len() {
+        0 => RestChoice::Inconsistent,
+        1 => RestChoice::Unique(alternatives[0]),
+        _ => RestChoice::Indeterminate { alternatives },
+    }
+}

@@ -1,0 +1,264 @@
+//! Scenes: a TOML file with a rig, an initial state, a run and what the run should produce.
+//! Key names are fixed (scripts use them); unknown keys are errors so typos never pass.
+
+use crate::model::{Rig, RigError, State};
+use crate::sim::{Method, Options, Request};
+use serde::Deserialize;
+use std::path::{Path, PathBuf};
+use thiserror::Error;
+
+/// The `[rig]` section. Also a file of its own (`RIG.toml`) for commands that take a rig.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RigSpec {
+    /// Slider mass (kg).
+    pub slider_mass: f64,
+    /// Bob mass (kg).
+    pub bob_mass: f64,
+    /// Rod length (m).
+    pub rod_length: f64,
+    /// Gravity (m/s^2).
+    pub gravity: f64,
+    /// Kinetic friction coefficient.
+    pub mu_kinetic: f64,
+    /// Static friction coefficient (defaults to `mu_kinetic`).
+    pub mu_static: Option<f64>,
+}
+
+impl RigSpec {
+    /// The validated rig.
+    pub fn rig(&self) -> Result<Rig<f64>, RigError> {
+        Rig::new(
+            self.slider_mass,
+            self.bob_mass,
+            self.rod_length,
+            self.gravity,
+            self.mu_kinetic,
+            self.mu_static,
+        )
+    }
+}
+
+/// The `[initial]` section: the state at t = 0 in PHYSICS.md's convention (radians, y down).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct InitialSpec {
+    /// Slider position (m).
+    pub x: f64,
+    /// Rod angle from the rail's +x direction, y down (rad): pi/2 hangs straight down.
+    pub theta: f64,
+    /// Slider velocity (m/s).
+    pub x_dot: f64,
+    /// Angular velocity (rad/s).
+    pub theta_dot: f64,
+}
+
+/// The `[run]` section.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RunSpec {
+    /// Duration (s).
+    pub duration: f64,
+    /// Relative tolerance (default 1e-10).
+    pub rtol: Option<f64>,
+    /// Absolute tolerance (default 1e-12).
+    pub atol: Option<f64>,
+    /// `dop853` (default) or `dp5`.
+    pub method: Option<Method>,
+    /// Step limit (default 1e6).
+    pub max_steps: Option<usize>,
+}
+
+/// The optional `[output]` section: what the run should produce besides events and the
+/// final state. Nothing here is computed unless asked for.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Default)]
+#[serde(deny_unknown_fields)]
+pub struct OutputSpec {
+    /// Sample the trajectory at this frame rate (Hz).
+    pub frame_rate: Option<f64>,
+    /// Add marker positions (rail frame, metres, y up) to the samples.
+    #[serde(default)]
+    pub markers: bool,
+    /// Add energy and friction work to the samples (integrates the friction work).
+    #[serde(default)]
+    pub energy: bool,
+}
+
+/// A whole scene file as written.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SceneFile {
+    /// `[rig]`.
+    pub rig: RigSpec,
+    /// `[initial]`.
+    pub initial: InitialSpec,
+    /// `[run]`.
+    pub run: RunSpec,
+    /// `[output]`.
+    #[serde(default)]
+    pub output: OutputSpec,
+}
+
+/// A validated scene, ready to simulate.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Scene {
+    /// The rig.
+    pub rig: Rig<f64>,
+    /// State at t = 0.
+    pub initial: State<f64>,
+    /// Duration (s).
+    pub duration: f64,
+    /// Integrator options.
+    pub options: Options,
+    /// What to produce.
+    pub output: OutputSpec,
+}
+
+/// A scene that cannot be used, with the file and the key at fault.
+#[derive(Debug, Error)]
+pub enum SceneError {
+    /// The file could not be read.
+    #[error("{path}: cannot read: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+    /// TOML syntax, a missing or unknown key, or a wrong type (the message names the key and
+    /// line).
+    #[error("{path}: {message}")]
+    Parse {
+        /// The file.
+        path: PathBuf,
+        /// The parser's message with line and key.
+        message: String,
+    },
+    /// A value outside its range.
+    #[error("{path}: {message}")]
+    Invalid {
+        /// The file.
+        path: PathBuf,
+        /// What is wrong, naming the key.
+        message: String,
+    },
+}
+
+fn check(path: &Path, ok: bool, key: &str, expected: &str, value: f64) -> Result<(), SceneError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(SceneError::Invalid {
+            path: path.to_owned(),
+            message: format!("{key} must be {expected}, got {value}"),
+        })
+    }
+}
+
+impl Scene {
+    /// Read and validate a scene file.
+    pub fn from_path(path: &Path) -> Result<Self, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        Self::from_toml(&text, path)
+    }
+
+    /// Parse and validate scene text; `path` only labels errors.
+    pub fn from_toml(text: &str, path: &Path) -> Result<Self, SceneError> {
+        let file: SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
+            path: path.to_owned(),
+            message: e.to_string().trim_end().to_owned(),
+        })?;
+        file.validate(path)
+    }
+}
+
+impl SceneFile {
+    /// Check every value, naming the first bad key.
+    pub fn validate(&self, path: &Path) -> Result<Scene, SceneError> {
+        let rig = self.rig.rig().map_err(|e| SceneError::Invalid {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
+        let i = &self.initial;
+        for (key, v) in [
+            ("initial.x", i.x),
+            ("initial.theta", i.theta),
+            ("initial.x_dot", i.x_dot),
+            ("initial.theta_dot", i.theta_dot),
+        ] {
+            check(path, v.is_finite(), key, "a finite number", v)?;
+        }
+        let r = &self.run;
+        check(
+            path,
+            r.duration.is_finite() && r.duration > 0.0,
+            "run.duration",
+            "a finite number > 0",
+            r.duration,
+        )?;
+        let defaults = Options::default();
+        let rtol = r.rtol.unwrap_or(defaults.rtol);
+        let atol = r.atol.unwrap_or(defaults.atol);
+        check(
+            path,
+            rtol > 0.0 && rtol < 1.0,
+            "run.rtol",
+            "in (0, 1)",
+            rtol,
+        )?;
+        check(
+            path,
+            atol > 0.0 && atol.is_finite(),
+            "run.atol",
+            "a finite number > 0",
+            atol,
+        )?;
+        if let Some(fr) = self.output.frame_rate {
+            check(
+                path,
+                fr.is_finite() && fr > 0.0,
+                "output.frame_rate",
+                "a finite number > 0 (Hz)",
+                fr,
+            )?;
+        }
+        Ok(Scene {
+            rig,
+            initial: [i.x, i.theta, i.x_dot, i.theta_dot],
+            duration: r.duration,
+            options: Options {
+                rtol,
+                atol,
+                method: r.method.unwrap_or_default(),
+                max_steps: r.max_steps.unwrap_or(defaults.max_steps),
+                ..defaults
+            },
+            output: self.output,
+        })
+    }
+}
+
+impl Scene {
+    /// Frame times 0, 1/rate, ... up to the duration, when a frame rate is asked for.
+    pub fn frame_times(&self) -> Vec<f64> {
+        match self.output.frame_rate {
+            Some(rate) => {
+                let n = (self.duration * rate + 1e-9).floor() as usize;
+                (0..=n).map(|k| k as f64 / rate).collect()
+            }
+            None => Vec::new(),
+        }
+    }
+
+    /// What the simulator must compute for this scene: samples only when a trajectory is
+    /// asked for, friction work only when energy is.
+    pub fn request(&self) -> Request {
+        Request {
+            sample_times: self.frame_times(),
+            friction_work: self.output.energy,
+        }
+    }
+}

@@ -1,0 +1,247 @@
+//! Simulation: a scene's rig and initial state is the problem, a Runge-Kutta method the
+//! algorithm, and a run returns a [`Solution`] with its events, samples and statistics.
+
+mod hybrid;
+pub mod rk;
+pub mod tableau;
+
+pub use hybrid::simulate;
+
+use crate::model::{Mode, State};
+use serde::Serialize;
+use std::fmt;
+use thiserror::Error;
+
+/// The integration method of a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, Serialize)]
+pub enum Method {
+    /// Dormand-Prince 5(4) with 4th-order dense output.
+    #[serde(rename = "dp5")]
+    Dp5,
+    /// DOP853, 8th order with 7th-order dense output (the default: cheapest at tight tolerances).
+    #[default]
+    #[serde(rename = "dop853")]
+    Dop853,
+}
+
+impl Method {
+    /// Every method, for benchmarks and convergence tests.
+    pub const ALL: [Method; 2] = [Method::Dp5, Method::Dop853];
+
+    /// The name used in scenes and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Dp5 => "dp5",
+            Method::Dop853 => "dop853",
+        }
+    }
+}
+
+/// How accurately and how far a run may go.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Options {
+    /// Relative tolerance of the local error.
+    pub rtol: f64,
+    /// Absolute tolerance of the local error.
+    pub atol: f64,
+    /// Integration method.
+    pub method: Method,
+    /// Most steps (accepted and rejected) before the run fails.
+    pub max_steps: usize,
+    /// Most events before the run fails (guards against stick-slip chattering).
+    pub max_events: usize,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Options {
+            rtol: 1e-10,
+            atol: 1e-12,
+            method: Method::Dop853,
+            max_steps: 1_000_000,
+            max_events: 10_000,
+        }
+    }
+}
+
+/// What a run must produce besides its events and final state: nothing else is computed.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Request {
+    /// Times (s, ascending, within the run) at which to sample the state.
+    pub sample_times: Vec<f64>,
+    /// Integrate the friction work alongside the state (for energy balances).
+    pub friction_work: bool,
+}
+
+/// Why an event happened.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum EventKind {
+    /// Stick -> slide: the needed friction reached mu_s |N|.
+    Slip,
+    /// Slide -> stick: the slider stopped where static friction holds it.
+    Stick,
+    /// The slider stopped and slides back the other way.
+    Reversal,
+    /// The slider stopped for an instant and slides on in the same direction.
+    Continuation,
+    /// The rail reaction changed sign while sliding (the friction branch changes).
+    NormalFlip,
+    /// The sliding equation stopped having exactly one solution (Painleve paradox).
+    Paradox,
+}
+
+/// What the rig moves into at an event.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Outcome {
+    /// A mode of motion.
+    Mode(Mode),
+    /// The sliding equation has no consistent solution here.
+    Inconsistent,
+    /// Several consistent motions exist here; the listed ones.
+    Indeterminate(Vec<Mode>),
+}
+
+impl Outcome {
+    /// The name in timelines and JSON (`stick`, `slide+`, `slide-`, `inconsistent`,
+    /// `indeterminate`).
+    pub fn name(&self) -> &'static str {
+        match self {
+            Outcome::Mode(m) => m.name(),
+            Outcome::Inconsistent => "inconsistent",
+            Outcome::Indeterminate(_) => "indeterminate",
+        }
+    }
+}
+
+impl fmt::Display for Outcome {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Outcome::Indeterminate(alts) => {
+                let names: Vec<_> = alts.iter().map(|m| m.name()).collect();
+                write!(f, "indeterminate ({})", names.join(" | "))
+            }
+            other => f.write_str(other.name()),
+        }
+    }
+}
+
+/// A located mode transition (or paradox), with the state where it happened.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Event {
+    /// Time (s).
+    pub t: f64,
+    /// Mode before the event.
+    pub from: Mode,
+    /// What follows.
+    pub to: Outcome,
+    /// Why.
+    pub kind: EventKind,
+    /// State (x, theta, x', theta') at the event, after any reset of x'.
+    pub state: State<f64>,
+}
+
+/// Work counters of a run.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize)]
+pub struct Stats {
+    /// Accepted steps.
+    pub steps: usize,
+    /// Rejected steps.
+    pub rejected: usize,
+    /// Right-hand-side evaluations (stages, dense-output stages, initial-step probes).
+    pub rhs_evals: usize,
+    /// Events located.
+    pub events: usize,
+}
+
+/// One requested sample of the state.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample<T> {
+    /// Time (s).
+    pub t: f64,
+    /// State (x, theta, x', theta').
+    pub state: State<T>,
+    /// Mode at that time.
+    pub mode: Mode,
+    /// Friction work done up to this time (J, <= 0), when requested.
+    pub friction_work: Option<T>,
+}
+
+/// The result of a run.
+#[derive(Debug, Clone)]
+pub struct Solution<T> {
+    /// Events in time order.
+    pub events: Vec<Event>,
+    /// Requested samples, in the order of the requested times (times after an early stop are
+    /// missing).
+    pub samples: Vec<Sample<T>>,
+    /// Time the run ended: the scene's duration, or an unresolved paradox.
+    pub final_time: f64,
+    /// State at `final_time`.
+    pub final_state: State<T>,
+    /// Mode at `final_time`.
+    pub final_mode: Mode,
+    /// Friction work over the run (J), when requested.
+    pub friction_work: Option<T>,
+    /// Work counters.
+    pub stats: Stats,
+}
+
+impl<T> Solution<T> {
+    /// Whether the run stopped early at a paradox it does not resolve.
+    pub fn stopped_at_paradox(&self) -> bool {
+        self.events
+            .last()
+            .is_some_and(|e| !matches!(e.to, Outcome::Mode(_)))
+    }
+}
+
+/// A run that could not produce a trustworthy answer, with where it happened.
+#[derive(Debug, Error, PartialEq)]
+pub enum SimError {
+    /// The step size fell below what f64 time can resolve.
+    #[error("step size underflow (h = {h:e} s) at t = {t} s, state {state:?}; the motion is too stiff here (near the paradox band?) or the tolerances are too tight")]
+    StepSizeUnderflow {
+        /// Time of the failure.
+        t: f64,
+        /// Step size tried.
+        h: f64,
+        /// State (x, theta, x', theta').
+        state: State<f64>,
+    },
+    /// More steps than allowed.
+    #[error(
+        "more than {max} steps by t = {t} s, state {state:?}; raise the step limit or loosen rtol"
+    )]
+    TooManySteps {
+        /// Time of the failure.
+        t: f64,
+        /// The limit.
+        max: usize,
+        /// State.
+        state: State<f64>,
+    },
+    /// More events than allowed (chattering between stick and slide).
+    #[error(
+        "more than {max} events by t = {t} s, state {state:?}: the rig chatters between modes"
+    )]
+    TooManyEvents {
+        /// Time of the failure.
+        t: f64,
+        /// The limit.
+        max: usize,
+        /// State.
+        state: State<f64>,
+    },
+    /// A state or derivative became NaN or infinite.
+    #[error("non-finite value at t = {t} s, state {state:?}")]
+    NonFinite {
+        /// Time of the failure.
+        t: f64,
+        /// Last finite state.
+        state: State<f64>,
+    },
+    /// The input state or duration is unusable.
+    #[error("invalid run input: {0}")]
+    InvalidInput(String),
+}

@@ -1,0 +1,298 @@
+//! Embedded explicit Runge-Kutta steppers with dense output. A stepper only knows how to take
+//! one step, estimate its error and interpolate inside it; the hybrid loop owns step-size
+//! control, events and outputs.
+
+use super::tableau::*;
+use crate::model::Scalar;
+
+/// An autonomous ODE y' = f(y) of dimension `N`.
+pub trait OdeSystem<T, const N: usize> {
+    /// Write f(y) into `dy`.
+    fn rhs(&self, y: &[T; N], dy: &mut [T; N]);
+}
+
+/// One stepping method: init / step / accept / interpolate.
+pub trait Stepper<T: Scalar, const N: usize> {
+    /// Order of the error estimator; the step-size exponent is 1 / (order + 1).
+    const ERROR_ORDER: i32;
+
+    /// Start at `y`: evaluate f there.
+    fn reset<S: OdeSystem<T, N>>(&mut self, sys: &S, y: &[T; N]);
+
+    /// Attempt a step of size `h` from `y`; returns the new state and the scaled error norm
+    /// (accept when <= 1).
+    fn try_step<S: OdeSystem<T, N>>(
+        &mut self,
+        sys: &S,
+        y: &[T; N],
+        h: f64,
+        rtol: f64,
+        atol: f64,
+    ) -> ([T; N], f64);
+
+    /// f at the start of the current step.
+    fn f_start(&self) -> &[T; N];
+
+    /// f at the end of the last attempted step (FSAL).
+    fn f_end(&self) -> &[T; N];
+
+    /// Make the last attempted step the current one (its end becomes the next start).
+    fn accept(&mut self);
+
+    /// Prepare the interpolant of the last attempted step, from `y0` to `y1` with size `h`.
+    /// Costs extra f evaluations for some methods, so the loop calls it only when needed.
+    fn prepare_dense<S: OdeSystem<T, N>>(&mut self, sys: &S, y0: &[T; N], y1: &[T; N], h: f64);
+
+    /// The state at fraction `theta` in [0, 1] of the prepared step.
+    fn interpolate(&self, theta: f64) -> [T; N];
+
+    /// Right-hand-side evaluations so far.
+    fn rhs_evals(&self) -> usize;
+}
+
+#[inline]
+fn zero<T: Scalar, const N: usize>() -> [T; N] {
+    [T::from(0.0); N]
+}
+
+/// y0 + h * sum_j coef[j] k[j] over the first `n` stages.
+#[inline]
+fn combine<T: Scalar, const N: usize>(y0: &[T; N], h: f64, coef: &[f64], k: &[[T; N]]) -> [T; N] {
+    // A weighted sum first, then one scaling by h: fewer operations than scaling each stage,
+    // and branch-free so the compiler can vectorise over the state.
+    let mut acc = [T::from(0.0); N];
+    for (c, kj) in coef.iter().zip(k) {
+        for i in 0..N {
+            acc[i] += kj[i] * *c;
+        }
+    }
+    let mut out = *y0;
+    for i in 0..N {
+        out[i] += acc[i] * h;
+    }
+    out
+}
+
+/// Scale of the mixed absolute/relative tolerance per component (real parts only, so a dual
+/// run takes exactly the steps of the f64 run it differentiates).
+#[inline]
+fn scale<T: Scalar>(a: T, b: T, rtol: f64, atol: f64) -> f64 {
+    atol + rtol * a.re().abs().max(b.re().abs())
+}
+
+/// Dormand-Prince 5(4) with Shampine's 4th-order dense output (free: no extra stages).
+#[derive(Debug, Clone)]
+pub struct Dp5<T, const N: usize> {
+    k: [[T; N]; 7],
+    y0: [T; N],
+    h: f64,
+    evals: usize,
+}
+
+impl<T: Scalar, const N: usize> Default for Dp5<T, N> {
+    fn default() -> Self {
+        Dp5 {
+            k: [zero(); 7],
+            y0: zero(),
+            h: 0.0,
+            evals: 0,
+        }
+    }
+}
+
+impl<T: Scalar, const N: usize> Stepper<T, N> for Dp5<T, N> {
+    const ERROR_ORDER: i32 = 4;
+
+    fn reset<S: OdeSystem<T, N>>(&mut self, sys: &S, y: &[T; N]) {
+        sys.rhs(y, &mut self.k[0]);
+        self.evals += 1;
+    }
+
+    fn try_step<S: OdeSystem<T, N>>(
+        &mut self,
+        sys: &S,
+        y: &[T; N],
+        h: f64,
+        rtol: f64,
+        atol: f64,
+    ) -> ([T; N], f64) {
+        for s in 1..7 {
+            let ys = combine(y, h, &DP5_A[s][..s], &self.k[..s]);
+            let (_, rest) = self.k.split_at_mut(s);
+            sys.rhs(&ys, &mut rest[0]);
+        }
+        self.evals += 6;
+        // Row 6 of A is b: the stage-7 argument is the new state (FSAL).
+        let y1 = combine(y, h, &DP5_A[6], &self.k[..6]);
+        let mut acc = 0.0;
+        for i in 0..N {
+            let mut e = T::from(0.0);
+            for (j, ej) in DP5_E.iter().enumerate() {
+                if *ej != 0.0 {
+                    e += self.k[j][i] * *ej;
+                }
+            }
+            let r = h * e.re() / scale(y[i], y1[i], rtol, atol);
+            acc += r * r;
+        }
+        self.y0 = *y;
+        self.h = h;
+        (y1, (acc / N as f64).sqrt())
+    }
+
+    fn f_start(&self) -> &[T; N] {
+        &self.k[0]
+    }
+
+    fn f_end(&self) -> &[T; N] {
+        &self.k[6]
+    }
+
+    fn accept(&mut self) {
+        self.k[0] = self.k[6];
+    }
+
+    fn prepare_dense<S: OdeSystem<T, N>>(&mut self, _: &S, y0: &[T; N], _: &[T; N], h: f64) {
+        self.y0 = *y0;
+        self.h = h;
+    }
+
+    fn interpolate(&self, theta: f64) -> [T; N] {
+        let powers = [theta, theta * theta, theta.powi(3), theta.powi(4)];
+        let mut coef = [0.0; 7];
+        for (j, row) in DP5_P.iter().enumerate() {
+            coef[j] = row.iter().zip(&powers).map(|(p, t)| p * t).sum();
+        }
+        combine(&self.y0, self.h, &coef, &self.k)
+    }
+
+    fn rhs_evals(&self) -> usize {
+        self.evals
+    }
+}
+
+/// DOP853: 8th order with a 5th/3rd-order error estimate and 7th-order dense output, which
+/// costs three extra stages and so is built only for steps that need it.
+#[derive(Debug, Clone)]
+pub struct Dop853<T, const N: usize> {
+    k: [[T; N]; 16],
+    dense: [[T; N]; 7],
+    y0: [T; N],
+    evals: usize,
+}
+
+impl<T: Scalar, const N: usize> Default for Dop853<T, N> {
+    fn default() -> Self {
+        Dop853 {
+            k: [zero(); 16],
+            dense: [zero(); 7],
+            y0: zero(),
+            evals: 0,
+        }
+    }
+}
+
+impl<T: Scalar, const N: usize> Dop853<T, N> {
+    fn stage<S: OdeSystem<T, N>>(&mut self, sys: &S, y: &[T; N], h: f64, s: usize) {
+        let ys = combine(y, h, &DOP853_A[s][..s], &self.k[..s]);
+        let (_, rest) = self.k.split_at_mut(s);
+        sys.rhs(&ys, &mut rest[0]);
+    }
+}
+
+impl<T: Scalar, const N: usize> Stepper<T, N> for Dop853<T, N> {
+    const ERROR_ORDER: i32 = 7;
+
+    fn reset<S: OdeSystem<T, N>>(&mut self, sys: &S, y: &[T; N]) {
+        sys.rhs(y, &mut self.k[0]);
+        self.evals += 1;
+    }
+
+    fn try_step<S: OdeSystem<T, N>>(
+        &mut self,
+        sys: &S,
+        y: &[T; N],
+        h: f64,
+        rtol: f64,
+        atol: f64,
+    ) -> ([T; N], f64) {
+        for s in 1..12 {
+            self.stage(sys, y, h, s);
+        }
+        let y1 = combine(y, h, &DOP853_A[12][..12], &self.k[..12]);
+        let (_, rest) = self.k.split_at_mut(12);
+        sys.rhs(&y1, &mut rest[0]);
+        self.evals += 12;
+        // The combined 5th/3rd-order estimate of dop853.f: robust when either alone is small.
+        let (mut e5, mut e3) = (0.0, 0.0);
+        for i in 0..N {
+            let (mut a5, mut a3) = (0.0, 0.0);
+            for j in 0..13 {
+                let kj = self.k[j][i].re();
+                a5 += DOP853_E5[j] * kj;
+                a3 += DOP853_E3[j] * kj;
+            }
+            let sc = scale(y[i], y1[i], rtol, atol);
+            e5 += (a5 / sc) * (a5 / sc);
+            e3 += (a3 / sc) * (a3 / sc);
+        }
+        let err = if e5 == 0.0 && e3 == 0.0 {
+            0.0
+        } else {
+            h.abs() * e5 / ((e5 + 0.01 * e3) * N as f64).sqrt()
+        };
+        (y1, err)
+    }
+
+    fn f_start(&self) -> &[T; N] {
+        &self.k[0]
+    }
+
+    fn f_end(&self) -> &[T; N] {
+        &self.k[12]
+    }
+
+    fn accept(&mut self) {
+        self.k[0] = self.k[12];
+    }
+
+    fn prepare_dense<S: OdeSystem<T, N>>(&mut self, sys: &S, y0: &[T; N], y1: &[T; N], h: f64) {
+        for s in 13..16 {
+            self.stage(sys, y0, h, s);
+        }
+        self.evals += 3;
+        let mut dy = *y1;
+        for i in 0..N {
+            dy[i] -= y0[i];
+        }
+        let (f0, f1) = (&self.k[0], &self.k[12]);
+        for i in 0..N {
+            self.dense[0][i] = dy[i];
+            self.dense[1][i] = f0[i] * h - dy[i];
+            self.dense[2][i] = dy[i] * 2.0 - (f1[i] + f0[i]) * h;
+        }
+        for (r, drow) in DOP853_D.iter().enumerate() {
+            self.dense[3 + r] = combine(&zero(), h, drow, &self.k);
+        }
+        self.y0 = *y0;
+    }
+
+    fn interpolate(&self, theta: f64) -> [T; N] {
+        // Horner-like evaluation alternating theta and (1 - theta), as in dop853.f contd8.
+        let mut y = zero::<T, N>();
+        for (idx, f) in self.dense.iter().rev().enumerate() {
+            let factor = if idx % 2 == 0 { theta } else { 1.0 - theta };
+            for i in 0..N {
+                y[i] = (y[i] + f[i]) * factor;
+            }
+        }
+        for i in 0..N {
+            y[i] += self.y0[i];
+        }
+        y
+    }
+
+    fn rhs_evals(&self) -> usize {
+        self.evals
+    }
+}
