@@ -6,8 +6,8 @@ use super::{
     Event, EventKind, Method, Options, Outcome, Request, Sample, SimError, Solution, Stats,
 };
 use crate::model::{
-    choose_at_rest, re_state, regions, Direction, Mode, RestChoice, Rig, Scalar, Shorthands, State,
-    X_DOT,
+    choose_at_rest, re_state, regions, sign, Direction, Mode, RestChoice, Rig, Scalar, Shorthands,
+    State, X_DOT,
 };
 use num_dual::Dual64;
 use std::any::TypeId;
@@ -264,17 +264,20 @@ struct Switch {
     sigma: f64,
 }
 
+/// The paradox met by a state: at rest, the consistent motions from rest; while sliding in
+/// `dir`, the sign rule of PHYSICS.md (inside the band two solutions when sign(Q) =
+/// sign(s a), none otherwise), which stays well defined on the band edge itself.
 fn paradox(rig: &Rig<f64>, y: &State<f64>, dir: Direction) -> Outcome {
-    match choose_at_rest(rig, &[y[0], y[1], 0.0, y[3]]) {
-        RestChoice::Indeterminate { alternatives } => Outcome::Indeterminate(alternatives),
-        _ => {
-            let sh = Shorthands::at(rig, y);
-            if rig.slide_branches(&sh, dir.sign()).count() == 2 {
-                Outcome::Indeterminate(vec![Mode::Slide(dir)])
-            } else {
-                Outcome::Inconsistent
-            }
+    if y[X_DOT] == 0.0 {
+        if let RestChoice::Indeterminate { alternatives } = choose_at_rest(rig, y) {
+            return Outcome::Indeterminate(alternatives);
         }
+    }
+    let sh = Shorthands::at(rig, y);
+    if sign(sh.q) == sign(dir.sign() * sh.a) {
+        Outcome::Indeterminate(vec![Mode::Slide(dir)])
+    } else {
+        Outcome::Inconsistent
     }
 }
 
@@ -432,7 +435,7 @@ where
         ));
     }
     let times = &request.sample_times;
-    if times.windows(2).any(|w| !(w[0] <= w[1])) || times.iter().any(|t| !t.is_finite()) {
+    if times.windows(2).any(|w| w[0].partial_cmp(&w[1]) == Some(std::cmp::Ordering::Greater)) || times.iter().any(|t| !t.is_finite()) {
         return Err(SimError::InvalidInput(
             "sample times must be finite and ascending".into(),
         ));

@@ -2,6 +2,9 @@
 //! one step, estimate its error and interpolate inside it; the hybrid loop owns step-size
 //! control, events and outputs.
 
+// Index loops over the state components read like the formulas they implement.
+#![allow(clippy::needless_range_loop)]
+
 use super::tableau::*;
 use crate::model::Scalar;
 
@@ -294,5 +297,65 @@ impl<T: Scalar, const N: usize> Stepper<T, N> for Dop853<T, N> {
 
     fn rhs_evals(&self) -> usize {
         self.evals
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// y'' = -y written as a system; exact solution (cos t, -sin t).
+    struct Oscillator;
+    impl OdeSystem<f64, 2> for Oscillator {
+        fn rhs(&self, y: &[f64; 2], dy: &mut [f64; 2]) {
+            dy[0] = y[1];
+            dy[1] = -y[0];
+        }
+    }
+
+    /// Error of one step of size h and of the interpolant inside it, against the exact flow.
+    fn one_step<M: Stepper<f64, 2> + Default>(h: f64) -> (f64, f64) {
+        let mut m = M::default();
+        let y0 = [1.0, 0.0];
+        m.reset(&Oscillator, &y0);
+        let (y1, _) = m.try_step(&Oscillator, &y0, h, 1e-6, 1e-6);
+        m.prepare_dense(&Oscillator, &y0, &y1, h);
+        let step_err = (y1[0] - h.cos()).abs();
+        let dense_err = (0..=10)
+            .map(|k| {
+                let th = k as f64 / 10.0;
+                (m.interpolate(th)[0] - (th * h).cos()).abs()
+            })
+            .fold(0.0, f64::max);
+        (step_err, dense_err)
+    }
+
+    /// Local errors shrink like h^(p+1): halving h divides the step error by about 2^(p+1)
+    /// (order 5 and 8) and the dense error by 2^(q+1) (order 4 and 7).
+    #[test]
+    fn local_orders_of_steps_and_dense_output() {
+        let ratio = |a: f64, b: f64| (a / b).log2();
+        let (s1, d1) = one_step::<Dp5<f64, 2>>(0.2);
+        let (s2, d2) = one_step::<Dp5<f64, 2>>(0.1);
+        assert!(ratio(s1, s2) > 5.5, "dp5 step order {}", ratio(s1, s2));
+        assert!(ratio(d1, d2) > 4.5, "dp5 dense order {}", ratio(d1, d2));
+        let (s1, d1) = one_step::<Dop853<f64, 2>>(0.4);
+        let (s2, d2) = one_step::<Dop853<f64, 2>>(0.2);
+        assert!(ratio(s1, s2) > 8.5, "dop853 step order {}", ratio(s1, s2));
+        assert!(ratio(d1, d2) > 7.5, "dop853 dense order {}", ratio(d1, d2));
+    }
+
+    /// The interpolant reproduces both ends of the step.
+    #[test]
+    fn dense_output_matches_step_ends() {
+        let mut m = Dop853::<f64, 2>::default();
+        let y0 = [1.0, 0.0];
+        m.reset(&Oscillator, &y0);
+        let (y1, _) = m.try_step(&Oscillator, &y0, 0.3, 1e-6, 1e-6);
+        m.prepare_dense(&Oscillator, &y0, &y1, 0.3);
+        for i in 0..2 {
+            assert!((m.interpolate(0.0)[i] - y0[i]).abs() < 1e-15);
+            assert!((m.interpolate(1.0)[i] - y1[i]).abs() < 1e-15);
+        }
     }
 }

@@ -5,6 +5,9 @@
 //! Norsett and Wanner, "Solving ODEs I", 2nd ed.) with its 7th-order dense output. The
 //! decimal values are the published ones (as in Hairer's dop853.f and SciPy's tables).
 
+// The published decimals are kept as printed, so they can be checked against the source.
+#![allow(clippy::excessive_precision)]
+
 /// Dormand-Prince 5(4): nodes.
 pub const DP5_C: [f64; 7] = [0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0];
 

@@ -1,0 +1,120 @@
+//! `appell simulate` as a user runs it: output shape and clear errors for bad scenes.
+
+use std::process::Command;
+
+fn appell(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_appell"))
+        .args(args)
+        .output()
+        .expect("runs")
+}
+
+fn scene_with(replace: &str, with: &str) -> std::path::PathBuf {
+    let base = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/configs/paper_rest_horizontal.toml"
+    ))
+    .unwrap();
+    assert!(base.contains(replace), "fixture lacks {replace}");
+    let text = base.replacen(replace, with, 1);
+    let dir = std::env::temp_dir().join(format!("appell-test-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let path = dir.join(format!("scene-{:x}.toml", text.len() * 31 + with.len()));
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+#[test]
+fn json_has_events_final_and_stats() {
+    let out = appell(&[
+        "simulate",
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/configs/paper_rest_horizontal.toml"
+        ),
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let ev = v["events"].as_array().unwrap();
+    assert_eq!(ev[0]["from"], "stick");
+    assert_eq!(ev[0]["to"], "slide+");
+    assert!((ev[0]["t"].as_f64().unwrap() - 0.0868).abs() < 1e-4);
+    for key in ["x", "theta", "x_dot", "theta_dot"] {
+        assert!(v["final"][key].is_f64());
+    }
+    for key in ["steps", "rejected", "rhs_evals"] {
+        assert!(v["stats"][key].as_u64().unwrap() > 0 || key == "rejected");
+    }
+}
+
+#[test]
+fn trajectory_csv_has_markers_at_rod_length() {
+    let scene = scene_with(
+        "[run]",
+        "[output]\nframe_rate = 100.0\nmarkers = true\nenergy = true\n\n[run]",
+    );
+    let out_csv = scene.with_extension("csv");
+    let out = appell(&[
+        "simulate",
+        scene.to_str().unwrap(),
+        "--out",
+        out_csv.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut rd = csv::Reader::from_path(&out_csv).unwrap();
+    let headers = rd.headers().unwrap().clone();
+    let col = |name: &str| headers.iter().position(|h| h == name).unwrap();
+    let mut rows = 0;
+    for rec in rd.records() {
+        let rec = rec.unwrap();
+        let f = |name: &str| rec[col(name)].parse::<f64>().unwrap();
+        let d =
+            ((f("bob_x") - f("slider_x")).powi(2) + (f("bob_y") - f("slider_y")).powi(2)).sqrt();
+        assert!((d - 0.3).abs() < 1e-12);
+        assert!(f("bob_y") <= 1e-12, "bob below the rail in a y-up frame");
+        rows += 1;
+    }
+    assert_eq!(rows, 201);
+}
+
+#[test]
+fn bad_scenes_name_the_key_and_exit_2() {
+    let cases = [
+        ("slider_mass = 0.10", "slider_mass = -0.10", "slider_mass"),
+        ("mu_static = 0.35", "mu_static = 0.2", "mu_static"),
+        ("duration = 2.0", "", "duration"),
+        ("theta = 0.0", "theta = 0.0\nphi = 1.0", "phi"),
+        ("x_dot = 0.0", "x_dot = nan", "x_dot"),
+        ("rtol = 1e-10", "rtol = \"tight\"", "rtol"),
+    ];
+    for (from, to, key) in cases {
+        let path = scene_with(from, to);
+        let out = appell(&["simulate", path.to_str().unwrap()]);
+        assert_eq!(
+            out.status.code(),
+            Some(2),
+            "{to}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(
+            err.contains(key),
+            "error for `{to}` should name `{key}`: {err}"
+        );
+        assert!(
+            err.contains(path.file_name().unwrap().to_str().unwrap()),
+            "names the file: {err}"
+        );
+    }
+    let out = appell(&["simulate", "/nonexistent/scene.toml"]);
+    assert_eq!(out.status.code(), Some(2));
+}

@@ -1,0 +1,119 @@
+//! Shared fixtures and independent oracles for the integration tests.
+
+use appell::model::{Rig, State};
+use appell::sim::{simulate, Method, Options, Request, Solution};
+
+/// Run a rig with given tolerance and method, asking for `request`.
+pub fn run(
+    rig: &Rig<f64>,
+    y0: State<f64>,
+    t_end: f64,
+    rtol: f64,
+    method: Method,
+    request: &Request,
+) -> Solution<f64> {
+    let options = Options {
+        rtol,
+        atol: rtol * 1e-2,
+        method,
+        ..Options::default()
+    };
+    simulate(rig, &y0, t_end, &options, request).expect("simulation succeeds")
+}
+
+/// Complete elliptic integral of the first kind K(k) by the arithmetic-geometric mean.
+pub fn elliptic_k(k: f64) -> f64 {
+    let (mut a, mut b) = (1.0, (1.0 - k * k).sqrt());
+    for _ in 0..40 {
+        let (an, bn) = (0.5 * (a + b), (a * b).sqrt());
+        a = an;
+        b = bn;
+    }
+    std::f64::consts::PI / (2.0 * a)
+}
+
+/// The sliding-rod model written independently of the library, from the equations of motion
+/// of PHYSICS.md as a 3x3 linear system in (x'', theta'', N) with F = -mu s sigma N,
+/// solved for each sigma and kept where sign(N) = sigma. Returns (x'', theta'').
+pub fn slide_accel_oracle(rig: &Rig<f64>, y: &[f64; 4], s: f64) -> (f64, f64) {
+    use nalgebra::{Matrix3, Vector3};
+    let (m1, m2, l, g, mu) = (
+        rig.slider_mass,
+        rig.bob_mass,
+        rig.rod_length,
+        rig.gravity,
+        rig.mu_kinetic,
+    );
+    let (th, w) = (y[1], y[3]);
+    let (sn, cs) = th.sin_cos();
+    let mut found = None;
+    for sigma in [1.0, -1.0] {
+        let a = Matrix3::new(
+            m1 + m2,
+            -m2 * l * sn,
+            mu * s * sigma,
+            -sn,
+            l,
+            0.0,
+            0.0,
+            -m2 * l * cs,
+            1.0,
+        );
+        let rhs = Vector3::new(
+            m2 * l * cs * w * w,
+            g * cs,
+            -m2 * l * sn * w * w - (m1 + m2) * g,
+        );
+        let sol = a.lu().solve(&rhs).expect("regular system");
+        if sol[2] * sigma >= 0.0 {
+            assert!(
+                found.is_none(),
+                "oracle found two solutions: paradox regime"
+            );
+            found = Some((sol[0], sol[1]));
+        }
+    }
+    found.expect("oracle found a consistent sliding solution")
+}
+
+/// Classical fixed-step RK4 on the oracle's sliding model from `y0` until x' reaches zero;
+/// the crossing is located on the cubic Hermite interpolant of x' (using x'' as slope).
+pub fn oracle_slide_until_stop(rig: &Rig<f64>, y0: [f64; 4], s: f64, h: f64) -> (f64, [f64; 4]) {
+    let f = |y: &[f64; 4]| {
+        let (xdd, tdd) = slide_accel_oracle(rig, y, s);
+        [y[2], y[3], xdd, tdd]
+    };
+    let add =
+        |y: &[f64; 4], k: &[f64; 4], c: f64| std::array::from_fn::<f64, 4, _>(|i| y[i] + c * k[i]);
+    let (mut t, mut y) = (0.0, y0);
+    loop {
+        let k1 = f(&y);
+        let k2 = f(&add(&y, &k1, h / 2.0));
+        let k3 = f(&add(&y, &k2, h / 2.0));
+        let k4 = f(&add(&y, &k3, h));
+        let y1: [f64; 4] =
+            std::array::from_fn(|i| y[i] + h / 6.0 * (k1[i] + 2.0 * k2[i] + 2.0 * k3[i] + k4[i]));
+        if y1[2] * s <= 0.0 {
+            let (v0, v1, a0, a1) = (y[2], y1[2], k1[2] * h, f(&y1)[2] * h);
+            let hermite = |u: f64| {
+                let (u2, u3) = (u * u, u * u * u);
+                (2.0 * u3 - 3.0 * u2 + 1.0) * v0
+                    + (u3 - 2.0 * u2 + u) * a0
+                    + (-2.0 * u3 + 3.0 * u2) * v1
+                    + (u3 - u2) * a1
+            };
+            let (mut lo, mut hi) = (0.0, 1.0);
+            for _ in 0..80 {
+                let mid = 0.5 * (lo + hi);
+                if hermite(mid) * s > 0.0 {
+                    lo = mid;
+                } else {
+                    hi = mid;
+                }
+            }
+            return (t + lo * h, y);
+        }
+        t += h;
+        y = y1;
+    }
+}

@@ -1,0 +1,5 @@
+//! Integration tests: one binary, shared helpers, one module per capability.
+
+mod cli_simulate;
+mod helpers;
+mod simulate_oracles;

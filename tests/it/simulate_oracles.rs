@@ -1,0 +1,381 @@
+//! The simulator against physics: energy balance, conservation laws, the exact pendulum,
+//! mirror symmetry, closed forms and an independently computed event timeline.
+
+use crate::helpers::*;
+use appell::model::{energy, momentum, regions, Mode, Rig, Shorthands};
+use appell::sim::{simulate, EventKind, Method, Options, Outcome, Request, SimError};
+use std::f64::consts::{FRAC_PI_2, PI};
+
+fn unequal_rig(mu: f64) -> Rig<f64> {
+    Rig::new(0.5, 0.2, 0.3, 9.81, mu, Some(mu * 1.2)).unwrap()
+}
+
+/// dE/dt = F x' integrated: E(t) - E(0) equals the friction work along the whole run,
+/// through every stick-slip transition, for both methods and several rigs.
+#[test]
+fn energy_change_equals_friction_work() {
+    let cases = [
+        (Rig::paper(0.35), [0.0, 0.0, 0.0, 0.0]),
+        (unequal_rig(0.12), [0.0, FRAC_PI_2 - 0.9, 0.0, 0.0]),
+        (Rig::paper(0.2), [0.01, 0.4, -0.3, 5.0]),
+    ];
+    for (rig, y0) in cases {
+        for method in Method::ALL {
+            let req = Request {
+                sample_times: (0..=40).map(|k| k as f64 * 0.05).collect(),
+                friction_work: true,
+            };
+            let sol = run(&rig, y0, 2.0, 1e-12, method, &req);
+            assert!(
+                sol.events.len() >= 2,
+                "the case should stick and slip: {:?}",
+                sol.events
+            );
+            let e0 = energy(&rig, &y0);
+            let work = sol.friction_work.unwrap();
+            assert!(work < 0.0, "friction dissipates");
+            for s in &sol.samples {
+                let de = energy(&rig, &s.state) - e0;
+                let w = s.friction_work.unwrap();
+                assert!(
+                    (de - w).abs() <= 1e-9 * work.abs().max(1e-3),
+                    "{method:?} t={} dE={de} W={w}",
+                    s.t
+                );
+            }
+        }
+    }
+}
+
+/// With mu = 0 the slider never sticks (except at equilibrium) and horizontal momentum is
+/// conserved; energy is conserved too.
+#[test]
+fn frictionless_conserves_momentum_and_energy() {
+    let rig = Rig::paper(0.0);
+    for y0 in [
+        [0.0, 0.3, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 0.0],
+        [0.1, 1.0, 0.4, -3.0],
+    ] {
+        let req = Request {
+            sample_times: (0..=100).map(|k| k as f64 * 0.03).collect(),
+            friction_work: false,
+        };
+        let sol = run(&rig, y0, 3.0, 1e-11, Method::Dop853, &req);
+        let (p0, e0) = (momentum(&rig, &y0), energy(&rig, &y0));
+        for s in &sol.samples {
+            assert!(
+                (momentum(&rig, &s.state) - p0).abs() < 1e-9,
+                "t={} p={}",
+                s.t,
+                momentum(&rig, &s.state)
+            );
+            assert!((energy(&rig, &s.state) - e0).abs() < 1e-9);
+            if s.t > 0.0 {
+                assert!(
+                    matches!(s.mode, Mode::Slide(_)),
+                    "frictionless slider is never stuck (t={})",
+                    s.t
+                );
+            }
+        }
+    }
+}
+
+/// A stuck pendulum released from rest at amplitude A reaches the mirror angle with zero
+/// angular velocity after half its exact period 2 sqrt(l/g) K(sin(A/2)).
+#[test]
+fn stuck_pendulum_matches_elliptic_period() {
+    // Friction well above the needed ratio (below mu* = 2.83 so no paradox): never slips.
+    let rig = Rig::paper(2.5);
+    for amplitude in [0.3_f64, 1.2, 2.5] {
+        let half =
+            2.0 * (rig.rod_length / rig.gravity).sqrt() * elliptic_k((amplitude / 2.0).sin());
+        let y0 = [0.0, FRAC_PI_2 - amplitude, 0.0, 0.0];
+        let sol = run(&rig, y0, half, 1e-12, Method::Dop853, &Request::default());
+        assert!(sol.events.is_empty(), "A={amplitude}: {:?}", sol.events);
+        assert_eq!(sol.final_mode, Mode::Stick);
+        let y = sol.final_state;
+        assert!(
+            (y[1] - (FRAC_PI_2 + amplitude)).abs() < 1e-9,
+            "A={amplitude}: theta={}",
+            y[1]
+        );
+        assert!(y[3].abs() < 1e-8, "A={amplitude}: w={}", y[3]);
+    }
+}
+
+/// (x, theta, x', w) -> (-x, pi - theta, -x', -w) maps motions to motions: the event times
+/// agree and slide directions swap.
+#[test]
+fn mirror_symmetry_of_events() {
+    for (rig, y0) in [
+        (Rig::paper(0.3), [0.02, 0.2, 0.1, 2.0]),
+        (unequal_rig(0.15), [0.0, 0.5, 0.0, -1.0]),
+    ] {
+        let a = run(&rig, y0, 2.0, 1e-11, Method::Dop853, &Request::default());
+        let m = [-y0[0], PI - y0[1], -y0[2], -y0[3]];
+        let b = run(&rig, m, 2.0, 1e-11, Method::Dop853, &Request::default());
+        assert!(a.events.len() >= 3);
+        assert_eq!(a.events.len(), b.events.len());
+        for (ea, eb) in a.events.iter().zip(&b.events) {
+            assert!((ea.t - eb.t).abs() < 1e-9, "{} vs {}", ea.t, eb.t);
+            assert_eq!(ea.from.mirrored(), eb.from);
+            let Outcome::Mode(ma) = ea.to else { panic!() };
+            assert_eq!(Outcome::Mode(ma.mirrored()), eb.to);
+            assert!((ea.state[0] + eb.state[0]).abs() < 1e-9);
+            assert!((ea.state[1] - (PI - eb.state[1])).abs() < 1e-9);
+        }
+    }
+}
+
+/// mu* = 2 sqrt(r (1 + r)) equals the minimum over theta of D / |a| found numerically.
+#[test]
+fn critical_friction_matches_numerical_minimum() {
+    for r in [0.05, 0.1, 0.5, 1.0, 2.0, 7.0] {
+        let rig = Rig::new(r, 1.0, 0.3, 9.81, 0.0, None).unwrap();
+        let ratio = |th: f64| {
+            let sh = Shorthands::new(&rig, th, 0.0);
+            sh.d / sh.a.abs()
+        };
+        // Coarse grid, then golden-section refinement.
+        let n = 2000;
+        let k = (1..n)
+            .min_by(|&i, &j| {
+                ratio(i as f64 / n as f64 * FRAC_PI_2)
+                    .total_cmp(&ratio(j as f64 / n as f64 * FRAC_PI_2))
+            })
+            .unwrap();
+        let (mut lo, mut hi) = (
+            (k - 1) as f64 / n as f64 * FRAC_PI_2,
+            (k + 1) as f64 / n as f64 * FRAC_PI_2,
+        );
+        let gr = (5f64.sqrt() - 1.0) / 2.0;
+        for _ in 0..100 {
+            let (c, d) = (hi - gr * (hi - lo), lo + gr * (hi - lo));
+            if ratio(c) < ratio(d) {
+                hi = d;
+            } else {
+                lo = c;
+            }
+        }
+        let th = 0.5 * (lo + hi);
+        assert!(
+            (ratio(th) - regions::mu_critical(r)).abs() < 1e-10 * regions::mu_critical(r),
+            "r={r}"
+        );
+        assert!((th - regions::theta_critical(r)).abs() < 1e-6, "r={r}");
+    }
+    assert!((regions::mu_critical(1.0) - 2.0 * 2f64.sqrt()).abs() < 1e-15);
+}
+
+/// The paper's rig from rest with the rod horizontal: slip near 0.0868 s (from the energy
+/// integral of the stuck pendulum and the friction ratio, by quadrature) and the first stick
+/// near 0.326 s (from an independent RK4 on the equations of motion solved as a linear system).
+#[test]
+fn paper_timeline_against_independent_solution() {
+    let rig = Rig::paper(0.35);
+    let (g, l, mu) = (rig.gravity, rig.rod_length, 0.35);
+    // Stuck from rest at theta = 0: w^2 = 2 (g/l) sin(theta); the needed friction ratio is
+    // |c| / |b| = 3 sin cos / (1 + 3 sin^2) for equal masses.
+    let need = |th: f64| 3.0 * th.sin() * th.cos() / (1.0 + 3.0 * th.sin().powi(2)) - mu;
+    let (mut lo, mut hi) = (1e-9, 0.46);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if need(mid) < 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let th_slip = 0.5 * (lo + hi);
+    // t = int_0^th dtheta / sqrt(2 (g/l) sin theta), with theta = v^2 to remove the
+    // endpoint singularity; composite Simpson.
+    let vmax = th_slip.sqrt();
+    let integrand = |v: f64| {
+        if v == 0.0 {
+            2.0 / (2.0 * g / l).sqrt()
+        } else {
+            2.0 * v / (2.0 * g / l * (v * v).sin()).sqrt()
+        }
+    };
+    let n = 4000;
+    let hv = vmax / n as f64;
+    let simpson: f64 = (0..=n)
+        .map(|i| {
+            let wgt = if i == 0 || i == n {
+                1.0
+            } else if i % 2 == 1 {
+                4.0
+            } else {
+                2.0
+            };
+            wgt * integrand(i as f64 * hv)
+        })
+        .sum::<f64>()
+        * hv
+        / 3.0;
+    let t_slip = simpson;
+    let w_slip = (2.0 * g / l * th_slip.sin()).sqrt();
+    let (dt_stop, _) = oracle_slide_until_stop(&rig, [0.0, th_slip, 0.0, w_slip], 1.0, 2e-5);
+    let t_stick = t_slip + dt_stop;
+
+    let sol = run(
+        &rig,
+        [0.0; 4],
+        0.5,
+        1e-12,
+        Method::Dop853,
+        &Request::default(),
+    );
+    let ev = &sol.events;
+    assert_eq!(
+        (ev[0].from, &ev[0].to, ev[0].kind),
+        (
+            Mode::Stick,
+            &Outcome::Mode(Mode::Slide(appell::model::Direction::Positive)),
+            EventKind::Slip
+        )
+    );
+    assert_eq!((ev[1].to.name(), ev[1].kind), ("stick", EventKind::Stick));
+    assert!((t_slip - 0.0868).abs() < 5e-5, "oracle slip {t_slip}");
+    assert!((t_stick - 0.326).abs() < 5e-4, "oracle stick {t_stick}");
+    assert!(
+        (ev[0].t - t_slip).abs() < 1e-9,
+        "slip {} vs oracle {t_slip}",
+        ev[0].t
+    );
+    assert!(
+        (ev[1].t - t_stick).abs() < 1e-8,
+        "stick {} vs oracle {t_stick}",
+        ev[1].t
+    );
+    assert!((ev[0].state[1] - th_slip).abs() < 1e-8);
+}
+
+/// Event times converge as the tolerance tightens, for both methods, towards a reference
+/// from the other method at the tightest tolerance; at rtol 1e-12 they agree to 1e-10 s.
+#[test]
+fn event_times_converge_with_tolerance() {
+    let rig = unequal_rig(0.12);
+    let y0 = [0.0, FRAC_PI_2 - 0.9, 0.0, 0.0];
+    let reference = |m: Method| run(&rig, y0, 2.0, 1e-13, m, &Request::default());
+    for method in Method::ALL {
+        let other = if method == Method::Dp5 {
+            Method::Dop853
+        } else {
+            Method::Dp5
+        };
+        let refr = reference(other);
+        let mut errors = Vec::new();
+        for rtol in [1e-6, 1e-8, 1e-10, 1e-12] {
+            let sol = run(&rig, y0, 2.0, rtol, method, &Request::default());
+            assert_eq!(
+                sol.events.len(),
+                refr.events.len(),
+                "{method:?} rtol {rtol}"
+            );
+            let err = sol
+                .events
+                .iter()
+                .zip(&refr.events)
+                .map(|(a, b)| (a.t - b.t).abs())
+                .fold(0.0, f64::max);
+            errors.push(err);
+        }
+        assert!(
+            errors.windows(2).all(|w| w[1] < w[0] || w[1] < 1e-11),
+            "{method:?} not converging: {errors:?}"
+        );
+        assert!(
+            errors[0] / errors[2].max(1e-13) > 100.0,
+            "{method:?}: {errors:?}"
+        );
+        assert!(errors[3] < 1e-10, "{method:?}: {errors:?}");
+    }
+    // The shared example recordings' documented stick onsets (FORMATS.md): 0.3186, 0.8994,
+    // 1.4045 and 1.9210 s.
+    let doc_rig = Rig::new(0.5, 0.2, 0.3, 9.81, 0.12, None).unwrap();
+    let sol = run(
+        &doc_rig,
+        y0,
+        2.0,
+        1e-12,
+        Method::Dop853,
+        &Request::default(),
+    );
+    let sticks: Vec<f64> = sol
+        .events
+        .iter()
+        .filter(|e| e.kind == EventKind::Stick)
+        .map(|e| e.t)
+        .collect();
+    let documented = [0.3186, 0.8994, 1.4045, 1.9210];
+    assert_eq!(sticks.len(), documented.len(), "{sticks:?}");
+    for (a, b) in sticks.iter().zip(documented) {
+        assert!((a - b).abs() < 1e-4, "{a} vs {b}");
+    }
+}
+
+/// Above mu* the run never integrates through the paradox silently: it ends with an event of
+/// its own kind at the state where it happened, named by the sign rule of PHYSICS.md.
+#[test]
+fn paradox_is_reported_not_integrated() {
+    // Equal masses, mu = 3 > mu* = 2.83: the band is 45..63.43 deg (tan in (1, 2)).
+    let rig = Rig::paper(3.0);
+    let band = regions::paradox_band(1.0, 3.0).unwrap();
+    assert!((band.0.tan() - 1.0).abs() < 1e-12 && (band.1.tan() - 2.0).abs() < 1e-12);
+    let th = 50f64.to_radians();
+    // Inside the band Q < 0 and a > 0: sliding with s a > 0 (s = +1) has no solution,
+    // with s a < 0 (s = -1) two.
+    for (x_dot, expect) in [(0.5, "inconsistent"), (-0.5, "indeterminate")] {
+        let sol = simulate(
+            &rig,
+            &[0.0, th, x_dot, 0.0],
+            1.0,
+            &Options::default(),
+            &Request::default(),
+        )
+        .unwrap();
+        assert_eq!(sol.events.len(), 1);
+        let e = &sol.events[0];
+        assert_eq!(
+            (e.t, e.kind, e.to.name()),
+            (0.0, EventKind::Paradox, expect)
+        );
+        assert!(sol.stopped_at_paradox() && sol.final_time == 0.0);
+    }
+    // Sliding (s = -1) from outside into the band: the run stops at the band edge, 45 deg.
+    let sol = simulate(
+        &rig,
+        &[0.0, 30f64.to_radians(), -3.0, 3.0],
+        1.0,
+        &Options::default(),
+        &Request::default(),
+    )
+    .unwrap();
+    let e = sol.events.last().unwrap();
+    assert_eq!((e.kind, e.to.name()), (EventKind::Paradox, "indeterminate"));
+    assert!(
+        (e.state[1] - band.0).abs() < 1e-9,
+        "stopped at {} deg",
+        e.state[1].to_degrees()
+    );
+    assert!(sol.final_time == e.t && e.t > 0.0);
+}
+
+/// Failures carry where they happened: a step limit is an error with the time and state.
+#[test]
+fn step_limit_is_an_error_with_state() {
+    let rig = Rig::paper(0.35);
+    let options = Options {
+        max_steps: 10,
+        ..Options::default()
+    };
+    let err = simulate(&rig, &[0.0; 4], 2.0, &options, &Request::default()).unwrap_err();
+    let SimError::TooManySteps { t, max, state } = err else {
+        panic!("{err}")
+    };
+    assert_eq!(max, 10);
+    assert!(t > 0.0 && t < 2.0 && state[1] > 0.0);
+}
