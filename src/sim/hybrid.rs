@@ -435,7 +435,11 @@ where
         ));
     }
     let times = &request.sample_times;
-    if times.windows(2).any(|w| w[0].partial_cmp(&w[1]) == Some(std::cmp::Ordering::Greater)) || times.iter().any(|t| !t.is_finite()) {
+    if times
+        .windows(2)
+        .any(|w| w[0].partial_cmp(&w[1]) == Some(std::cmp::Ordering::Greater))
+        || times.iter().any(|t| !t.is_finite())
+    {
         return Err(SimError::InvalidInput(
             "sample times must be finite and ascending".into(),
         ));

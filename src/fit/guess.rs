@@ -1,0 +1,130 @@
+//! Starting values from the data, because the cost is only piecewise smooth in mu: the angle
+//! and its rate from the first frames' geometry, the slider's state from its track, and mu
+//! from the accelerations of a sliding stretch through the sliding equation.
+
+use super::problem::Observations;
+use crate::model::{sign, Rig, Shorthands};
+
+/// Least-squares polynomial value and first two derivatives at `t0` through (t, y) points.
+fn quadratic_at(t: &[f64], y: &[f64], t0: f64) -> Option<[f64; 3]> {
+    if t.len() < 3 {
+        return None;
+    }
+    // Normal equations of y = c0 + c1 (t - t0) + c2 (t - t0)^2.
+    let mut a = nalgebra::Matrix3::zeros();
+    let mut b = nalgebra::Vector3::zeros();
+    for (&ti, &yi) in t.iter().zip(y) {
+        let d = ti - t0;
+        let phi = nalgebra::Vector3::new(1.0, d, d * d);
+        a += phi * phi.transpose();
+        b += phi * yi;
+    }
+    let c = a.lu().solve(&b)?;
+    Some([c[0], c[1], 2.0 * c[2]])
+}
+
+/// Rod angle in the model convention (y down) from rail-frame markers with y up.
+pub fn angle(slider: [f64; 2], bob: [f64; 2]) -> f64 {
+    (-(bob[1] - slider[1])).atan2(bob[0] - slider[0])
+}
+
+/// Per-frame angle, unwrapped to be continuous, for frames with both markers.
+fn angles(obs: &Observations) -> (Vec<f64>, Vec<f64>) {
+    let mut t = Vec::new();
+    let mut th: Vec<f64> = Vec::new();
+    for ((ti, s), b) in obs.times.iter().zip(&obs.slider).zip(&obs.bob) {
+        if let (Some(s), Some(b)) = (s, b) {
+            let mut a = angle(*s, *b);
+            if let Some(prev) = th.last() {
+                a += (2.0 * std::f64::consts::PI)
+                    * ((prev - a) / (2.0 * std::f64::consts::PI)).round();
+            }
+            t.push(*ti);
+            th.push(a);
+        }
+    }
+    (t, th)
+}
+
+fn slider_x(obs: &Observations) -> (Vec<f64>, Vec<f64>) {
+    obs.times
+        .iter()
+        .zip(&obs.slider)
+        .filter_map(|(t, s)| s.map(|s| (*t, s[0])))
+        .unzip()
+}
+
+/// Initial state (x, theta, x', theta') from a quadratic fit over the first `window` frames.
+pub fn initial_state(obs: &Observations, window: usize) -> Option<[f64; 4]> {
+    let t0 = *obs.times.first()?;
+    let (ts, xs) = slider_x(obs);
+    let (ta, th) = angles(obs);
+    let n = window.max(3);
+    let x = quadratic_at(&ts[..ts.len().min(n)], &xs[..xs.len().min(n)], t0)?;
+    let a = quadratic_at(&ta[..ta.len().min(n)], &th[..th.len().min(n)], t0)?;
+    Some([x[0], a[0], x[1], a[1]])
+}
+
+/// Median rod length seen in the frames with both markers.
+pub fn rod_length(obs: &Observations) -> Option<f64> {
+    let mut d: Vec<f64> = obs
+        .slider
+        .iter()
+        .zip(&obs.bob)
+        .filter_map(|(s, b)| {
+            let (s, b) = ((*s)?, (*b)?);
+            Some(((b[0] - s[0]).powi(2) + (b[1] - s[1]).powi(2)).sqrt())
+        })
+        .collect();
+    if d.is_empty() {
+        return None;
+    }
+    d.sort_by(f64::total_cmp);
+    Some(d[d.len() / 2])
+}
+
+/// mu_kinetic from the sliding equation solved for mu at frames where the slider clearly
+/// moves: x'' (D + mu s sigma a) = c - mu s sigma b, with x', x'', theta, theta' from local
+/// quadratic fits; the median over the frames. `None` when the slider never clearly slides.
+pub fn mu_from_sliding(obs: &Observations, rig: &Rig<f64>, half_window: usize) -> Option<f64> {
+    let (ts, xs) = slider_x(obs);
+    let (ta, th) = angles(obs);
+    if ts.len() < 2 * half_window + 1 || ta.len() != ts.len() {
+        return None;
+    }
+    let h = half_window;
+    let mut est = Vec::new();
+    let mut speeds = Vec::new();
+    for i in h..ts.len() - h {
+        let Some(x) = quadratic_at(&ts[i - h..=i + h], &xs[i - h..=i + h], ts[i]) else {
+            continue;
+        };
+        speeds.push(x[1].abs());
+        let Some(a) = quadratic_at(&ta[i - h..=i + h], &th[i - h..=i + h], ts[i]) else {
+            continue;
+        };
+        est.push((x, a));
+    }
+    // "Clearly sliding": faster than a fifth of the fastest slide seen.
+    let vmax = speeds.iter().cloned().fold(0.0, f64::max);
+    if vmax < 1e-3 {
+        return None;
+    }
+    let mut mus: Vec<f64> = est
+        .iter()
+        .filter(|(x, _)| x[1].abs() > 0.2 * vmax)
+        .filter_map(|(x, a)| {
+            let sh = Shorthands::new(rig, a[0], a[1]);
+            let s = sign(x[1]);
+            let sigma = sign(sh.q);
+            let den = s * sigma * (x[2] * sh.a + sh.b);
+            let mu = (sh.c - x[2] * sh.d) / den;
+            (den.abs() > 1e-12 && mu.is_finite() && mu >= 0.0).then_some(mu)
+        })
+        .collect();
+    if mus.len() < 5 {
+        return None;
+    }
+    mus.sort_by(f64::total_cmp);
+    Some(mus[mus.len() / 2])
+}

@@ -1,0 +1,311 @@
+//! The estimation problem: predicted minus observed marker positions at every frame with data,
+//! weighted per marker, as a function of the free parameters (rig and initial state).
+
+use super::lm::LeastSquares;
+use crate::model::{markers, Rig, Scalar, State};
+use crate::sim::{simulate, Options, Request, SimError};
+use argmin::core::Error;
+use nalgebra::{DMatrix, DVector, U1};
+use num_dual::{Derivative, DualSVec64};
+use serde::Serialize;
+use std::sync::Arc;
+
+/// Marker observations in the rail frame (metres, y up), times in seconds from the first frame.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Observations {
+    /// Frame times (s), ascending, starting at 0.
+    pub times: Vec<f64>,
+    /// Slider position per frame, `None` where missing.
+    pub slider: Vec<Option<[f64; 2]>>,
+    /// Bob position per frame, `None` where missing.
+    pub bob: Vec<Option<[f64; 2]>>,
+}
+
+/// A quantity the fit can estimate.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Param {
+    /// Kinetic friction coefficient.
+    MuKinetic,
+    /// Static friction coefficient.
+    MuStatic,
+    /// Initial slider position (m).
+    X,
+    /// Initial rod angle (rad, PHYSICS.md convention).
+    Theta,
+    /// Initial slider velocity (m/s).
+    XDot,
+    /// Initial angular velocity (rad/s).
+    ThetaDot,
+    /// Rod length (m).
+    RodLength,
+}
+
+impl Param {
+    /// Name in reports and JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Param::MuKinetic => "mu_kinetic",
+            Param::MuStatic => "mu_static",
+            Param::X => "x",
+            Param::Theta => "theta",
+            Param::XDot => "x_dot",
+            Param::ThetaDot => "theta_dot",
+            Param::RodLength => "rod_length",
+        }
+    }
+}
+
+/// One residual row: which frame, which marker (0 slider, 1 bob), which coordinate.
+#[derive(Debug, Clone, Copy)]
+struct Row {
+    frame: usize,
+    marker: usize,
+    coord: usize,
+    observed: f64,
+}
+
+/// The residual function of a fit: fixed values, free parameters, weights.
+#[derive(Debug, Clone)]
+pub struct TrajectoryProblem {
+    obs: Arc<Observations>,
+    /// Rig holding the values of parameters that are not free.
+    pub rig: Rig<f64>,
+    /// Initial state holding the values of parameters that are not free.
+    pub initial: State<f64>,
+    /// Free parameters, in the order of the parameter vector.
+    pub free: Vec<Param>,
+    /// Keep mu_static equal to mu_kinetic while mu_static is not free.
+    pub tie_static: bool,
+    /// Integrator settings for every prediction.
+    pub options: Options,
+    /// Noise scale per marker (slider, bob) in metres: residuals are divided by it.
+    pub sigma: [f64; 2],
+    /// Extra weight per row (robust loss by iteratively reweighted least squares).
+    pub row_weights: Vec<f64>,
+    rows: Vec<Row>,
+    times: Vec<f64>,
+}
+
+impl TrajectoryProblem {
+    /// A problem over `obs` with the given fixed values and free parameters.
+    pub fn new(
+        obs: Arc<Observations>,
+        rig: Rig<f64>,
+        initial: State<f64>,
+        free: Vec<Param>,
+        options: Options,
+    ) -> Self {
+        let mut rows = Vec::new();
+        let mut frames = Vec::new();
+        for (i, (s, b)) in obs.slider.iter().zip(&obs.bob).enumerate() {
+            let mut any = false;
+            for (marker, pos) in [(0, s), (1, b)] {
+                if let Some(p) = pos {
+                    any = true;
+                    for (coord, &observed) in p.iter().enumerate() {
+                        rows.push(Row {
+                            frame: frames.len(),
+                            marker,
+                            coord,
+                            observed,
+                        });
+                    }
+                }
+            }
+            if any {
+                frames.push(obs.times[i]);
+            }
+        }
+        let n = rows.len();
+        TrajectoryProblem {
+            obs,
+            rig,
+            initial,
+            free,
+            tie_static: true,
+            options,
+            sigma: [1.0, 1.0],
+            row_weights: vec![1.0; n],
+            rows,
+            times: frames,
+        }
+    }
+
+    /// The observations.
+    pub fn observations(&self) -> &Observations {
+        &self.obs
+    }
+
+    /// Number of residual rows.
+    pub fn n_rows(&self) -> usize {
+        self.rows.len()
+    }
+
+    /// Marker (0 slider, 1 bob) of each residual row.
+    pub fn row_markers(&self) -> Vec<usize> {
+        self.rows.iter().map(|r| r.marker).collect()
+    }
+
+    /// Current values of the free parameters.
+    pub fn values(&self) -> DVector<f64> {
+        DVector::from_iterator(self.free.len(), self.free.iter().map(|&p| self.get(p)))
+    }
+
+    /// Value of any parameter (free ones as last set with [`Self::set_values`]).
+    pub fn get(&self, p: Param) -> f64 {
+        match p {
+            Param::MuKinetic => self.rig.mu_kinetic,
+            Param::MuStatic => self.rig.mu_static,
+            Param::X => self.initial[0],
+            Param::Theta => self.initial[1],
+            Param::XDot => self.initial[2],
+            Param::ThetaDot => self.initial[3],
+            Param::RodLength => self.rig.rod_length,
+        }
+    }
+
+    /// Store a parameter vector into the rig and initial state.
+    pub fn set_values(&mut self, v: &DVector<f64>) {
+        let (rig, y0) = self.apply::<f64>(v.as_slice());
+        self.rig = rig;
+        self.initial = y0;
+    }
+
+    /// Rig and initial state for a parameter vector, in any scalar.
+    pub fn apply<T: Scalar>(&self, p: &[T]) -> (Rig<T>, State<T>) {
+        let mut rig: Rig<T> = self.rig.lift();
+        let mut y0: State<T> = self.initial.map(T::from);
+        for (&param, &v) in self.free.iter().zip(p) {
+            match param {
+                Param::MuKinetic => rig.mu_kinetic = v,
+                Param::MuStatic => rig.mu_static = v,
+                Param::X => y0[0] = v,
+                Param::Theta => y0[1] = v,
+                Param::XDot => y0[2] = v,
+                Param::ThetaDot => y0[3] = v,
+                Param::RodLength => rig.rod_length = v,
+            }
+        }
+        if self.tie_static && !self.free.contains(&Param::MuStatic) {
+            rig.mu_static = rig.mu_kinetic;
+        }
+        (rig, y0)
+    }
+
+    /// Simulate with parameters `p` and return the predicted marker positions per frame with
+    /// data (`[slider_x, slider_y, bob_x, bob_y]`), or why the model cannot predict them.
+    pub fn predict<T: Scalar + 'static>(&self, p: &[T]) -> Result<Vec<[T; 4]>, SimError> {
+        let (rig, y0) = self.apply(p);
+        let t_end = self.times.last().copied().unwrap_or(0.0);
+        let request = Request {
+            sample_times: self.times.clone(),
+            friction_work: false,
+        };
+        let sol = simulate(&rig, &y0, t_end, &self.options, &request)?;
+        if sol.samples.len() < self.times.len() {
+            return Err(SimError::InvalidInput(format!(
+                "the model stops at t = {} s (Painleve paradox) before the recording ends",
+                sol.final_time
+            )));
+        }
+        Ok(sol
+            .samples
+            .iter()
+            .map(|s| markers(&rig, &s.state))
+            .collect())
+    }
+
+    /// Weighted residuals (predicted - observed) / sigma for parameters `p`.
+    pub fn weighted<T: Scalar + 'static>(&self, p: &[T]) -> Result<Vec<T>, SimError> {
+        let pred = self.predict(p)?;
+        Ok(self
+            .rows
+            .iter()
+            .zip(&self.row_weights)
+            .map(|(r, w)| {
+                (pred[r.frame][2 * r.marker + r.coord] - r.observed) * (w / self.sigma[r.marker])
+            })
+            .collect())
+    }
+
+    /// Unweighted residuals in metres, with each row's marker.
+    pub fn raw_residuals(&self, p: &DVector<f64>) -> Result<Vec<(usize, f64)>, SimError> {
+        let pred = self.predict(p.as_slice())?;
+        Ok(self
+            .rows
+            .iter()
+            .map(|r| (r.marker, pred[r.frame][2 * r.marker + r.coord] - r.observed))
+            .collect())
+    }
+
+    /// Frame times with data.
+    pub fn frame_times(&self) -> &[f64] {
+        &self.times
+    }
+
+    fn jacobian_n<const N: usize>(
+        &self,
+        p: &DVector<f64>,
+    ) -> Result<(DVector<f64>, DMatrix<f64>), SimError> {
+        let seeded: Vec<DualSVec64<N>> = (0..N)
+            .map(|i| {
+                DualSVec64::<N>::new(
+                    p[i],
+                    Derivative::derivative_generic(nalgebra::Const::<N>, U1, i),
+                )
+            })
+            .collect();
+        let r = self.weighted(&seeded)?;
+        let mut jac = DMatrix::zeros(r.len(), N);
+        let res = DVector::from_iterator(r.len(), r.iter().map(|v| v.re));
+        for (row, v) in r.iter().enumerate() {
+            let d = v.eps.clone().unwrap_generic(nalgebra::Const::<N>, U1);
+            for k in 0..N {
+                jac[(row, k)] = d[k];
+            }
+        }
+        Ok((res, jac))
+    }
+}
+
+fn to_err(e: SimError) -> Error {
+    Error::msg(e.to_string())
+}
+
+impl LeastSquares for TrajectoryProblem {
+    fn residuals(&self, p: &DVector<f64>) -> Result<DVector<f64>, Error> {
+        let r = self.weighted(p.as_slice()).map_err(to_err)?;
+        Ok(DVector::from_vec(r))
+    }
+
+    /// Exact Jacobian by forward-mode dual numbers through the integrator, with event times
+    /// differentiated implicitly at every mode switch.
+    fn residuals_jacobian(&self, p: &DVector<f64>) -> Result<(DVector<f64>, DMatrix<f64>), Error> {
+        match p.len() {
+            1 => self.jacobian_n::<1>(p),
+            2 => self.jacobian_n::<2>(p),
+            3 => self.jacobian_n::<3>(p),
+            4 => self.jacobian_n::<4>(p),
+            5 => self.jacobian_n::<5>(p),
+            6 => self.jacobian_n::<6>(p),
+            7 => self.jacobian_n::<7>(p),
+            n => return Err(Error::msg(format!("at most 7 free parameters, got {n}"))),
+        }
+        .map_err(to_err)
+    }
+
+    fn project(&self, p: &mut DVector<f64>) {
+        let idx = |q: Param| self.free.iter().position(|&f| f == q);
+        if let Some(i) = idx(Param::MuKinetic) {
+            p[i] = p[i].max(0.0);
+        }
+        let mu_k = idx(Param::MuKinetic).map_or(self.rig.mu_kinetic, |i| p[i]);
+        if let Some(i) = idx(Param::MuStatic) {
+            p[i] = p[i].max(mu_k);
+        }
+        if let Some(i) = idx(Param::RodLength) {
+            p[i] = p[i].max(1e-6);
+        }
+    }
+}
