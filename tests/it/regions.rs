@@ -6,7 +6,7 @@ use appell::model::regions::{
     paradox_band_deg, q_zero_curve, slide_count_intervals, slide_solution_count, stick_boundary,
     stick_intervals, theta_critical, PlaneWindow,
 };
-use appell::model::{Direction, Mode, Rig};
+use appell::model::{Direction, Mode, Rig, Shorthands};
 use appell::report::regions::{phase_portrait, PortraitOptions};
 use appell::scene::RigFile;
 use std::f64::consts::PI;
@@ -189,9 +189,10 @@ fn solve_branch(rig: &Rig<f64>, theta: f64, w: f64, s: f64, sigma: f64) -> Optio
         m.swap(col, p);
         for row in 0..3 {
             if row != col {
-                let f = m[row][col] / m[col][col];
-                for k in col..4 {
-                    m[row][k] -= f * m[col][k];
+                let pivot = m[col];
+                let f = m[row][col] / pivot[col];
+                for (v, p) in m[row].iter_mut().zip(pivot).skip(col) {
+                    *v -= f * p;
                 }
             }
         }
@@ -242,6 +243,9 @@ fn sign_rule_counts_match_brute_force_root_counting() {
             };
             let got = slide_solution_count(rig, theta, w, s);
             assert_eq!(got, expected, "theta {theta}, w {w}, s {s}, rig {rig:?}");
+            // The simulator's own branch test must agree too.
+            let branches = rig.slide_branches(&Shorthands::new(rig, theta, w), s);
+            assert_eq!(branches.count(), expected, "slide_branches at theta {theta}, w {w}");
             seen[got] += 1;
         }
     }
