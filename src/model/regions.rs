@@ -130,6 +130,15 @@ fn nonneg_root(v0: f64, v1: f64) -> Option<f64> {
 /// c = `branch` * mu_s * b (`branch` = +1 or -1), i.e. w^2 = u(theta) =
 /// (branch mu_s b0 - c0) / (c1 - branch mu_s b1); `None` where that w^2 is negative or
 /// infinite (the branch does not cross this theta).
+///
+/// ```
+/// use appell::model::{regions::stick_boundary_w2, Rig, Shorthands};
+/// let rig = Rig::paper(0.35);
+/// let theta = 50f64.to_radians();
+/// let w2 = stick_boundary_w2(&rig, theta, -1.0).unwrap();
+/// let sh = Shorthands::new(&rig, theta, w2.sqrt());
+/// assert!((sh.c.abs() - 0.35 * sh.b.abs()).abs() < 1e-12);
+/// ```
 pub fn stick_boundary_w2(rig: &Rig<f64>, theta: f64, branch: f64) -> Option<f64> {
     let f = AffineInW2::new(rig, theta);
     let mu = branch * rig.mu_static;
@@ -159,6 +168,18 @@ pub fn in_paradox_band(rig: &Rig<f64>, theta: f64) -> bool {
 /// inside it two when sign(Q) = sign(s a) and none when the signs are opposite. On the curves
 /// themselves (band edge, Q = 0) the count is the limit from the side where the margin is
 /// positive (band edge: one) or where Q > 0 (Q = 0, with [`super::sign`]'s zero-is-plus).
+///
+/// ```
+/// use appell::model::{regions::slide_solution_count, Rig};
+/// // A light slider under a heavy bob at mu = 0.6 > mu* = 0.458, at rest at 75 deg (inside
+/// // the band, bob below the rail so Q < 0, a > 0): sliding toward +x has no solution,
+/// // toward -x two; at 30 deg (outside the band) exactly one either way.
+/// let rig = Rig::new(0.01, 0.2, 0.3, 9.81, 0.6, None).unwrap();
+/// let t = 75f64.to_radians();
+/// assert_eq!(slide_solution_count(&rig, t, 0.0, 1.0), 0);
+/// assert_eq!(slide_solution_count(&rig, t, 0.0, -1.0), 2);
+/// assert_eq!(slide_solution_count(&rig, 30f64.to_radians(), 0.0, 1.0), 1);
+/// ```
 pub fn slide_solution_count(rig: &Rig<f64>, theta: f64, w: f64, s: f64) -> usize {
     let sh = Shorthands::new(rig, theta, w);
     if sh.band_margin(rig.mu_kinetic) >= -EDGE_TOL * sh.d {

@@ -245,7 +245,11 @@ fn sign_rule_counts_match_brute_force_root_counting() {
             assert_eq!(got, expected, "theta {theta}, w {w}, s {s}, rig {rig:?}");
             // The simulator's own branch test must agree too.
             let branches = rig.slide_branches(&Shorthands::new(rig, theta, w), s);
-            assert_eq!(branches.count(), expected, "slide_branches at theta {theta}, w {w}");
+            assert_eq!(
+                branches.count(),
+                expected,
+                "slide_branches at theta {theta}, w {w}"
+            );
             seen[got] += 1;
         }
     }
