@@ -262,3 +262,34 @@ impl Scene {
         }
     }
 }
+
+/// A rig file (`RIG.toml`): just the `[rig]` section of a scene.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct RigFile {
+    /// `[rig]`.
+    pub rig: RigSpec,
+}
+
+impl RigFile {
+    /// Read and validate a rig file; errors name the file and the key at fault.
+    pub fn load(path: &Path) -> Result<Rig<f64>, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        Self::parse(&text, path)
+    }
+
+    /// Parse and validate rig-file text; `path` only labels errors.
+    pub fn parse(text: &str, path: &Path) -> Result<Rig<f64>, SceneError> {
+        let file: RigFile = toml::from_str(text).map_err(|e| SceneError::Parse {
+            path: path.to_owned(),
+            message: e.to_string().trim_end().to_owned(),
+        })?;
+        file.rig.rig().map_err(|e| SceneError::Invalid {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })
+    }
+}

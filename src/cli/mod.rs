@@ -2,6 +2,7 @@
 //! command that calls the library and prints.
 
 mod bench;
+mod regions;
 mod simulate;
 
 use clap::{Parser, Subcommand};
@@ -21,6 +22,9 @@ enum Command {
     Simulate(simulate::Args),
     /// Time the simulator on a scene (median of repeats).
     Bench(bench::Args),
+    /// Regions of the stick and sliding models in the (theta, theta') plane, the paradox
+    /// band, and phase portraits.
+    Regions(regions::Args),
 }
 
 /// A failed command: bad input (exit code 2) or a run that could not finish (exit code 1).
@@ -47,6 +51,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Simulate(args) => simulate::run(args),
         Command::Bench(args) => bench::run(args),
+        Command::Regions(args) => regions::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

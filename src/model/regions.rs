@@ -1,5 +1,14 @@
-//! Where each model holds: the critical friction mu*, its angle theta*, and the paradox band
-//! where the sliding equation has two solutions or none (PHYSICS.md, "The Painleve paradox").
+//! Where each model holds: the critical friction mu*, its angle theta*, the paradox band where
+//! the sliding equation has two solutions or none (PHYSICS.md, "The Painleve paradox"), and the
+//! regions of both models in the (theta, theta') plane.
+//!
+//! At fixed theta the shorthands b, c and Q are affine in w^2, so every boundary in the plane is
+//! a closed form w^2 = u(theta): the stick boundary |c| = mu_s |b| (two branches), the curve
+//! Q = 0, and the band edges (lines of constant theta where mu_k |a| = D).
+
+use super::{sign, Rig, Shorthands};
+use serde::Serialize;
+use std::f64::consts::PI;
 
 /// Critical friction mu* = 2 sqrt(r (1 + r)) for mass ratio r = m1 / m2: below it the sliding
 /// equation has exactly one solution at every angle.
@@ -31,6 +40,445 @@ pub fn paradox_band(mass_ratio: f64, mu: f64) -> Option<(f64, f64)> {
 /// [`mu_critical`], r = (sqrt(1 + mu^2) - 1) / 2.
 pub fn max_mass_ratio_for_paradox(mu: f64) -> f64 {
     ((1.0 + mu * mu).sqrt() - 1.0) / 2.0
+}
+
+/// Paradox margins below this (relative to D) count as on the band edge, not inside it.
+const EDGE_TOL: f64 = 1e-12;
+
+/// The paradox band of `rig` within 0..180 degrees, as `[lo, hi]` pairs in degrees: the band
+/// of the first quadrant and its mirror in the second. Empty when mu_k <= mu*.
+pub fn paradox_band_deg(rig: &Rig<f64>) -> Vec<[f64; 2]> {
+    paradox_band_intervals(rig.mass_ratio(), rig.mu_kinetic, 0.0, PI)
+        .into_iter()
+        .map(|(lo, hi)| [lo.to_degrees(), hi.to_degrees()])
+        .collect()
+}
+
+/// Every interval of theta in [theta_min, theta_max] where mu |a| > D: the first-quadrant band
+/// (lo, hi) of [`paradox_band`] repeated as (k pi + lo, k pi + hi) and (k pi - hi, k pi - lo),
+/// clipped to the range and sorted. Empty when mu <= mu*.
+pub fn paradox_band_intervals(
+    mass_ratio: f64,
+    mu: f64,
+    theta_min: f64,
+    theta_max: f64,
+) -> Vec<(f64, f64)> {
+    let Some((lo, hi)) = paradox_band(mass_ratio, mu) else {
+        return Vec::new();
+    };
+    let mut out = Vec::new();
+    let k0 = (theta_min / PI).floor() as i64 - 1;
+    let k1 = (theta_max / PI).ceil() as i64 + 1;
+    for k in k0..=k1 {
+        let base = k as f64 * PI;
+        for (a, b) in [(base + lo, base + hi), (base - hi, base - lo)] {
+            let (a, b) = (a.max(theta_min), b.min(theta_max));
+            if a < b {
+                out.push((a, b));
+            }
+        }
+    }
+    out.sort_by(|p, q| p.0.total_cmp(&q.0));
+    out
+}
+
+/// The band edges (where mu |a| = D) inside [theta_min, theta_max], sorted: the vertical
+/// lines of the region plots.
+pub fn band_edges(mass_ratio: f64, mu: f64, theta_min: f64, theta_max: f64) -> Vec<f64> {
+    let mut edges: Vec<f64> = paradox_band_intervals(mass_ratio, mu, theta_min, theta_max)
+        .into_iter()
+        .flat_map(|(a, b)| [a, b])
+        .filter(|&t| t > theta_min && t < theta_max)
+        .collect();
+    edges.sort_by(f64::total_cmp);
+    edges
+}
+
+/// The shorthands that depend on w, b, c and Q, as affine functions v0 + v1 W of W = w^2 at a
+/// fixed theta. Built from two evaluations of [`Shorthands`] (w = 0 and w = 1), so the
+/// formulas stay in one place; each is exactly affine in W.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AffineInW2 {
+    /// (b0, b1): b = b0 + b1 W, the normal force while stuck.
+    pub b: (f64, f64),
+    /// (c0, c1): c = c0 + c1 W, minus the friction needed to stay stuck.
+    pub c: (f64, f64),
+    /// (Q0, Q1): Q = Q0 + Q1 W, the numerator of N while sliding.
+    pub q: (f64, f64),
+}
+
+impl AffineInW2 {
+    /// The affine forms at angle `theta`.
+    pub fn new(rig: &Rig<f64>, theta: f64) -> Self {
+        let s0 = Shorthands::new(rig, theta, 0.0);
+        let s1 = Shorthands::new(rig, theta, 1.0);
+        AffineInW2 {
+            b: (s0.b, s1.b - s0.b),
+            c: (s0.c, s1.c - s0.c),
+            q: (s0.q, s1.q - s0.q),
+        }
+    }
+}
+
+/// The root W >= 0 of v0 + v1 W, if it is finite.
+fn nonneg_root(v0: f64, v1: f64) -> Option<f64> {
+    let w2 = -v0 / v1;
+    (w2.is_finite() && w2 >= 0.0).then_some(w2)
+}
+
+/// One branch of the stick boundary |c| = mu_s |b| at angle `theta`: the w^2 where
+/// c = `branch` * mu_s * b (`branch` = +1 or -1), i.e. w^2 = u(theta) =
+/// (branch mu_s b0 - c0) / (c1 - branch mu_s b1); `None` where that w^2 is negative or
+/// infinite (the branch does not cross this theta).
+///
+/// ```
+/// use appell::model::{regions::stick_boundary_w2, Rig, Shorthands};
+/// let rig = Rig::paper(0.35);
+/// let theta = 50f64.to_radians();
+/// let w2 = stick_boundary_w2(&rig, theta, -1.0).unwrap();
+/// let sh = Shorthands::new(&rig, theta, w2.sqrt());
+/// assert!((sh.c.abs() - 0.35 * sh.b.abs()).abs() < 1e-12);
+/// ```
+pub fn stick_boundary_w2(rig: &Rig<f64>, theta: f64, branch: f64) -> Option<f64> {
+    let f = AffineInW2::new(rig, theta);
+    let mu = branch * rig.mu_static;
+    nonneg_root(f.c.0 - mu * f.b.0, f.c.1 - mu * f.b.1)
+}
+
+/// The curve Q = 0 at angle `theta`: w^2 = -(m1 + m2) g / (m2 l sin(theta)), where the rail
+/// reaction of a slide changes sign; `None` with the bob below the rail (sin(theta) >= 0).
+pub fn q_zero_w2(rig: &Rig<f64>, theta: f64) -> Option<f64> {
+    let f = AffineInW2::new(rig, theta);
+    nonneg_root(f.q.0, f.q.1).filter(|&w2| w2 > 0.0)
+}
+
+/// Whether the pendulum (stick) model holds at (theta, w): |c| <= mu_s |b|.
+pub fn in_stick_region(rig: &Rig<f64>, theta: f64, w: f64) -> bool {
+    Shorthands::new(rig, theta, w).stick_margin(rig.mu_static) >= 0.0
+}
+
+/// Whether (theta, w) lies strictly inside the paradox band, mu_k |a| > D.
+pub fn in_paradox_band(rig: &Rig<f64>, theta: f64) -> bool {
+    let sh = Shorthands::new(rig, theta, 0.0);
+    sh.band_margin(rig.mu_kinetic) < -EDGE_TOL * sh.d
+}
+
+/// Number of solutions (0, 1 or 2) of the sliding equation at (theta, w) sliding in
+/// direction `s` (+1 or -1), by the sign rule of PHYSICS.md: one outside the paradox band;
+/// inside it two when sign(Q) = sign(s a) and none when the signs are opposite. On the curves
+/// themselves (band edge, Q = 0) the count is the limit from the side where the margin is
+/// positive (band edge: one) or where Q > 0 (Q = 0, with [`super::sign`]'s zero-is-plus).
+///
+/// ```
+/// use appell::model::{regions::slide_solution_count, Rig};
+/// // A light slider under a heavy bob at mu = 0.6 > mu* = 0.458, at rest at 75 deg (inside
+/// // the band, bob below the rail so Q < 0, a > 0): sliding toward +x has no solution,
+/// // toward -x two; at 30 deg (outside the band) exactly one either way.
+/// let rig = Rig::new(0.01, 0.2, 0.3, 9.81, 0.6, None).unwrap();
+/// let t = 75f64.to_radians();
+/// assert_eq!(slide_solution_count(&rig, t, 0.0, 1.0), 0);
+/// assert_eq!(slide_solution_count(&rig, t, 0.0, -1.0), 2);
+/// assert_eq!(slide_solution_count(&rig, 30f64.to_radians(), 0.0, 1.0), 1);
+/// ```
+pub fn slide_solution_count(rig: &Rig<f64>, theta: f64, w: f64, s: f64) -> usize {
+    let sh = Shorthands::new(rig, theta, w);
+    if sh.band_margin(rig.mu_kinetic) >= -EDGE_TOL * sh.d {
+        1
+    } else if sign(sh.q) == sign(s * sh.a) {
+        2
+    } else {
+        0
+    }
+}
+
+/// Split [0, w_max^2] at the given breakpoints and return the W pieces with the value of
+/// `classify` at each piece's midpoint, merging neighbours of equal value.
+fn pieces_in_w2<V: PartialEq + Copy>(
+    w_max: f64,
+    breaks: impl IntoIterator<Item = Option<f64>>,
+    classify: impl Fn(f64) -> V,
+) -> Vec<(f64, f64, V)> {
+    let top = w_max * w_max;
+    let mut cuts: Vec<f64> = breaks
+        .into_iter()
+        .flatten()
+        .filter(|&w2| w2 > 0.0 && w2 < top)
+        .collect();
+    cuts.push(0.0);
+    cuts.push(top);
+    cuts.sort_by(f64::total_cmp);
+    cuts.dedup();
+    let mut out: Vec<(f64, f64, V)> = Vec::new();
+    for pair in cuts.windows(2) {
+        let v = classify(0.5 * (pair[0] + pair[1]));
+        match out.last_mut() {
+            Some(last) if last.2 == v => last.1 = pair[1],
+            _ => out.push((pair[0], pair[1], v)),
+        }
+    }
+    out
+}
+
+/// Map W = w^2 pieces to w pieces over [-w_max, w_max], ascending and merged across w = 0.
+fn pieces_in_w<V: PartialEq + Copy>(pieces: &[(f64, f64, V)]) -> Vec<(f64, f64, V)> {
+    let mut out: Vec<(f64, f64, V)> = Vec::new();
+    let neg = pieces
+        .iter()
+        .rev()
+        .map(|&(lo, hi, v)| (-hi.sqrt(), -lo.sqrt(), v));
+    let pos = pieces.iter().map(|&(lo, hi, v)| (lo.sqrt(), hi.sqrt(), v));
+    for (lo, hi, v) in neg.chain(pos) {
+        match out.last_mut() {
+            Some(last) if last.2 == v => last.1 = hi,
+            _ => out.push((lo, hi, v)),
+        }
+    }
+    out
+}
+
+/// The intervals of w in [-w_max, w_max] where the pendulum model holds at angle `theta`
+/// (|c| <= mu_s |b|), exact: the margin is piecewise linear in w^2 with kinks where b or c
+/// vanish and zeros on the two boundary branches.
+pub fn stick_intervals(rig: &Rig<f64>, theta: f64, w_max: f64) -> Vec<(f64, f64)> {
+    let f = AffineInW2::new(rig, theta);
+    let breaks = [
+        stick_boundary_w2(rig, theta, 1.0),
+        stick_boundary_w2(rig, theta, -1.0),
+        nonneg_root(f.b.0, f.b.1),
+        nonneg_root(f.c.0, f.c.1),
+    ];
+    let mu = rig.mu_static;
+    let pieces = pieces_in_w2(w_max, breaks, |w2| {
+        mu * (f.b.0 + f.b.1 * w2).abs() >= (f.c.0 + f.c.1 * w2).abs()
+    });
+    pieces_in_w(&pieces)
+        .into_iter()
+        .filter(|p| p.2)
+        .map(|(lo, hi, _)| (lo, hi))
+        .collect()
+}
+
+/// The intervals of w in [-w_max, w_max] at angle `theta` with their number of sliding
+/// solutions in direction `s` ([`slide_solution_count`]): the count changes only across the
+/// curve Q = 0 (and across band edges, which are lines of constant theta).
+pub fn slide_count_intervals(
+    rig: &Rig<f64>,
+    theta: f64,
+    s: f64,
+    w_max: f64,
+) -> Vec<(f64, f64, usize)> {
+    let pieces = pieces_in_w2(w_max, [q_zero_w2(rig, theta)], |w2| {
+        slide_solution_count(rig, theta, w2.sqrt(), s)
+    });
+    pieces_in_w(&pieces)
+}
+
+/// A window of the (theta, theta') plane for region maps: theta range (rad), |theta'| up to
+/// `w_max` (rad/s), and the number of theta samples along each curve.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct PlaneWindow {
+    /// Smallest theta (rad).
+    pub theta_min: f64,
+    /// Largest theta (rad).
+    pub theta_max: f64,
+    /// Largest |theta'| shown (rad/s).
+    pub w_max: f64,
+    /// Theta samples per curve.
+    pub samples: usize,
+}
+
+impl PlaneWindow {
+    /// The default window for a rig: theta in [0, 2 pi] (bob below the rail in the first half,
+    /// above it in the second), |theta'| up to 3 sqrt(g / l), 721 samples (every half degree).
+    pub fn for_rig(rig: &Rig<f64>) -> Self {
+        PlaneWindow {
+            theta_min: 0.0,
+            theta_max: 2.0 * PI,
+            w_max: 3.0 * (rig.gravity / rig.rod_length).sqrt(),
+            samples: 721,
+        }
+    }
+
+    /// The theta samples, evenly spaced including both ends.
+    pub fn thetas(&self) -> impl Iterator<Item = f64> + '_ {
+        let n = self.samples.max(2);
+        (0..n).map(move |i| {
+            self.theta_min + (self.theta_max - self.theta_min) * i as f64 / (n - 1) as f64
+        })
+    }
+
+    /// Wrap an angle into [theta_min, theta_min + 2 pi).
+    pub fn wrap(&self, theta: f64) -> f64 {
+        self.theta_min + (theta - self.theta_min).rem_euclid(2.0 * PI)
+    }
+}
+
+/// A curve in the (theta, theta') plane: a label and its points `[theta, theta']` (rad, rad/s).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Curve {
+    /// What the curve is, e.g. `c = +mu_s b, w > 0`.
+    pub label: String,
+    /// Points `[theta, theta']`, ordered by theta.
+    pub points: Vec<[f64; 2]>,
+}
+
+/// Trace w = `side` sqrt(w2(theta)) over the window, split into pieces where w2 exists and
+/// |w| <= w_max; each piece's ends are refined by bisection onto the edge where it stops.
+fn trace(
+    window: &PlaneWindow,
+    label: &str,
+    side: f64,
+    w2: impl Fn(f64) -> Option<f64>,
+) -> Vec<Curve> {
+    let top = window.w_max * window.w_max;
+    let valid = |t: f64| w2(t).filter(|&v| v <= top);
+    let point = |t: f64, v: f64| [t, side * v.sqrt()];
+    // The last valid theta between a valid `good` and an invalid `bad`.
+    let edge = |mut good: f64, mut bad: f64| {
+        for _ in 0..60 {
+            let mid = 0.5 * (good + bad);
+            if valid(mid).is_some() {
+                good = mid;
+            } else {
+                bad = mid;
+            }
+        }
+        good
+    };
+    let mut curves = Vec::new();
+    let mut current: Vec<[f64; 2]> = Vec::new();
+    let mut prev: Option<(f64, bool)> = None;
+    for t in window.thetas() {
+        let v = valid(t);
+        match (prev, v) {
+            (Some((tp, false)), Some(_)) => {
+                let te = edge(t, tp);
+                current.push(point(te, valid(te).unwrap_or(0.0)));
+            }
+            (Some((tp, true)), None) => {
+                let te = edge(tp, t);
+                current.push(point(te, valid(te).unwrap_or(0.0)));
+                curves.push(Curve {
+                    label: label.to_owned(),
+                    points: std::mem::take(&mut current),
+                });
+            }
+            _ => {}
+        }
+        if let Some(v) = v {
+            current.push(point(t, v));
+        }
+        prev = Some((t, v.is_some()));
+    }
+    if !current.is_empty() {
+        curves.push(Curve {
+            label: label.to_owned(),
+            points: current,
+        });
+    }
+    curves.retain(|c| c.points.len() >= 2);
+    curves
+}
+
+/// The boundary |c| = mu_s |b| of the pendulum model's region within the window: both
+/// branches c = +mu_s b and c = -mu_s b, each for w > 0 and w < 0, as continuous pieces.
+pub fn stick_boundary(rig: &Rig<f64>, window: &PlaneWindow) -> Vec<Curve> {
+    let mut out = Vec::new();
+    for (branch, name) in [(1.0, "+"), (-1.0, "-")] {
+        for (side, wname) in [(1.0, "w > 0"), (-1.0, "w < 0")] {
+            let label = format!("c = {name}mu_s b, {wname}");
+            out.extend(trace(window, &label, side, |t| {
+                stick_boundary_w2(rig, t, branch)
+            }));
+        }
+    }
+    out
+}
+
+/// The curve Q = 0 (m2 l w^2 sin(theta) = -(m1 + m2) g) within the window, for w > 0 and
+/// w < 0: where the rail reaction of a slide changes sign.
+pub fn q_zero_curve(rig: &Rig<f64>, window: &PlaneWindow) -> Vec<Curve> {
+    let mut out = Vec::new();
+    for (side, wname) in [(1.0, "w > 0"), (-1.0, "w < 0")] {
+        out.extend(trace(window, &format!("Q = 0, {wname}"), side, |t| {
+            q_zero_w2(rig, t)
+        }));
+    }
+    out
+}
+
+/// The numbers that say whether and where a rig meets the Painleve paradox.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RegionSummary {
+    /// Mass ratio r = m1 / m2.
+    pub mass_ratio: f64,
+    /// The rig's kinetic friction (the sliding model's mu).
+    pub mu_kinetic: f64,
+    /// The rig's static friction (the stick region's mu).
+    pub mu_static: f64,
+    /// mu* = 2 sqrt(r (1 + r)).
+    pub mu_critical: f64,
+    /// theta* (degrees), where the band opens first.
+    pub theta_critical_deg: f64,
+    /// The paradox band within 0..180 degrees, `[lo, hi]` pairs; empty below mu*.
+    pub paradox_band_deg: Vec<[f64; 2]>,
+    /// The largest m1 / m2 at which the rig's mu_k exceeds mu*.
+    pub max_mass_ratio_for_paradox: f64,
+}
+
+impl RegionSummary {
+    /// The summary of `rig`.
+    pub fn of(rig: &Rig<f64>) -> Self {
+        let r = rig.mass_ratio();
+        RegionSummary {
+            mass_ratio: r,
+            mu_kinetic: rig.mu_kinetic,
+            mu_static: rig.mu_static,
+            mu_critical: mu_critical(r),
+            theta_critical_deg: theta_critical(r).to_degrees(),
+            paradox_band_deg: paradox_band_deg(rig),
+            max_mass_ratio_for_paradox: max_mass_ratio_for_paradox(rig.mu_kinetic),
+        }
+    }
+
+    /// Whether the rig's kinetic friction exceeds mu* (the band is not empty).
+    pub fn paradox_possible(&self) -> bool {
+        !self.paradox_band_deg.is_empty()
+    }
+}
+
+/// Everything a region plot shows, as data: the summary, the window, the stick boundary, the
+/// curve Q = 0 and the band edges (theta, rad) inside the window.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct RegionMap {
+    /// mu*, theta*, the band, the largest mass ratio.
+    pub summary: RegionSummary,
+    /// The plane window the curves were traced in.
+    pub window: PlaneWindow,
+    /// Pieces of |c| = mu_s |b|.
+    pub stick_boundary: Vec<Curve>,
+    /// Pieces of Q = 0.
+    pub q_zero: Vec<Curve>,
+    /// Band edges inside the window (rad), where mu_k |a| = D.
+    pub band_edges: Vec<f64>,
+}
+
+impl RegionMap {
+    /// The region map of `rig` in `window`.
+    pub fn new(rig: &Rig<f64>, window: &PlaneWindow) -> Self {
+        RegionMap {
+            summary: RegionSummary::of(rig),
+            window: *window,
+            stick_boundary: stick_boundary(rig, window),
+            q_zero: q_zero_curve(rig, window),
+            band_edges: band_edges(
+                rig.mass_ratio(),
+                rig.mu_kinetic,
+                window.theta_min,
+                window.theta_max,
+            ),
+        }
+    }
 }
 
 #[cfg(test)]

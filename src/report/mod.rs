@@ -1,5 +1,7 @@
 //! Reports: readable timelines, JSON objects and CSV tables, each written whole or not at all.
 
+pub mod plot;
+pub mod regions;
 mod simulate;
 
 pub use simulate::{simulation_json, timeline, write_trajectory_csv};

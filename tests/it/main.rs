@@ -1,5 +1,7 @@
 //! Integration tests: one binary, shared helpers, one module per capability.
 
+mod cli_regions;
 mod cli_simulate;
 mod helpers;
+mod regions;
 mod simulate_oracles;

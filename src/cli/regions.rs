@@ -1,0 +1,73 @@
+//! `appell regions RIG.toml [--json] [--plot FILE.svg|FILE.png] [--trajectories N]`.
+
+use super::Failure;
+use anyhow::anyhow;
+use appell::model::regions::{PlaneWindow, RegionMap};
+use appell::report::plot::{render, ImageFormat};
+use appell::report::regions::{
+    phase_portrait, regions_json, regions_summary, PortraitOptions, RegionFigure,
+};
+use appell::scene::RigFile;
+use std::path::PathBuf;
+
+/// Arguments of `appell regions`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Rig file (TOML with a [rig] section, as in a scene).
+    rig: PathBuf,
+    /// Print one JSON object instead of the summary.
+    #[arg(long)]
+    json: bool,
+    /// Draw the regions and phase portraits in the (theta, theta') plane (.svg or .png).
+    #[arg(long, value_name = "FILE.svg|FILE.png")]
+    plot: Option<PathBuf>,
+    /// Number of phase-portrait trajectories to simulate (0: none).
+    #[arg(long, value_name = "N", default_value_t = 8)]
+    trajectories: usize,
+    /// Duration of each trajectory (s).
+    #[arg(long, value_name = "SECONDS", default_value_t = 3.0)]
+    duration: f64,
+}
+
+pub fn run(args: Args) -> Result<(), Failure> {
+    // Validate every value before any work.
+    if let Some(path) = &args.plot {
+        ImageFormat::from_path(path).map_err(|e| Failure::Input(e.into()))?;
+    }
+    if !(args.duration.is_finite() && args.duration > 0.0 && args.duration <= 600.0) {
+        return Err(Failure::Input(anyhow!(
+            "--duration must be in (0, 600] s, got {}",
+            args.duration
+        )));
+    }
+    let rig = RigFile::load(&args.rig).map_err(|e| Failure::Input(e.into()))?;
+    let window = PlaneWindow::for_rig(&rig);
+    let map = RegionMap::new(&rig, &window);
+    let trajectories = phase_portrait(
+        &rig,
+        &PortraitOptions {
+            trajectories: args.trajectories,
+            duration: args.duration,
+            ..PortraitOptions::default()
+        },
+    );
+    if let Some(path) = &args.plot {
+        let figure = RegionFigure {
+            rig: &rig,
+            map: &map,
+            trajectories: &trajectories,
+        };
+        render(path, &figure).map_err(|e| {
+            Failure::Run(anyhow!(e).context(format!("plotting {}", path.display())))
+        })?;
+    }
+    if args.json {
+        println!("{}", regions_json(&map, &trajectories));
+    } else {
+        print!("{}", regions_summary(&rig, &map, &trajectories));
+        if let Some(path) = &args.plot {
+            println!("figure written to {}", path.display());
+        }
+    }
+    Ok(())
+}

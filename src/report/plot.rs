@@ -1,0 +1,312 @@
+//! Plotting helpers shared by every command that draws: one registered font, SVG or PNG chosen
+//! by the file extension, and files written whole or not at all.
+//!
+//! A figure implements [`Figure`] (draw on any plotters backend) and [`render`] writes it;
+//! [`LinePlot`] is a ready-made figure of labelled line series for simple charts.
+
+use super::write_atomic;
+use plotters::coord::Shift;
+use plotters::drawing::DrawingAreaErrorKind;
+use plotters::prelude::*;
+use std::ops::Range;
+use std::path::{Path, PathBuf};
+use std::sync::Once;
+use thiserror::Error;
+
+/// The font every figure uses, shipped with the crate (DejaVu Sans, free license) so that no
+/// system font is needed.
+static FONT: &[u8] = include_bytes!("../../assets/DejaVuSans.ttf");
+
+/// Register the shipped font as plotters' `sans-serif` family, once per process. [`render`]
+/// calls it; call it yourself only when drawing on a backend of your own.
+pub fn ensure_font() {
+    static ONCE: Once = Once::new();
+    ONCE.call_once(|| {
+        // The bytes are a valid TTF shipped in the repository; a failure here would be a
+        // packaging bug, and the drawing would then report FontUnavailable.
+        let _ = plotters::style::register_font("sans-serif", FontStyle::Normal, FONT);
+    });
+}
+
+/// Image formats a figure can be written in, chosen by the output file's extension.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ImageFormat {
+    /// `.svg`: vector, text stays text.
+    Svg,
+    /// `.png`: bitmap.
+    Png,
+}
+
+impl ImageFormat {
+    /// The format of `path` by its extension (case-insensitive).
+    pub fn from_path(path: &Path) -> Result<Self, PlotError> {
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(str::to_ascii_lowercase);
+        match ext.as_deref() {
+            Some("svg") => Ok(ImageFormat::Svg),
+            Some("png") => Ok(ImageFormat::Png),
+            _ => Err(PlotError::Extension {
+                path: path.to_owned(),
+            }),
+        }
+    }
+}
+
+/// A figure that could not be written.
+#[derive(Debug, Error)]
+pub enum PlotError {
+    /// The output file's extension names no supported format.
+    #[error("{path}: unsupported image format (use a .svg or .png file name)")]
+    Extension {
+        /// The output path.
+        path: PathBuf,
+    },
+    /// plotters failed while drawing (the message is its own).
+    #[error("drawing failed: {0}")]
+    Draw(String),
+    /// Writing or renaming the file failed.
+    #[error("{path}: {source}")]
+    Io {
+        /// The output path.
+        path: PathBuf,
+        /// The cause.
+        source: std::io::Error,
+    },
+}
+
+impl<E: std::error::Error + Send + Sync> From<DrawingAreaErrorKind<E>> for PlotError {
+    fn from(e: DrawingAreaErrorKind<E>) -> Self {
+        PlotError::Draw(e.to_string())
+    }
+}
+
+/// Something that draws itself on a plotters drawing area of any backend.
+pub trait Figure {
+    /// Size in pixels (width, height).
+    fn size(&self) -> (u32, u32) {
+        (1000, 700)
+    }
+
+    /// Draw on `root` (already sized; filled white by [`render`]).
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError>;
+}
+
+/// Write `figure` to `path` as SVG or PNG (by extension). Nothing is left at `path` unless the
+/// whole image was written: SVG is drawn into memory and written atomically, PNG is drawn to a
+/// temporary sibling and renamed.
+pub fn render(path: &Path, figure: &impl Figure) -> Result<(), PlotError> {
+    ensure_font();
+    let io = |source| PlotError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    match ImageFormat::from_path(path)? {
+        ImageFormat::Svg => {
+            let mut svg = String::new();
+            {
+                let root = SVGBackend::with_string(&mut svg, figure.size()).into_drawing_area();
+                root.fill(&WHITE)?;
+                figure.draw(&root)?;
+                root.present()?;
+            }
+            write_atomic(path, |w| w.write_all(svg.as_bytes())).map_err(io)
+        }
+        ImageFormat::Png => {
+            let name = path.file_name().ok_or_else(|| {
+                io(std::io::Error::new(
+                    std::io::ErrorKind::InvalidInput,
+                    "output path has no file name",
+                ))
+            })?;
+            let mut tmp_name = std::ffi::OsString::from(".");
+            tmp_name.push(name);
+            tmp_name.push(format!(".{}.tmp.png", std::process::id()));
+            let tmp = path.with_file_name(tmp_name);
+            let drawn = (|| {
+                let root = BitMapBackend::new(&tmp, figure.size()).into_drawing_area();
+                root.fill(&WHITE)?;
+                figure.draw(&root)?;
+                root.present()?;
+                Ok(())
+            })();
+            let result = drawn.and_then(|()| std::fs::rename(&tmp, path).map_err(io));
+            if result.is_err() {
+                let _ = std::fs::remove_file(&tmp);
+            }
+            result
+        }
+    }
+}
+
+/// One line series of a [`LinePlot`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct Series {
+    /// Legend label (empty: no legend entry).
+    pub label: String,
+    /// Points (x, y) drawn in order; a NaN coordinate breaks the line.
+    pub points: Vec<(f64, f64)>,
+    /// Line colour.
+    pub color: RGBColor,
+    /// Line width in pixels.
+    pub width: u32,
+}
+
+/// A chart of labelled line series: the simple figure fit, plan and bench reports need.
+#[derive(Debug, Clone, PartialEq)]
+pub struct LinePlot {
+    /// Title above the chart.
+    pub title: String,
+    /// x axis label.
+    pub x_label: String,
+    /// y axis label.
+    pub y_label: String,
+    /// x range; `None`: the data's range.
+    pub x_range: Option<Range<f64>>,
+    /// y range; `None`: the data's range with a 5 % margin.
+    pub y_range: Option<Range<f64>>,
+    /// The series, drawn in order.
+    pub series: Vec<Series>,
+}
+
+/// The finite range of `values` widened by `margin` of its span (a unit range when empty or
+/// flat).
+pub fn data_range(values: impl IntoIterator<Item = f64>, margin: f64) -> Range<f64> {
+    let (lo, hi) = values
+        .into_iter()
+        .filter(|v| v.is_finite())
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        });
+    if lo > hi {
+        return 0.0..1.0;
+    }
+    let span = if hi > lo { hi - lo } else { 1.0 };
+    (lo - margin * span)..(hi + margin * span)
+}
+
+/// Split points into runs of finite points (a NaN or infinite coordinate ends a run).
+pub fn finite_runs(points: &[(f64, f64)]) -> Vec<Vec<(f64, f64)>> {
+    let mut out = Vec::new();
+    let mut run = Vec::new();
+    for &(x, y) in points {
+        if x.is_finite() && y.is_finite() {
+            run.push((x, y));
+        } else if !run.is_empty() {
+            out.push(std::mem::take(&mut run));
+        }
+    }
+    if !run.is_empty() {
+        out.push(run);
+    }
+    out
+}
+
+impl Figure for LinePlot {
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
+        let all = || self.series.iter().flat_map(|s| s.points.iter());
+        let x_range = self
+            .x_range
+            .clone()
+            .unwrap_or_else(|| data_range(all().map(|p| p.0), 0.0));
+        let y_range = self
+            .y_range
+            .clone()
+            .unwrap_or_else(|| data_range(all().map(|p| p.1), 0.05));
+        let mut chart = ChartBuilder::on(root)
+            .caption(&self.title, ("sans-serif", 22))
+            .margin(12)
+            .x_label_area_size(45)
+            .y_label_area_size(65)
+            .build_cartesian_2d(x_range, y_range)?;
+        chart
+            .configure_mesh()
+            .x_desc(&self.x_label)
+            .y_desc(&self.y_label)
+            .label_style(("sans-serif", 14))
+            .draw()?;
+        let mut labelled = false;
+        for s in &self.series {
+            let style = s.color.stroke_width(s.width);
+            for (i, run) in finite_runs(&s.points).into_iter().enumerate() {
+                let drawn = chart.draw_series(LineSeries::new(run, style))?;
+                if i == 0 && !s.label.is_empty() {
+                    labelled = true;
+                    let color = s.color;
+                    drawn.label(&s.label).legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 20, y)], color.stroke_width(2))
+                    });
+                }
+            }
+        }
+        if labelled {
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 14))
+                .draw()?;
+        }
+        Ok(())
+    }
+}
+
+/// Draw line series to an SVG or PNG file (by extension): [`render`] of a [`LinePlot`].
+pub fn draw_lines(path: &Path, plot: &LinePlot) -> Result<(), PlotError> {
+    render(path, plot)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unknown_extension_is_refused_and_nothing_written() {
+        let dir = std::env::temp_dir().join(format!("appell-plot-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let path = dir.join("figure.jpg");
+        let plot = LinePlot {
+            title: String::new(),
+            x_label: String::new(),
+            y_label: String::new(),
+            x_range: None,
+            y_range: None,
+            series: Vec::new(),
+        };
+        assert!(matches!(
+            draw_lines(&path, &plot),
+            Err(PlotError::Extension { .. })
+        ));
+        assert!(!path.exists());
+    }
+
+    #[test]
+    fn line_plot_writes_svg_and_png_with_text() {
+        let dir = std::env::temp_dir().join(format!("appell-plot-ok-{}", std::process::id()));
+        std::fs::create_dir_all(&dir).unwrap();
+        let plot = LinePlot {
+            title: "sine".into(),
+            x_label: "t [s]".into(),
+            y_label: "y".into(),
+            x_range: None,
+            y_range: None,
+            series: vec![Series {
+                label: "sin t".into(),
+                points: (0..50)
+                    .map(|i| (i as f64 * 0.1, (i as f64 * 0.1).sin()))
+                    .collect(),
+                color: BLUE,
+                width: 2,
+            }],
+        };
+        for name in ["a.svg", "a.png"] {
+            let path = dir.join(name);
+            draw_lines(&path, &plot).unwrap();
+            let bytes = std::fs::read(&path).unwrap();
+            assert!(bytes.len() > 1000, "{name}: {} bytes", bytes.len());
+        }
+        let svg = std::fs::read_to_string(dir.join("a.svg")).unwrap();
+        assert!(svg.contains("sin t") && svg.trim_end().ends_with("</svg>"));
+    }
+}

@@ -1,0 +1,159 @@
+//! `appell regions` end to end: the shipped rigs give a valid SVG, PNG and JSON; bad rig files
+//! exit with code 2 and name the key.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn appell(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_appell"))
+        .args(args)
+        .output()
+        .expect("run appell")
+}
+
+fn config(name: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("configs")
+        .join(name)
+        .display()
+        .to_string()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("appell-cli-regions-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    dir.join(name)
+}
+
+fn json_of(out: &Output) -> serde_json::Value {
+    assert!(
+        out.status.success(),
+        "stderr: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).expect("stdout is JSON")
+}
+
+fn png_size(bytes: &[u8]) -> (u32, u32) {
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "PNG signature");
+    assert_eq!(&bytes[12..16], b"IHDR");
+    let be = |i: usize| u32::from_be_bytes(bytes[i..i + 4].try_into().unwrap());
+    (be(16), be(20))
+}
+
+fn check_svg(path: &Path) {
+    let svg = std::fs::read_to_string(path).unwrap();
+    assert!(
+        svg.trim_start().starts_with("<svg"),
+        "{}",
+        &svg[..60.min(svg.len())]
+    );
+    assert!(svg.trim_end().ends_with("</svg>"));
+    assert!(svg.contains("<text"), "axis labels are drawn");
+    assert!(svg.contains("theta [deg]"));
+    assert_eq!(svg.matches("<svg").count(), 1);
+}
+
+#[test]
+fn paper_rig_json_svg_and_png() {
+    let svg = scratch("paper.svg");
+    let out = appell(&[
+        "regions",
+        &config("rig_paper.toml"),
+        "--json",
+        "--plot",
+        svg.to_str().unwrap(),
+        "--trajectories",
+        "4",
+    ]);
+    let v = json_of(&out);
+    assert!((v["mu_critical"].as_f64().unwrap() - 2.0 * 2f64.sqrt()).abs() < 1e-9);
+    assert!((v["theta_critical_deg"].as_f64().unwrap() - 54.7356).abs() < 1e-3);
+    assert_eq!(v["paradox_band_deg"].as_array().unwrap().len(), 0);
+    let r_max = v["max_mass_ratio_for_paradox"].as_f64().unwrap();
+    assert!((r_max - ((1.0f64 + 0.35 * 0.35).sqrt() - 1.0) / 2.0).abs() < 1e-12);
+    let curves = v["stick_boundary"].as_array().unwrap();
+    assert!(!curves.is_empty());
+    assert!(curves[0]["points"][0].as_array().unwrap().len() == 2);
+    assert_eq!(v["trajectories"].as_array().unwrap().len(), 4);
+    check_svg(&svg);
+
+    let png = scratch("paper.png");
+    let out = appell(&[
+        "regions",
+        &config("rig_paper.toml"),
+        "--plot",
+        png.to_str().unwrap(),
+        "--trajectories",
+        "2",
+    ]);
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stdout).contains("mu* = 2.8284"));
+    let bytes = std::fs::read(&png).unwrap();
+    assert_eq!(png_size(&bytes), (1200, 1100));
+    assert!(bytes.len() > 20_000);
+}
+
+#[test]
+fn paradox_rig_json_svg_and_png() {
+    let svg = scratch("paradox.svg");
+    let png = scratch("paradox.png");
+    for plot in [&svg, &png] {
+        let out = appell(&[
+            "regions",
+            &config("rig_paradox.toml"),
+            "--json",
+            "--plot",
+            plot.to_str().unwrap(),
+        ]);
+        let v = json_of(&out);
+        assert!((v["mu_critical"].as_f64().unwrap() - 0.458).abs() < 1e-3);
+        let band = v["paradox_band_deg"].as_array().unwrap();
+        assert_eq!(band.len(), 2);
+        let (lo, hi) = (band[0][0].as_f64().unwrap(), band[0][1].as_f64().unwrap());
+        assert!(lo < 77.7 && 77.7 < hi, "{lo}..{hi}");
+        assert!(!v["q_zero"].as_array().unwrap().is_empty());
+        assert_eq!(v["band_edges_deg"].as_array().unwrap().len(), 8);
+    }
+    check_svg(&svg);
+    assert_eq!(png_size(&std::fs::read(&png).unwrap()), (1200, 1100));
+}
+
+fn bad_rig(name: &str, body: &str) -> Output {
+    let path = scratch(name);
+    std::fs::write(&path, body).unwrap();
+    appell(&["regions", path.to_str().unwrap(), "--trajectories", "0"])
+}
+
+#[test]
+fn negative_mass_exits_2_naming_the_key() {
+    let out = bad_rig(
+        "negative.toml",
+        "[rig]\nslider_mass = -0.1\nbob_mass = 0.1\nrod_length = 0.3\ngravity = 9.81\nmu_kinetic = 0.3\n",
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("slider_mass"));
+}
+
+#[test]
+fn unknown_key_exits_2_naming_the_key() {
+    let out = bad_rig(
+        "unknown.toml",
+        "[rig]\nslider_mass = 0.1\nbob_mass = 0.1\nrod_length = 0.3\ngravity = 9.81\nmu_kinetic = 0.3\nmu_kinetc = 0.3\n",
+    );
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("mu_kinetc"));
+}
+
+#[test]
+fn unsupported_plot_format_exits_2_and_writes_nothing() {
+    let path = scratch("figure.jpg");
+    let out = appell(&[
+        "regions",
+        &config("rig_paper.toml"),
+        "--plot",
+        path.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(!path.exists());
+}

@@ -1,0 +1,404 @@
+//! Region analysis against PHYSICS.md: closed forms of mu*, theta* and the band, a numerical
+//! minimisation, brute-force root counting of the sliding equation, and simulated trajectories.
+
+use appell::model::regions::{
+    band_edges, in_stick_region, max_mass_ratio_for_paradox, mu_critical, paradox_band,
+    paradox_band_deg, q_zero_curve, slide_count_intervals, slide_solution_count, stick_boundary,
+    stick_intervals, theta_critical, PlaneWindow,
+};
+use appell::model::{Direction, Mode, Rig, Shorthands};
+use appell::report::regions::{phase_portrait, PortraitOptions};
+use appell::scene::RigFile;
+use std::f64::consts::PI;
+use std::path::Path;
+
+/// D and a of PHYSICS.md, written out here again so the tests do not trust the library.
+fn d_a(rig: &Rig<f64>, theta: f64) -> (f64, f64) {
+    let (s, c) = theta.sin_cos();
+    (rig.slider_mass + rig.bob_mass * c * c, rig.bob_mass * s * c)
+}
+
+/// b and c of PHYSICS.md, written out independently.
+fn b_c(rig: &Rig<f64>, theta: f64, w: f64) -> (f64, f64) {
+    let (m1, m2, l, g) = (rig.slider_mass, rig.bob_mass, rig.rod_length, rig.gravity);
+    let (s, c) = theta.sin_cos();
+    (
+        -(m1 * g + m2 * g * s * s + m2 * l * w * w * s),
+        m2 * c * (g * s + l * w * w),
+    )
+}
+
+fn rig_with(m1: f64, m2: f64, mu: f64) -> Rig<f64> {
+    Rig::new(m1, m2, 0.3, 9.81, mu, None).unwrap()
+}
+
+/// A small deterministic generator (xorshift64*), uniform in [0, 1).
+struct Rng(u64);
+impl Rng {
+    fn next(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
+    }
+    fn uniform(&mut self, lo: f64, hi: f64) -> f64 {
+        lo + (hi - lo) * self.next()
+    }
+}
+
+#[test]
+fn mu_critical_and_theta_critical_match_physics_md() {
+    // (r, mu*, theta* in degrees) as printed in PHYSICS.md.
+    for (r, mu, theta) in [
+        (0.5, 1.732, 60.0),
+        (2.0, 4.899, 50.8),
+        (0.1, 0.663, 73.2),
+        (0.05, 0.458, 77.7),
+        (1.0, 2.828, 54.74),
+    ] {
+        assert!(
+            (mu_critical(r) - mu).abs() < 1e-3,
+            "r = {r}: {}",
+            mu_critical(r)
+        );
+        let t = theta_critical(r).to_degrees();
+        assert!((t - theta).abs() < 0.06, "r = {r}: theta* = {t}");
+    }
+}
+
+#[test]
+fn mu_critical_is_the_minimum_of_d_over_abs_a() {
+    for r in [0.02, 0.05, 0.1, 0.5, 1.0, 2.0, 7.0] {
+        let rig = rig_with(r, 1.0, 0.3);
+        let f = |t: f64| {
+            let (d, a) = d_a(&rig, t);
+            d / a.abs()
+        };
+        // Coarse grid, then golden-section search on the bracket around the best grid point.
+        let n = 2000;
+        let k = (1..n)
+            .min_by(|&i, &j| {
+                let ti = PI / 2.0 * i as f64 / n as f64;
+                let tj = PI / 2.0 * j as f64 / n as f64;
+                f(ti).total_cmp(&f(tj))
+            })
+            .unwrap();
+        let (mut lo, mut hi) = (
+            PI / 2.0 * (k - 1) as f64 / n as f64,
+            PI / 2.0 * (k + 1) as f64 / n as f64,
+        );
+        let g = (5f64.sqrt() - 1.0) / 2.0;
+        for _ in 0..100 {
+            let (x1, x2) = (hi - g * (hi - lo), lo + g * (hi - lo));
+            if f(x1) < f(x2) {
+                hi = x2;
+            } else {
+                lo = x1;
+            }
+        }
+        let t_min = 0.5 * (lo + hi);
+        assert!(
+            (f(t_min) - mu_critical(r)).abs() < 1e-9 * mu_critical(r),
+            "r = {r}: numerical {} vs {}",
+            f(t_min),
+            mu_critical(r)
+        );
+        assert!((t_min - theta_critical(r)).abs() < 1e-6, "r = {r}");
+        // And the inverse: at exactly mu*(r) the largest ratio is r.
+        assert!((max_mass_ratio_for_paradox(mu_critical(r)) - r).abs() < 1e-9 * (1.0 + r));
+    }
+}
+
+#[test]
+fn equal_mass_band_edges_match_physics_md_and_zero_the_margin() {
+    let rig = rig_with(0.1, 0.1, 1.0);
+    for (mu, lo_deg, hi_deg) in [(3.0, 45.0, 63.43), (4.0, 30.4, 73.7), (5.0, 23.7, 77.6)] {
+        let (lo, hi) = paradox_band(1.0, mu).unwrap();
+        assert!(
+            (lo.to_degrees() - lo_deg).abs() < 0.06,
+            "mu = {mu}: lo = {}",
+            lo.to_degrees()
+        );
+        assert!(
+            (hi.to_degrees() - hi_deg).abs() < 0.06,
+            "mu = {mu}: hi = {}",
+            hi.to_degrees()
+        );
+        for edge in [lo, hi, PI - lo, PI - hi, PI + lo, -hi] {
+            let (d, a) = d_a(&rig, edge);
+            assert!((d - mu * a.abs()).abs() < 1e-12, "mu = {mu}: edge {edge}");
+        }
+        let (d, a) = d_a(&rig, 0.5 * (lo + hi));
+        assert!(
+            d - mu * a.abs() < 0.0,
+            "inside the band the margin is negative"
+        );
+        for outside in [0.9 * lo, hi + 0.1 * (PI / 2.0 - hi)] {
+            let (d, a) = d_a(&rig, outside);
+            assert!(d - mu * a.abs() > 0.0);
+        }
+        // Every edge in a full turn: four per quadrant pair, eight in (0, 2 pi).
+        let edges = band_edges(1.0, mu, 0.0, 2.0 * PI);
+        assert_eq!(edges.len(), 8);
+        for e in edges {
+            let (d, a) = d_a(&rig, e);
+            assert!((d - mu * a.abs()).abs() < 1e-12);
+        }
+    }
+}
+
+#[test]
+fn paradox_band_in_degrees_is_empty_below_mu_star_and_mirrored_above() {
+    assert!(paradox_band_deg(&rig_with(0.1, 0.1, 2.8)).is_empty());
+    let band = paradox_band_deg(&rig_with(0.1, 0.1, 3.0));
+    assert_eq!(band.len(), 2);
+    assert!((band[0][0] - 45.0).abs() < 1e-9 && (band[0][1] - 63.43).abs() < 0.01);
+    assert!((band[1][0] - (180.0 - band[0][1])).abs() < 1e-9);
+    assert!((band[1][1] - (180.0 - band[0][0])).abs() < 1e-9);
+    let paradox = rig_with(0.01, 0.2, 0.6);
+    let band = paradox_band_deg(&paradox);
+    assert!(band[0][0] < 77.7 && 77.7 < band[0][1]);
+}
+
+/// Solve the equations of motion for x'', theta'', N on the friction branch sigma = sign(N),
+/// sliding in direction s (F = -mu s sigma N), by Gaussian elimination of the 3x3 system:
+///   (m1 + m2) x'' - m2 l sin(theta) theta'' + mu s sigma N = m2 l cos(theta) w^2
+///   -sin(theta) x'' + l theta''                            = g cos(theta)
+///   -m2 l cos(theta) theta'' + N                           = -m2 l sin(theta) w^2 - (m1 + m2) g
+fn solve_branch(rig: &Rig<f64>, theta: f64, w: f64, s: f64, sigma: f64) -> Option<[f64; 3]> {
+    let (m1, m2, l, g, mu) = (
+        rig.slider_mass,
+        rig.bob_mass,
+        rig.rod_length,
+        rig.gravity,
+        rig.mu_kinetic,
+    );
+    let (sn, cs) = theta.sin_cos();
+    let mut m = [
+        [m1 + m2, -m2 * l * sn, mu * s * sigma, m2 * l * cs * w * w],
+        [-sn, l, 0.0, g * cs],
+        [0.0, -m2 * l * cs, 1.0, -m2 * l * sn * w * w - (m1 + m2) * g],
+    ];
+    for col in 0..3 {
+        let p = (col..3)
+            .max_by(|&i, &j| m[i][col].abs().total_cmp(&m[j][col].abs()))
+            .unwrap();
+        if m[p][col].abs() < 1e-14 {
+            return None;
+        }
+        m.swap(col, p);
+        for row in 0..3 {
+            if row != col {
+                let pivot = m[col];
+                let f = m[row][col] / pivot[col];
+                for (v, p) in m[row].iter_mut().zip(pivot).skip(col) {
+                    *v -= f * p;
+                }
+            }
+        }
+    }
+    Some([m[0][3] / m[0][0], m[1][3] / m[1][1], m[2][3] / m[2][2]])
+}
+
+/// Count consistent branches by brute force; `None` when the state is too close to a
+/// degenerate curve (N near 0 or a near-singular system) for the count to be robust.
+fn brute_force_count(rig: &Rig<f64>, theta: f64, w: f64, s: f64) -> Option<usize> {
+    let mut count = 0;
+    for sigma in [1.0, -1.0] {
+        let [_, _, n] = solve_branch(rig, theta, w, s, sigma)?;
+        let scale = (rig.slider_mass + rig.bob_mass) * rig.gravity;
+        if n.abs() < 1e-6 * scale {
+            return None;
+        }
+        if n * sigma > 0.0 {
+            count += 1;
+        }
+    }
+    Some(count)
+}
+
+#[test]
+fn sign_rule_counts_match_brute_force_root_counting() {
+    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let rigs = [
+        rig_with(0.1, 0.1, 0.35),
+        rig_with(0.1, 0.1, 3.5),
+        rig_with(0.01, 0.2, 0.6),
+        rig_with(0.01, 0.2, 2.0),
+        rig_with(0.3, 0.1, 5.0),
+    ];
+    let mut seen = [0usize; 3];
+    for rig in &rigs {
+        let w_scale = 4.0 * (rig.gravity / rig.rod_length).sqrt();
+        for _ in 0..20_000 {
+            let theta = rng.uniform(-PI, PI);
+            let w = rng.uniform(-w_scale, w_scale);
+            let s = if rng.next() < 0.5 { 1.0 } else { -1.0 };
+            let (d, a) = d_a(rig, theta);
+            if (d - rig.mu_kinetic * a.abs()).abs() < 1e-6 * d {
+                continue; // on a band edge
+            }
+            let Some(expected) = brute_force_count(rig, theta, w, s) else {
+                continue;
+            };
+            let got = slide_solution_count(rig, theta, w, s);
+            assert_eq!(got, expected, "theta {theta}, w {w}, s {s}, rig {rig:?}");
+            // The simulator's own branch test must agree too.
+            let branches = rig.slide_branches(&Shorthands::new(rig, theta, w), s);
+            assert_eq!(
+                branches.count(),
+                expected,
+                "slide_branches at theta {theta}, w {w}"
+            );
+            seen[got] += 1;
+        }
+    }
+    // The sample must have exercised non-existence and non-uniqueness, not only uniqueness.
+    assert!(seen.iter().all(|&n| n > 100), "counts seen: {seen:?}");
+}
+
+#[test]
+fn stick_boundary_points_satisfy_abs_c_equals_mu_abs_b() {
+    for rig in [
+        rig_with(0.1, 0.1, 0.35),
+        rig_with(0.01, 0.2, 0.6),
+        Rig::new(0.2, 0.1, 0.5, 9.81, 0.2, Some(0.5)).unwrap(),
+    ] {
+        let window = PlaneWindow::for_rig(&rig);
+        let curves = stick_boundary(&rig, &window);
+        assert!(!curves.is_empty());
+        let mut n = 0;
+        for curve in &curves {
+            for &[theta, w] in &curve.points {
+                let (b, c) = b_c(&rig, theta, w);
+                let scale = rig.mu_static * b.abs() + c.abs() + 1e-3;
+                assert!(
+                    (c.abs() - rig.mu_static * b.abs()).abs() < 1e-9 * scale,
+                    "{}: theta {theta}, w {w}: |c| = {}, mu|b| = {}",
+                    curve.label,
+                    c.abs(),
+                    rig.mu_static * b.abs()
+                );
+                assert!(w.abs() <= window.w_max * (1.0 + 1e-12));
+                n += 1;
+            }
+        }
+        assert!(n > 500, "only {n} boundary points");
+    }
+}
+
+#[test]
+fn q_zero_curve_points_satisfy_its_equation() {
+    let rig = rig_with(0.01, 0.2, 0.6);
+    let window = PlaneWindow::for_rig(&rig);
+    let curves = q_zero_curve(&rig, &window);
+    assert!(!curves.is_empty());
+    for c in &curves {
+        for &[theta, w] in &c.points {
+            let lhs = rig.bob_mass * rig.rod_length * w * w * theta.sin();
+            let rhs = -(rig.slider_mass + rig.bob_mass) * rig.gravity;
+            assert!((lhs - rhs).abs() < 1e-9 * rhs.abs(), "theta {theta}, w {w}");
+            assert!(theta.sin() < 0.0, "Q = 0 only with the bob above the rail");
+        }
+    }
+}
+
+#[test]
+fn region_intervals_agree_with_pointwise_tests() {
+    let mut rng = Rng(12345);
+    for rig in [
+        rig_with(0.1, 0.1, 0.35),
+        rig_with(0.01, 0.2, 0.6),
+        rig_with(0.1, 0.1, 4.0),
+    ] {
+        let w_max = 3.0 * (rig.gravity / rig.rod_length).sqrt();
+        for _ in 0..3000 {
+            let theta = rng.uniform(0.0, 2.0 * PI);
+            let w = rng.uniform(-w_max, w_max);
+            let (b, c) = b_c(&rig, theta, w);
+            let margin = rig.mu_static * b.abs() - c.abs();
+            if margin.abs() > 1e-9 {
+                let inside = stick_intervals(&rig, theta, w_max)
+                    .iter()
+                    .any(|&(lo, hi)| lo <= w && w <= hi);
+                assert_eq!(inside, margin > 0.0, "theta {theta}, w {w}");
+                assert_eq!(in_stick_region(&rig, theta, w), margin > 0.0);
+            }
+            for s in [1.0, -1.0] {
+                let intervals = slide_count_intervals(&rig, theta, s, w_max);
+                let Some(&(_, _, n)) = intervals.iter().find(|&&(lo, hi, _)| lo <= w && w <= hi)
+                else {
+                    panic!("w = {w} not covered by {intervals:?}");
+                };
+                assert_eq!(n, slide_solution_count(&rig, theta, w, s));
+            }
+        }
+    }
+}
+
+#[test]
+fn release_from_horizontal_stays_in_stick_region_exactly_when_mu_s_at_least_three_quarters() {
+    // PHYSICS.md: equal masses released from rest with the rod horizontal slip exactly when
+    // mu_s < 0.75 (the ratio |c|/|b| along the pendulum motion peaks at 0.75).
+    let stays = |mu: f64| {
+        let rig = rig_with(0.1, 0.1, mu);
+        (0..=900).all(|k| {
+            let theta = (k as f64 / 10.0).to_radians();
+            let w = (2.0 * rig.gravity / rig.rod_length * theta.sin()).sqrt();
+            in_stick_region(&rig, theta, w)
+        })
+    };
+    assert!(stays(0.7501));
+    assert!(!stays(0.7499));
+}
+
+fn shipped(name: &str) -> Rig<f64> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("configs")
+        .join(name);
+    RigFile::load(&path).unwrap()
+}
+
+#[test]
+fn simulated_modes_lie_in_their_regions() {
+    for (name, expect_paradox) in [("rig_paper.toml", false), ("rig_paradox.toml", true)] {
+        let rig = shipped(name);
+        assert_eq!(!paradox_band_deg(&rig).is_empty(), expect_paradox, "{name}");
+        let runs = phase_portrait(&rig, &PortraitOptions::default());
+        let mut modes = std::collections::HashSet::new();
+        let mut checked = 0;
+        for run in &runs {
+            for sample in &run.samples {
+                let [_, theta, _, w] = sample.state;
+                modes.insert(sample.mode);
+                match sample.mode {
+                    Mode::Stick => {
+                        let (b, c) = b_c(&rig, theta, w);
+                        let margin = rig.mu_static * b.abs() - c.abs();
+                        assert!(
+                            margin >= -1e-7 * (b.abs() + c.abs()),
+                            "{name}: stick sample at t {} outside the stick region (margin {margin})",
+                            sample.t
+                        );
+                    }
+                    Mode::Slide(dir) => {
+                        let s = dir.sign();
+                        assert!(
+                            slide_solution_count(&rig, theta, w, s) >= 1,
+                            "{name}: slide sample at t {} where sliding has no solution",
+                            sample.t
+                        );
+                    }
+                }
+                checked += 1;
+            }
+        }
+        assert!(checked > 1000, "{name}: only {checked} samples");
+        assert!(modes.contains(&Mode::Stick), "{name}: {modes:?}");
+        assert!(
+            modes.contains(&Mode::Slide(Direction::Positive))
+                || modes.contains(&Mode::Slide(Direction::Negative)),
+            "{name}: {modes:?}"
+        );
+    }
+}
