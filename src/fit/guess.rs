@@ -5,8 +5,9 @@
 use super::problem::Observations;
 use crate::model::{sign, Rig, Shorthands};
 
-/// Least-squares polynomial value and first two derivatives at `t0` through (t, y) points.
-fn quadratic_at(t: &[f64], y: &[f64], t0: f64) -> Option<[f64; 3]> {
+/// Least-squares quadratic through (t, y): value and first two derivatives at `t0`, and the
+/// standard error of the slope from the fit's own residuals.
+fn quadratic_fit(t: &[f64], y: &[f64], t0: f64) -> Option<([f64; 3], f64)> {
     if t.len() < 3 {
         return None;
     }
@@ -19,8 +20,23 @@ fn quadratic_at(t: &[f64], y: &[f64], t0: f64) -> Option<[f64; 3]> {
         a += phi * phi.transpose();
         b += phi * yi;
     }
-    let c = a.lu().solve(&b)?;
-    Some([c[0], c[1], 2.0 * c[2]])
+    let cov = a.try_inverse()?;
+    let c = cov * b;
+    let ss: f64 = t
+        .iter()
+        .zip(y)
+        .map(|(&ti, &yi)| {
+            let d = ti - t0;
+            (yi - c[0] - c[1] * d - c[2] * d * d).powi(2)
+        })
+        .sum();
+    let s2 = ss / (t.len() as f64 - 3.0).max(1.0);
+    Some(([c[0], c[1], 2.0 * c[2]], (s2 * cov[(1, 1)]).sqrt()))
+}
+
+/// Value and first two derivatives at `t0` of the least-squares quadratic.
+fn quadratic_at(t: &[f64], y: &[f64], t0: f64) -> Option<[f64; 3]> {
+    quadratic_fit(t, y, t0).map(|(c, _)| c)
 }
 
 /// Rod angle in the model convention (y down) from rail-frame markers with y up.
@@ -54,15 +70,16 @@ fn slider_x(obs: &Observations) -> (Vec<f64>, Vec<f64>) {
         .unzip()
 }
 
-/// Initial state (x, theta, x', theta') from a quadratic fit over the first `window` frames.
-pub fn initial_state(obs: &Observations, window: usize) -> Option<[f64; 4]> {
+/// Initial state (x, theta, x', theta') from a quadratic fit over the first `window` frames,
+/// with the standard error of x' (to tell a release from rest).
+pub fn initial_state(obs: &Observations, window: usize) -> Option<([f64; 4], f64)> {
     let t0 = *obs.times.first()?;
     let (ts, xs) = slider_x(obs);
     let (ta, th) = angles(obs);
     let n = window.max(3);
-    let x = quadratic_at(&ts[..ts.len().min(n)], &xs[..xs.len().min(n)], t0)?;
+    let (x, x_dot_se) = quadratic_fit(&ts[..ts.len().min(n)], &xs[..xs.len().min(n)], t0)?;
     let a = quadratic_at(&ta[..ta.len().min(n)], &th[..th.len().min(n)], t0)?;
-    Some([x[0], a[0], x[1], a[1]])
+    Some(([x[0], a[0], x[1], a[1]], x_dot_se))
 }
 
 /// Median rod length seen in the frames with both markers.
@@ -127,4 +144,50 @@ pub fn mu_from_sliding(obs: &Observations, rig: &Rig<f64>, half_window: usize) -
     }
     mus.sort_by(f64::total_cmp);
     Some(mus[mus.len() / 2])
+}
+
+/// mu_static from the stick-to-slide onsets seen in the data: where a stretch with the slider
+/// at rest ends, static friction was just exhausted, so mu_static ~ |c| / |b| there (the
+/// needed ratio of the pendulum model, from the smoothed angle and rate at the last stuck
+/// frame). The median over onsets; `None` when the data show no onset after a stuck stretch.
+pub fn mu_static_from_onsets(
+    obs: &Observations,
+    rig: &Rig<f64>,
+    half_window: usize,
+) -> Option<f64> {
+    let (ts, xs) = slider_x(obs);
+    let (ta, th) = angles(obs);
+    let h = half_window;
+    if ts.len() < 2 * h + 1 || ta.len() != ts.len() {
+        return None;
+    }
+    let fits: Vec<([f64; 3], f64, [f64; 3])> = (h..ts.len() - h)
+        .filter_map(|i| {
+            let (x, se) = quadratic_fit(&ts[i - h..=i + h], &xs[i - h..=i + h], ts[i])?;
+            let a = quadratic_at(&ta[i - h..=i + h], &th[i - h..=i + h], ts[i])?;
+            Some((x, se, a))
+        })
+        .collect();
+    let vmax = fits.iter().map(|f| f.0[1].abs()).fold(0.0, f64::max);
+    let still = |f: &([f64; 3], f64, [f64; 3])| f.0[1].abs() < (3.0 * f.1).max(0.02 * vmax);
+    let mut ratios = Vec::new();
+    let mut run = 0;
+    for k in 0..fits.len() {
+        if still(&fits[k]) {
+            run += 1;
+            continue;
+        }
+        // An onset: a stuck stretch of at least a window, then motion.
+        if run >= h && k > 0 {
+            let a = fits[k - 1].2;
+            let sh = Shorthands::new(rig, a[0], a[1]);
+            ratios.push(sh.c.abs() / sh.b.abs());
+        }
+        run = 0;
+    }
+    if ratios.is_empty() {
+        return None;
+    }
+    ratios.sort_by(f64::total_cmp);
+    Some(ratios[ratios.len() / 2])
 }

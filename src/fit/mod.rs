@@ -163,6 +163,9 @@ pub enum FitError {
     NoStart(String),
 }
 
+/// The optimum and its cost, or why the solver failed.
+type Solved = Result<(DVector<f64>, f64), String>;
+
 /// Run Levenberg-Marquardt from `p0` on `problem`; returns the optimum and its cost.
 fn solve(
     problem: &TrajectoryProblem,
@@ -234,7 +237,8 @@ pub fn fit(
     let n = obs.times.len();
     let dt = (obs.times[n - 1] / (n - 1) as f64).max(1e-6);
     let window = ((0.012 / dt).round() as usize).clamp(5, 40);
-    let y0 = guess::initial_state(&obs, window).unwrap_or([0.0; 4]);
+    let (y0, x_dot_se) = guess::initial_state(&obs, window).unwrap_or(([0.0; 4], f64::INFINITY));
+    let at_rest = y0[2].abs() < 3.0 * x_dot_se;
     let rig = *rig_guess;
     if let Some(l) = guess::rod_length(&obs) {
         if (l - rig.rod_length).abs() > 0.05 * rig.rod_length {
@@ -259,40 +263,102 @@ pub fn fit(
     let mut problem = TrajectoryProblem::new(obs.clone(), rig, y0, free, settings.options);
     problem.tie_static = settings.mu_static != StaticMode::Fixed;
 
-    // Multi-start over mu: the data's estimate, the rig's guess, and any extra starts.
-    let mut mu_starts: Vec<f64> = mu_data
-        .into_iter()
-        .chain([rig.mu_kinetic])
-        .chain(settings.extra_starts.iter().copied())
-        .collect();
-    mu_starts.dedup_by(|a, b| (*a - *b).abs() < 1e-3 * b.abs().max(1e-3));
-    let results: Vec<(f64, Result<(DVector<f64>, f64), String>)> = mu_starts
+    // Candidate models. Released from rest, x'(0) = 0 exactly: the motion may start stuck,
+    // which no small nonzero x'(0) reproduces (the mode at t = 0 jumps there). And a stuck
+    // start lasts as long as mu_static allows, which mu_static = mu_kinetic cannot reproduce
+    // when they differ: onsets seen in the data give mu_static a start of its own.
+    let mut candidates = vec![problem.clone()];
+    if at_rest {
+        let mut rest = problem.clone();
+        rest.free.retain(|&q| q != Param::XDot);
+        rest.initial[2] = 0.0;
+        let mu_s_data = (settings.mu_static == StaticMode::Auto)
+            .then(|| {
+                guess::mu_static_from_onsets(
+                    &obs,
+                    &rig,
+                    ((0.01 / dt).round() as usize).clamp(3, 50),
+                )
+            })
+            .flatten();
+        if let Some(mu_s) =
+            mu_s_data.filter(|&m| m > 1.05 * rig.mu_kinetic.min(mu_data.unwrap_or(f64::INFINITY)))
+        {
+            let mut m = rest.clone();
+            m.free.push(Param::MuStatic);
+            m.tie_static = false;
+            m.rig.mu_static = mu_s;
+            candidates.push(m);
+        }
+        candidates.push(rest);
+    }
+    let mu0 = mu_data.unwrap_or(rig.mu_kinetic);
+    let start_values = |m: &TrajectoryProblem, mu: f64| {
+        let mut p0 = m.values();
+        p0[0] = mu;
+        if let Some(i) = m.free.iter().position(|&q| q == Param::MuStatic) {
+            p0[i] = p0[i].max(mu);
+        }
+        p0
+    };
+    let first: Vec<Solved> = candidates
         .par_iter()
-        .map(|&mu| {
-            let mut p0 = problem.values();
-            p0[0] = mu;
-            (mu, solve(&problem, p0, settings.max_iters))
-        })
+        .map(|m| solve(m, start_values(m, mu0), settings.max_iters))
         .collect();
+    // Model choice by an information criterion: residual sum of squares times (1 + 2k/n),
+    // so a parameter must pay for itself (Akaike's criterion for Gaussian noise).
+    let n_rows = problem.n_rows() as f64;
     let mut starts = Vec::new();
-    let mut best: Option<(DVector<f64>, f64)> = None;
     let mut last_err = String::new();
-    for (mu, r) in results {
+    let mut best: Option<(usize, DVector<f64>, f64)> = None;
+    for (m, r) in first.into_iter().enumerate() {
         match r {
             Ok((p, c)) => {
                 starts.push(StartOutcome {
-                    mu_start: mu,
+                    mu_start: mu0,
                     mu_end: p[0],
                     cost: c,
                 });
-                if best.as_ref().is_none_or(|(_, bc)| c < *bc) {
-                    best = Some((p, c));
+                let score = c * (1.0 + 2.0 * p.len() as f64 / n_rows);
+                if best.as_ref().is_none_or(|(bm, bp, bc)| {
+                    score < bc * (1.0 + 2.0 * bp.len() as f64 / n_rows) || *bm == usize::MAX
+                }) {
+                    best = Some((m, p, c));
                 }
             }
             Err(e) => last_err = e,
         }
     }
-    let (mut p, _) = best.ok_or(FitError::NoStart(last_err))?;
+    let (choice, mut p, mut cost) = best.ok_or(FitError::NoStart(last_err))?;
+    problem = candidates.swap_remove(choice);
+    // A few more starts over mu on the chosen model: the cost is only piecewise smooth in mu.
+    let mut more: Vec<f64> = [rig.mu_kinetic]
+        .into_iter()
+        .chain(settings.extra_starts.iter().copied())
+        .collect();
+    more.retain(|mu| (mu - mu0).abs() > 1e-3 * mu0.abs().max(1e-3));
+    let others: Vec<(f64, Solved)> = more
+        .par_iter()
+        .map(|&mu| {
+            (
+                mu,
+                solve(&problem, start_values(&problem, mu), settings.max_iters),
+            )
+        })
+        .collect();
+    for (mu, r) in others {
+        if let Ok((q, c)) = r {
+            starts.push(StartOutcome {
+                mu_start: mu,
+                mu_end: q[0],
+                cost: c,
+            });
+            if c < cost {
+                p = q;
+                cost = c;
+            }
+        }
+    }
     problem.set_values(&p);
 
     // Noise per marker from the residuals, then refit with those weights (and robust weights).
@@ -323,6 +389,11 @@ pub fn fit(
                 }
             })
             .collect();
+        // Equal noise on both markers only rescales the cost: the optimum does not move.
+        let ratio = problem.sigma[0].max(problem.sigma[1]) / problem.sigma[0].min(problem.sigma[1]);
+        if settings.loss == Loss::Squares && ratio < 1.25 {
+            break;
+        }
         if let Ok(q) = refit(&problem, &p) {
             p = q;
             problem.set_values(&p);
@@ -343,25 +414,67 @@ pub fn fit(
         )
     };
     let sol = motion(&problem).map_err(|e| FitError::NoStart(e.to_string()))?;
-    let slides = sol.samples.iter().any(|s| matches!(s.mode, Mode::Slide(_)));
+    // A slide shorter than the slider's noise is not seen by the camera: the data then only
+    // say the slider held, so refit the stuck pendulum (mu at 0.999 mu*, where it never slips
+    // and no paradox arises) and report a lower bound for mu_static.
+    let (x_lo, x_hi) = sol
+        .samples
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
+            (lo.min(s.state[0]), hi.max(s.state[0]))
+        });
+    let slides = sol.samples.iter().any(|s| matches!(s.mode, Mode::Slide(_)))
+        && x_hi - x_lo > 3.0 * problem.sigma[0];
     let sticks = sol.samples.iter().any(|s| s.mode == Mode::Stick);
     let onset = sol
         .events
         .iter()
         .any(|e| e.kind == EventKind::Slip && e.t > 0.0);
-    let mut mu_static_free = false;
-    if settings.mu_static == StaticMode::Auto && onset && slides {
-        problem.free.push(Param::MuStatic);
-        problem.tie_static = false;
+    if !slides {
+        let mu_hold = 0.999 * crate::model::regions::mu_critical(problem.rig.mass_ratio());
+        problem.rig.mu_kinetic = mu_hold;
+        problem.rig.mu_static = mu_hold;
+        problem.initial[2] = 0.0;
+        problem.free = vec![Param::X, Param::Theta, Param::ThetaDot];
         p = problem.values();
         if let Ok(q) = refit(&problem, &p) {
             p = q;
             problem.set_values(&p);
-            mu_static_free = true;
-        } else {
-            problem.free.pop();
+        }
+        warnings.push("the slider never slides in the recording: mu_kinetic is not identifiable from it; mu_static is only bounded from below".into());
+    }
+    // mu_static is freed when the motion shows a stick-to-slide onset. If it ends on its bound
+    // mu_static = mu_kinetic, the onset is smooth (x'' starts at zero), its first-order
+    // sensitivity vanishes, and the errors of the others come from the tied model; mu_static
+    // then gets a one-sided profile interval.
+    let mut static_at_bound = false;
+    let mut mu_static_free = false;
+    if !slides {
+        // handled above: the stuck pendulum has no friction parameter left
+    } else if idx(&problem, Param::MuStatic).is_some() {
+        let i = idx(&problem, Param::MuStatic).unwrap();
+        if p[i] - p[0] <= 1e-9 * p[0].max(1e-9) {
+            problem.free.remove(i);
             problem.tie_static = true;
             p = problem.values();
+            static_at_bound = true;
+        } else {
+            mu_static_free = true;
+        }
+    } else if settings.mu_static == StaticMode::Auto && onset && slides {
+        let mut free_static = problem.clone();
+        free_static.free.push(Param::MuStatic);
+        free_static.tie_static = false;
+        if let Ok(q) = refit(&free_static, &free_static.values()) {
+            let at_bound = q[q.len() - 1] - q[0] <= 1e-9 * q[0].max(1e-9);
+            if at_bound {
+                static_at_bound = true;
+            } else {
+                problem = free_static;
+                p = q;
+                problem.set_values(&p);
+                mu_static_free = true;
+            }
         }
     }
     let sol = motion(&problem).map_err(|e| FitError::NoStart(e.to_string()))?;
@@ -396,13 +509,9 @@ pub fn fit(
         })
         .collect();
 
-    // Identifiability.
     let identifiable = slides;
-    if !slides {
-        warnings.push("the slider never slides in the fitted motion: mu_kinetic is not identifiable from this recording".into());
-    }
     if settings.profile && identifiable {
-        if let Some(ci) = profile_interval(&problem, &p, 0, se[0], s2, settings) {
+        if let Some(ci) = profile_interval(&problem, &p, 0, se[0], s2, settings, 0.0) {
             params[0].1.ci95 = ci;
         } else {
             warnings.push("the profile interval for mu_kinetic did not close; the interval shown is value +- 1.96 stderr".into());
@@ -411,7 +520,35 @@ pub fn fit(
     let mu_kinetic = identifiable.then(|| params[0].1);
     let mu_static = if mu_static_free {
         let i = idx(&problem, Param::MuStatic).unwrap();
+        if settings.profile {
+            match profile_interval(&problem, &p, i, se[i], s2, settings, p[0]) {
+                Some(ci) => params[i].1.ci95 = ci,
+                None => warnings.push("the profile interval for mu_static did not close".into()),
+            }
+        }
         StaticResult::Estimated(params[i].1)
+    } else if static_at_bound {
+        let mut upper = f64::NAN;
+        if settings.profile {
+            let mut free_static = problem.clone();
+            free_static.free.push(Param::MuStatic);
+            free_static.tie_static = false;
+            let q = free_static.values();
+            if let Some(ci) =
+                profile_interval(&free_static, &q, q.len() - 1, f64::NAN, s2, settings, q[0])
+            {
+                upper = ci[1];
+            }
+        }
+        warnings.push(format!(
+            "mu_static fits at its bound mu_static = mu_kinetic; the data allow up to {upper:.5}"
+        ));
+        let mu = p[0];
+        StaticResult::Estimated(Estimate {
+            value: mu,
+            stderr: (upper - mu) / 1.96,
+            ci95: [mu, upper],
+        })
     } else if !slides {
         let bound = sol
             .samples
@@ -500,12 +637,13 @@ fn profile_interval(
     se: f64,
     s2: f64,
     settings: &FitSettings,
+    lower_limit: f64,
 ) -> Option<[f64; 2]> {
     let target = 3.84 * s2;
     let base = p.clone();
     let s_min = problem.residuals(p).ok()?.norm_squared();
     let mut fixed = problem.clone();
-    let q = fixed.free.remove(k);
+    fixed.free.remove(k);
     let others: Vec<usize> = (0..p.len()).filter(|&i| i != k).collect();
     let profile = |v: f64, warm: &DVector<f64>| -> Option<(f64, DVector<f64>)> {
         let mut pr = fixed.clone();
@@ -518,17 +656,23 @@ fn profile_interval(
         let (opt, cost) = solve(&pr, warm.clone(), settings.max_iters).ok()?;
         Some((2.0 * cost - s_min, opt))
     };
-    let _ = q;
     let start: DVector<f64> = DVector::from_iterator(others.len(), others.iter().map(|&i| p[i]));
     let mut ends = [0.0; 2];
     for (side, dir) in [-1.0f64, 1.0].iter().enumerate() {
-        let step0 = se.max(1e-6 * p[k].abs().max(1e-3));
+        // A standard error larger than half the value means the linearisation says nothing
+        // (a bound is active): start from a step relative to the value instead.
+        let scale = p[k].abs().max(1e-3);
+        let step0 = if se.is_finite() && se < 0.5 * scale {
+            se.max(1e-6 * scale)
+        } else {
+            0.01 * scale
+        };
         let mut lo = (p[k], 0.0);
         let mut warm = start.clone();
         let mut step = 2.0 * step0;
         let mut hi = None;
         for _ in 0..12 {
-            let v = (p[k] + dir * step).max(0.0);
+            let v = (p[k] + dir * step).max(lower_limit);
             let (d, opt) = profile(v, &warm)?;
             if d >= target {
                 hi = Some((v, d));
@@ -536,14 +680,14 @@ fn profile_interval(
             }
             lo = (v, d);
             warm = opt;
-            if v == 0.0 {
+            if v == lower_limit {
                 break;
             }
             step *= 2.0;
         }
         let Some(mut hi) = hi else {
-            if lo.0 == 0.0 {
-                ends[side] = 0.0;
+            if lo.0 == lower_limit {
+                ends[side] = lower_limit;
                 continue;
             }
             return None;

@@ -117,3 +117,79 @@ pub fn oracle_slide_until_stop(rig: &Rig<f64>, y0: [f64; 4], s: f64, h: f64) -> 
         y = y1;
     }
 }
+
+/// A seeded standard normal generator (xorshift64* and Box-Muller): reproducible noise for
+/// synthetic recordings without a dependency.
+pub struct Normal(u64);
+
+impl Normal {
+    /// A generator from a non-zero seed.
+    pub fn new(seed: u64) -> Self {
+        Normal(seed.max(1))
+    }
+
+    fn uniform(&mut self) -> f64 {
+        self.0 ^= self.0 >> 12;
+        self.0 ^= self.0 << 25;
+        self.0 ^= self.0 >> 27;
+        (self.0.wrapping_mul(0x2545_F491_4F6C_DD1D) >> 11) as f64 / (1u64 << 53) as f64
+    }
+
+    /// One draw from N(0, 1).
+    pub fn sample(&mut self) -> f64 {
+        let (a, b) = (self.uniform().max(1e-300), self.uniform());
+        (-2.0 * a.ln()).sqrt() * (2.0 * std::f64::consts::PI * b).cos()
+    }
+}
+
+/// A synthetic recording of `rig` from `y0`: markers at `rate` Hz for `duration` s with
+/// Gaussian noise `sigma` (m), every `drop_every`-th frame's bob missing (0: none), and
+/// `outliers` frames whose bob is displaced by 20 sigma.
+#[allow(clippy::too_many_arguments)]
+pub fn synthetic(
+    rig: &Rig<f64>,
+    y0: State<f64>,
+    rate: f64,
+    duration: f64,
+    sigma: f64,
+    drop_every: usize,
+    outliers: usize,
+    seed: u64,
+) -> appell::fit::Observations {
+    let times: Vec<f64> = (0..=(duration * rate).round() as usize)
+        .map(|k| k as f64 / rate)
+        .collect();
+    let sol = run(
+        rig,
+        y0,
+        duration,
+        1e-12,
+        Method::Dop853,
+        &Request {
+            sample_times: times.clone(),
+            friction_work: false,
+        },
+    );
+    assert_eq!(sol.samples.len(), times.len());
+    let mut rng = Normal::new(seed);
+    let mut obs = appell::fit::Observations {
+        times,
+        slider: vec![],
+        bob: vec![],
+    };
+    for (k, s) in sol.samples.iter().enumerate() {
+        let m = appell::model::markers(rig, &s.state);
+        let mut n = || sigma * rng.sample();
+        obs.slider.push(Some([m[0] + n(), m[1] + n()]));
+        let mut bob = [m[2] + n(), m[3] + n()];
+        if outliers > 0 && k % (obs.times.len() / outliers).max(1) == 7 {
+            bob[0] += 20.0 * sigma;
+        }
+        obs.bob.push(if drop_every > 0 && k % drop_every == 3 {
+            None
+        } else {
+            Some(bob)
+        });
+    }
+    obs
+}

@@ -2,6 +2,7 @@
 
 mod cli_regions;
 mod cli_simulate;
+mod fit;
 mod helpers;
 mod regions;
 mod simulate_oracles;
