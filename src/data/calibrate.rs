@@ -33,9 +33,16 @@ pub fn calibrate(
             "the scale must be a finite number > 0, got {scale}"
         ));
     }
-    let sy = if y_down { -scale } else { scale };
+    // Millimetres and centimetres divide by 1000 and 100, so decimal values stay exact.
+    let inv = (1.0 / scale).round();
+    let exact_inverse = inv > 1.0 && ((1.0 / scale) - inv).abs() < 1e-9 * inv;
+    let flip = if y_down { -1.0 } else { 1.0 };
     for p in rec.slider.iter_mut().chain(rec.bob.iter_mut()).flatten() {
-        *p = [p[0] * scale, p[1] * sy];
+        *p = if exact_inverse {
+            [p[0] / inv, flip * p[1] / inv]
+        } else {
+            [p[0] * scale, flip * p[1] * scale]
+        };
     }
     let mut cal = Calibration {
         scale,

@@ -733,10 +733,12 @@ fn read_xyz_rows<R: Read>(
     let mut times = Vec::new();
     let mut clock = Clock::default();
     while rows.next()? {
+        // The csv crate skips blank lines: a section ends at a row of one cell (a blank line or
+        // the next section's title).
+        if stop_at_blank && rows.rec.len() == 1 {
+            break;
+        }
         if rows.is_blank() {
-            if stop_at_blank {
-                break;
-            }
             continue;
         }
         let t = time(rows)?;
