@@ -635,3 +635,83 @@ fn cli_convert_and_synth_write_files_that_read_back() {
     assert_eq!(a.bob, b.bob);
     assert_eq!(b.len(), 81);
 }
+
+// ---------------------------------------------------------------- properties
+
+mod props {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn point() -> impl Strategy<Value = Option<[f64; 2]>> {
+        prop::option::weighted(0.9, prop::array::uniform2(-1e3..1e3f64))
+    }
+
+    /// Increasing times with both tracks seen at least once.
+    fn recording() -> impl Strategy<Value = Recording> {
+        prop::collection::vec((1e-4..1.0f64, point(), point()), 1..40)
+            .prop_map(|rows| {
+                let mut rec = Recording::default();
+                let mut t = 0.0;
+                for (i, (dt, s, b)) in rows.into_iter().enumerate() {
+                    if i > 0 {
+                        t += dt;
+                    }
+                    rec.times.push(t);
+                    rec.slider.push(s);
+                    rec.bob.push(b);
+                }
+                rec
+            })
+            .prop_filter("both markers seen", |r| r.seen().0 > 0 && r.seen().1 > 0)
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 64, ..ProptestConfig::default() })]
+
+        #[test]
+        fn wide_csv_round_trips_exactly(rec in recording()) {
+            let mut bytes = Vec::new();
+            rec.write_csv(&mut bytes).unwrap();
+            let back = appell::data::read_recording_from(
+                bytes.as_slice(), Path::new("prop.csv"), &ReadOptions::default()).unwrap();
+            prop_assert_eq!(back.times, rec.times);
+            prop_assert_eq!(back.slider, rec.slider);
+            prop_assert_eq!(back.bob, rec.bob);
+        }
+
+        #[test]
+        fn tracker_reads_every_delimiter_and_decimal_style(
+            rows in prop::collection::vec(prop::array::uniform2(-1e3..1e3f64), 1..30),
+            style in 0usize..4,
+            exponent in any::<bool>(),
+        ) {
+            let (delim, comma) = [("\t", true), (";", true), (" ", false), (",", false)][style];
+            let fmt = |v: f64| {
+                let s = if exponent { format!("{v:E}") } else { format!("{v}") };
+                if comma { s.replace('.', ",") } else { s }
+            };
+            let mut text = format!("slider\nt{delim}x{delim}y\n");
+            for (i, p) in rows.iter().enumerate() {
+                text += &format!("{}{delim}{}{delim}{}\n", fmt(i as f64 * 0.5), fmt(p[0]), fmt(p[1]));
+            }
+            let dir = tempfile::tempdir().unwrap();
+            let s = write(dir.path(), "s.txt", &text);
+            let b = write(dir.path(), "b.txt", &text.replacen("slider", "bob", 1));
+            let rec = read(&[s, b], &ReadOptions::default()).unwrap();
+            prop_assert_eq!(rec.len(), rows.len());
+            for (i, p) in rows.iter().enumerate() {
+                prop_assert_eq!(rec.slider[i], Some(*p));
+            }
+        }
+
+        #[test]
+        fn csv_readers_never_panic_on_arbitrary_text(
+            text in "(t|slider_x|bob_y|scorer|coords|bodyparts|,|;|\t|\n|0|1\\.5|-|e|NaN| |x|y)*",
+            f in 0usize..6,
+        ) {
+            let format = [Format::Wide, Format::Long, Format::Tracker, Format::DeepLabCut, Format::Motive, Format::Vicon][f];
+            let opts = ReadOptions { format: Some(format), fps: Some(30.0), scale: Some(1.0), ..ReadOptions::default() };
+            let _ = appell::data::read_recording_from(text.as_bytes(), Path::new("fuzz.csv"), &opts);
+        }
+    }
+}

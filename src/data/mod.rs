@@ -220,15 +220,22 @@ fn assemble(
             candidates: "the slider's marker".into(),
         });
     }
-    let (times, slider, bob) = align(&parsed.series[si], &parsed.series[bi]);
+    let available = parsed
+        .series
+        .iter()
+        .map(|s| format!("{:?}", s.name))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let a = std::mem::take(&mut parsed.series[si]);
+    let b = std::mem::take(&mut parsed.series[bi]);
+    let (slider_name, bob_name) = (a.name.clone(), b.name.clone());
+    let (times, slider, bob) = align(a, b);
     if times.is_empty() {
         return Err(DataError::NoFrames {
             path: label,
             what: "a header".into(),
         });
     }
-    let slider_name = std::mem::take(&mut parsed.series[si].name);
-    let bob_name = std::mem::take(&mut parsed.series[bi].name);
     let t0 = times[0];
     let mut rec = Recording {
         times: times.iter().map(|t| t - t0).collect(),
@@ -258,12 +265,7 @@ fn assemble(
             path: paths_label(paths),
             role,
             wanted: format!("{name:?} (named, but never with a position)"),
-            available: parsed
-                .series
-                .iter()
-                .map(|s| format!("{:?}", s.name))
-                .collect::<Vec<_>>()
-                .join(", "),
+            available,
         });
     }
     calibrate::calibrate(&mut rec, parsed.scale, parsed.y_down, opts).map_err(|message| {
@@ -336,9 +338,9 @@ fn select(
 
 /// Merge two series with increasing times into common frames: the union of their times, each
 /// marker missing where it has no sample.
-fn align(a: &Series, b: &Series) -> (Vec<f64>, Track, Track) {
+fn align(a: Series, b: Series) -> (Vec<f64>, Track, Track) {
     if a.times == b.times {
-        return (a.times.clone(), a.points.clone(), b.points.clone());
+        return (a.times, a.points, b.points);
     }
     let n = a.times.len().max(b.times.len());
     let (mut t, mut pa, mut pb) = (
