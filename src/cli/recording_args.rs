@@ -124,7 +124,7 @@ mod tests {
     fn bad_recording_flags_are_rejected() {
         assert!(Probe::try_parse_from(["x", "--format", "xls"]).is_err());
         assert!(Probe::try_parse_from(["x", "--y-up", "--y-down"]).is_err());
-        let p = Probe::try_parse_from(["x", "--fps", "-3"]).unwrap();
+        let p = Probe::try_parse_from(["x", "--fps=-3"]).unwrap();
         assert!(p.rec.resolve().unwrap_err().contains("--fps"));
     }
 }

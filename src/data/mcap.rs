@@ -157,11 +157,14 @@ fn ros_ns(t: &RosTime) -> i64 {
     t.sec as i64 * 1_000_000_000 + t.nanosec as i64
 }
 
+/// One marker's samples with nanosecond stamps.
+type Stamped = Vec<(i64, Option<[f64; 2]>)>;
+
 /// Accumulates marker samples with nanosecond stamps.
 #[derive(Default)]
 struct Acc {
     index: HashMap<String, usize>,
-    series: Vec<(String, Vec<(i64, Option<[f64; 2]>)>)>,
+    series: Vec<(String, Stamped)>,
 }
 
 impl Acc {

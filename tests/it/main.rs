@@ -3,5 +3,6 @@
 mod cli_regions;
 mod cli_simulate;
 mod helpers;
+mod recordings;
 mod regions;
 mod simulate_oracles;

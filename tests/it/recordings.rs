@@ -211,7 +211,7 @@ fn dlc_pixels_in_a_tilted_camera_calibrate_back_into_the_rail_frame() {
         rail_frame: true,
         ..ReadOptions::default()
     };
-    let back = read(&[path.clone()], &opts).unwrap();
+    let back = read(std::slice::from_ref(&path), &opts).unwrap();
     assert_eq!(back.provenance.format, Some(Format::DeepLabCut));
     let cal = &back.provenance.calibration;
     assert!(cal.y_flipped);
@@ -500,10 +500,9 @@ fn truncated_mcap_keeps_the_frames_before_the_damage_and_says_so() {
         .warnings
         .iter()
         .any(|w| w.contains("damaged")));
-    let reference = reference();
-    for i in 0..rec.len() {
-        if let Some(s) = rec.slider[i] {
-            assert_eq!(s, reference[i].1);
+    for (s, r) in rec.slider.iter().zip(reference()) {
+        if let Some(s) = s {
+            assert_eq!(*s, r.1);
         }
     }
     // Cut inside the header: nothing to keep, an error naming the file.
