@@ -266,6 +266,7 @@ pub fn fit(
         .chain(settings.extra_starts.iter().copied())
         .collect();
     mu_starts.dedup_by(|a, b| (*a - *b).abs() < 1e-3 * b.abs().max(1e-3));
+    #[allow(clippy::type_complexity)]
     let results: Vec<(f64, Result<(DVector<f64>, f64), String>)> = mu_starts
         .par_iter()
         .map(|&mu| {

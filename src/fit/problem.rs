@@ -260,7 +260,7 @@ impl TrajectoryProblem {
         let mut jac = DMatrix::zeros(r.len(), N);
         let res = DVector::from_iterator(r.len(), r.iter().map(|v| v.re));
         for (row, v) in r.iter().enumerate() {
-            let d = v.eps.clone().unwrap_generic(nalgebra::Const::<N>, U1);
+            let d = v.eps.unwrap_generic(nalgebra::Const::<N>, U1);
             for k in 0..N {
                 jac[(row, k)] = d[k];
             }
