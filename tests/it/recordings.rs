@@ -714,3 +714,60 @@ mod props {
         }
     }
 }
+
+/// The shipped Tracker (German locale) and DeepLabCut (pixels, camera tilted 3 degrees)
+/// examples were drawn from configs/markers_example.toml at 100 Hz: they read back to the
+/// simulated markers.
+#[test]
+fn shipped_tracker_and_dlc_examples_read_back_to_the_simulated_markers() {
+    let cfg = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/markers_example.toml");
+    let scene = Scene::from_path(&cfg).unwrap();
+    let truth = synth::synthesize(
+        &scene,
+        &SynthOptions {
+            fps: 100.0,
+            ..SynthOptions::default()
+        },
+    )
+    .unwrap()
+    .recording;
+    let tracker = read(
+        &[data("tracker_slider.txt"), data("tracker_bob.txt")],
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    let dlc = read(
+        &[data("dlc_example.csv")],
+        &ReadOptions {
+            fps: Some(100.0),
+            rod_length: Some(0.30),
+            rail_frame: true,
+            ..ReadOptions::default()
+        },
+    )
+    .unwrap();
+    assert!((dlc.provenance.calibration.rail_angle.unwrap().to_degrees() - 3.0).abs() < 1e-4);
+    for (rec, tol, missing) in [
+        (&tracker, 1e-9, (None, Some(5))),
+        (&dlc, 1e-6, (Some(7), None)),
+    ] {
+        assert_eq!(rec.len(), truth.len());
+        for i in 0..rec.len() {
+            assert!((rec.times[i] - truth.times[i]).abs() < 1e-12);
+            for (got, want, gap) in [
+                (rec.slider[i], truth.slider[i], missing.0),
+                (rec.bob[i], truth.bob[i], missing.1),
+            ] {
+                if gap == Some(i) {
+                    assert_eq!(got, None);
+                    continue;
+                }
+                let (g, w) = (got.unwrap(), want.unwrap());
+                assert!(
+                    (g[0] - w[0]).abs() < tol && (g[1] - w[1]).abs() < tol,
+                    "frame {i}: {g:?} vs {w:?}"
+                );
+            }
+        }
+    }
+}
