@@ -6,6 +6,7 @@
 #![warn(missing_docs)]
 
 pub mod bench;
+pub mod data;
 pub mod fit;
 pub mod model;
 pub mod report;

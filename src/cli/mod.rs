@@ -2,8 +2,11 @@
 //! command that calls the library and prints.
 
 mod bench;
+mod convert;
+pub mod recording_args;
 mod regions;
 mod simulate;
+mod synth;
 
 use clap::{Parser, Subcommand};
 use std::process::ExitCode;
@@ -25,6 +28,10 @@ enum Command {
     /// Regions of the stick and sliding models in the (theta, theta') plane, the paradox
     /// band, and phase portraits.
     Regions(regions::Args),
+    /// Read a recording (CSV family or MCAP) and write the canonical wide CSV.
+    Convert(convert::Args),
+    /// Write a synthetic recording of a scene (CSV or MCAP) with noise, dropouts, outliers.
+    Synth(synth::Args),
 }
 
 /// A failed command: bad input (exit code 2) or a run that could not finish (exit code 1).
@@ -52,6 +59,8 @@ pub fn main() -> ExitCode {
         Command::Simulate(args) => simulate::run(args),
         Command::Bench(args) => bench::run(args),
         Command::Regions(args) => regions::run(args),
+        Command::Convert(args) => convert::run(args),
+        Command::Synth(args) => synth::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

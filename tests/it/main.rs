@@ -4,5 +4,6 @@ mod cli_regions;
 mod cli_simulate;
 mod fit;
 mod helpers;
+mod recordings;
 mod regions;
 mod simulate_oracles;

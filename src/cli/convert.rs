@@ -1,0 +1,43 @@
+//! `appell convert INPUT... OUTPUT.csv`: read any supported recording and write the canonical
+//! wide CSV.
+
+use super::recording_args::RecordingArgs;
+use super::Failure;
+use anyhow::anyhow;
+use appell::data::{read_recording, synth};
+use std::path::PathBuf;
+
+/// Arguments of `appell convert`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Input file(s), then the output CSV. Formats with one marker per file (Tracker) take
+    /// their files together: `appell convert slider.txt bob.txt out.csv`.
+    #[arg(required = true, num_args = 2.., value_name = "INPUT... OUTPUT.csv")]
+    paths: Vec<PathBuf>,
+    #[command(flatten)]
+    recording: RecordingArgs,
+}
+
+pub fn run(args: Args) -> Result<(), Failure> {
+    let opts = args
+        .recording
+        .resolve()
+        .map_err(|e| Failure::Input(anyhow!(e)))?;
+    let (output, inputs) = args.paths.split_last().expect("clap requires two paths");
+    if inputs.contains(output) {
+        return Err(Failure::Input(anyhow!(
+            "the output {} is also an input",
+            output.display()
+        )));
+    }
+    let rec = read_recording(inputs, &opts).map_err(|e| Failure::Input(e.into()))?;
+    print!("{}", rec.summary());
+    synth::write(output, &rec, &Default::default()).map_err(|e| Failure::Run(e.into()))?;
+    println!(
+        "wrote {} frames to {} ({})",
+        rec.len(),
+        output.display(),
+        synth::output_format(output)
+    );
+    Ok(())
+}

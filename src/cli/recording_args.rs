@@ -1,0 +1,130 @@
+//! The recording flags shared by every command that reads a recording (convert, and later
+//! fit), and the resolve step that turns them into library options.
+
+use appell::data::{Format, Plane, ReadOptions};
+
+/// Flags that say how to read a recording. Flatten into a command with
+/// `#[command(flatten)] recording: RecordingArgs`.
+#[derive(Debug, Clone, Default, clap::Args)]
+pub struct RecordingArgs {
+    /// Input format (default: detected from the header).
+    #[arg(long, value_parser = ["wide", "long", "tracker", "dlc", "motive", "vicon", "mcap"])]
+    pub format: Option<String>,
+    /// Marker name of the slider (default: the one name containing "slider").
+    #[arg(long, value_name = "NAME")]
+    pub slider: Option<String>,
+    /// Marker name of the bob (default: the one name containing "bob").
+    #[arg(long, value_name = "NAME")]
+    pub bob: Option<String>,
+    /// Metres per file unit (pixels, or to override the file's units).
+    #[arg(long, value_name = "M_PER_UNIT")]
+    pub scale: Option<f64>,
+    /// Frame rate for formats without times (DeepLabCut, frame columns).
+    #[arg(long, value_name = "HZ")]
+    pub fps: Option<f64>,
+    /// Plane of motion of 3-D data (default: xy; xz for Vicon).
+    #[arg(long, value_parser = ["xy", "xz", "yz"])]
+    pub plane: Option<String>,
+    /// The file's y axis points down (default: from the format; pixels point down).
+    #[arg(long, conflicts_with = "y_up")]
+    pub y_down: bool,
+    /// The file's y axis points up.
+    #[arg(long)]
+    pub y_up: bool,
+    /// Rotate and shift into the rail frame fitted to the slider's track.
+    #[arg(long)]
+    pub rail_frame: bool,
+    /// Known rod length (m): the geometry check's reference, and the scale of unitless data.
+    #[arg(long, value_name = "M")]
+    pub rod_length: Option<f64>,
+    /// DeepLabCut likelihood under which a point counts as missing.
+    #[arg(long, default_value_t = 0.6, value_name = "P")]
+    pub min_likelihood: f64,
+    /// Drop frames whose slider-bob distance is far from the rod length.
+    #[arg(long)]
+    pub drop_outliers: bool,
+}
+
+impl RecordingArgs {
+    /// Check the values (no I/O) and build the library's read options.
+    pub fn resolve(&self) -> Result<ReadOptions, String> {
+        let positive = |flag: &str, v: Option<f64>| match v {
+            Some(x) if !(x.is_finite() && x > 0.0) => {
+                Err(format!("{flag} must be a finite number > 0, got {x}"))
+            }
+            _ => Ok(v),
+        };
+        if !(0.0..=1.0).contains(&self.min_likelihood) {
+            return Err(format!(
+                "--min-likelihood must be in [0, 1], got {}",
+                self.min_likelihood
+            ));
+        }
+        Ok(ReadOptions {
+            format: self.format.as_deref().and_then(Format::from_name),
+            slider: self.slider.clone(),
+            bob: self.bob.clone(),
+            scale: positive("--scale", self.scale)?,
+            fps: positive("--fps", self.fps)?,
+            plane: self.plane.as_deref().and_then(Plane::from_name),
+            y_down: if self.y_down {
+                Some(true)
+            } else if self.y_up {
+                Some(false)
+            } else {
+                None
+            },
+            rail_frame: self.rail_frame,
+            rod_length: positive("--rod-length", self.rod_length)?,
+            min_likelihood: self.min_likelihood,
+            drop_outliers: self.drop_outliers,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::Parser;
+
+    #[derive(Debug, Parser)]
+    struct Probe {
+        #[command(flatten)]
+        rec: RecordingArgs,
+    }
+
+    #[test]
+    fn recording_flags_resolve_into_read_options() {
+        let p = Probe::try_parse_from([
+            "x",
+            "--format",
+            "dlc",
+            "--fps",
+            "240",
+            "--scale",
+            "0.001",
+            "--plane",
+            "xz",
+            "--slider",
+            "pivot",
+            "--rail-frame",
+            "--y-down",
+        ])
+        .unwrap();
+        let o = p.rec.resolve().unwrap();
+        assert_eq!(o.format, Some(Format::DeepLabCut));
+        assert_eq!(o.fps, Some(240.0));
+        assert_eq!(o.plane, Some(Plane::Xz));
+        assert_eq!(o.slider.as_deref(), Some("pivot"));
+        assert_eq!(o.y_down, Some(true));
+        assert!(o.rail_frame);
+    }
+
+    #[test]
+    fn bad_recording_flags_are_rejected() {
+        assert!(Probe::try_parse_from(["x", "--format", "xls"]).is_err());
+        assert!(Probe::try_parse_from(["x", "--y-up", "--y-down"]).is_err());
+        let p = Probe::try_parse_from(["x", "--fps=-3"]).unwrap();
+        assert!(p.rec.resolve().unwrap_err().contains("--fps"));
+    }
+}

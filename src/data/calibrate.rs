@@ -1,0 +1,191 @@
+//! Calibration into the rail frame: scale to metres, y up, the rail axis fitted from the
+//! slider's own track, the origin, and the rod-length check that flags outlier frames.
+
+use super::{Calibration, Geometry, ReadOptions, Recording};
+
+/// Scale, flip and (with `opts.rail_frame`) rotate and shift a recording in file units into the
+/// rail frame, then check the slider-bob distance. `file_scale` is the file's own metres per
+/// unit, when it says. Errors are messages naming the flag that would fix them.
+pub fn calibrate(
+    rec: &mut Recording,
+    file_scale: Option<(f64, String)>,
+    file_y_down: bool,
+    opts: &ReadOptions,
+) -> Result<(), String> {
+    let y_down = opts.y_down.unwrap_or(file_y_down);
+    let (scale, source) = match (opts.scale, file_scale, opts.rod_length) {
+        (Some(s), _, _) => (s, "--scale".to_string()),
+        (None, Some((s, why)), _) => (s, why),
+        (None, None, Some(l)) => {
+            let d = distances(rec);
+            if d.is_empty() {
+                return Err("no frame shows both markers, so --rod-length cannot set the scale: give --scale".into());
+            }
+            let m = median(d.into_iter().map(|(_, d)| d).collect());
+            (l / m, format!("from --rod-length {l} m over a median of {m} file units"))
+        }
+        (None, None, None) => {
+            return Err("the file's positions have no units (pixels): give --scale METRES_PER_UNIT or --rod-length METRES".into())
+        }
+    };
+    if !(scale.is_finite() && scale > 0.0) {
+        return Err(format!(
+            "the scale must be a finite number > 0, got {scale}"
+        ));
+    }
+    // Millimetres and centimetres divide by 1000 and 100, so decimal values stay exact.
+    let inv = (1.0 / scale).round();
+    let exact_inverse = inv > 1.0 && ((1.0 / scale) - inv).abs() < 1e-9 * inv;
+    let flip = if y_down { -1.0 } else { 1.0 };
+    for p in rec.slider.iter_mut().chain(rec.bob.iter_mut()).flatten() {
+        *p = if exact_inverse {
+            [p[0] / inv, flip * p[1] / inv]
+        } else {
+            [p[0] * scale, flip * p[1] * scale]
+        };
+    }
+    let mut cal = Calibration {
+        scale,
+        scale_source: source,
+        y_flipped: y_down,
+        ..Calibration::default()
+    };
+    if opts.rail_frame {
+        let (angle, origin, rms) = fit_rail(rec)?;
+        let (s, c) = (-angle).sin_cos();
+        for p in rec.slider.iter_mut().chain(rec.bob.iter_mut()).flatten() {
+            let (dx, dy) = (p[0] - origin[0], p[1] - origin[1]);
+            *p = [c * dx - s * dy, s * dx + c * dy];
+        }
+        cal.rail_angle = Some(angle);
+        cal.origin = Some(origin);
+        cal.rail_rms = Some(rms);
+        rec.provenance.notes.push(format!(
+            "rail axis fitted to {} slider positions: {:.4} deg from the file's x, rms off the line {:.3e} m",
+            rec.slider.iter().flatten().count(),
+            angle.to_degrees(),
+            rms
+        ));
+    }
+    rec.provenance.calibration = cal;
+    rec.provenance.geometry = check_geometry(rec, opts.rod_length);
+    if opts.drop_outliers {
+        if let Some(g) = &rec.provenance.geometry {
+            for &i in &g.outliers {
+                rec.slider[i] = None;
+                rec.bob[i] = None;
+            }
+            if !g.outliers.is_empty() {
+                rec.provenance
+                    .warnings
+                    .push(format!("{} outlier frame(s) dropped", g.outliers.len()));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The rail line through the slider's positions (total least squares): its angle in
+/// (-pi/2, pi/2], chosen with x reversed when that puts the bob below the rail; the origin is
+/// the first slider position projected onto the line; and the rms distance off the line.
+pub fn fit_rail(rec: &Recording) -> Result<(f64, [f64; 2], f64), String> {
+    let pts: Vec<[f64; 2]> = rec.slider.iter().flatten().copied().collect();
+    if pts.len() < 2 {
+        return Err("the rail frame needs at least two slider positions".into());
+    }
+    let n = pts.len() as f64;
+    let (mx, my) = pts
+        .iter()
+        .fold((0.0, 0.0), |(a, b), p| (a + p[0] / n, b + p[1] / n));
+    let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+    for p in &pts {
+        let (dx, dy) = (p[0] - mx, p[1] - my);
+        sxx += dx * dx;
+        syy += dy * dy;
+        sxy += dx * dy;
+    }
+    // Principal axis of the 2x2 covariance.
+    let mut angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+    let spread = (sxx + syy).sqrt();
+    if spread == 0.0 {
+        return Err(
+            "the slider never moves, so the rail axis cannot be fitted: drop --rail-frame".into(),
+        );
+    }
+    // Put the bob below the rail (y up).
+    let (s, c) = angle.sin_cos();
+    let bob_side: f64 = rec
+        .bob
+        .iter()
+        .flatten()
+        .map(|b| -s * (b[0] - mx) + c * (b[1] - my))
+        .sum();
+    if bob_side > 0.0 {
+        angle += std::f64::consts::PI;
+    }
+    let (s, c) = angle.sin_cos();
+    let rms = (pts
+        .iter()
+        .map(|p| (-s * (p[0] - mx) + c * (p[1] - my)).powi(2))
+        .sum::<f64>()
+        / n)
+        .sqrt();
+    let p0 = pts[0];
+    let along = c * (p0[0] - mx) + s * (p0[1] - my);
+    let origin = [mx + along * c, my + along * s];
+    Ok((angle, origin, rms))
+}
+
+/// `(frame, distance)` for every frame with both markers.
+fn distances(rec: &Recording) -> Vec<(usize, f64)> {
+    rec.slider
+        .iter()
+        .zip(&rec.bob)
+        .enumerate()
+        .filter_map(|(i, (s, b))| {
+            let (s, b) = (s.as_ref()?, b.as_ref()?);
+            Some((i, (b[0] - s[0]).hypot(b[1] - s[1])))
+        })
+        .collect()
+}
+
+fn median(mut v: Vec<f64>) -> f64 {
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
+/// The slider-bob distance: median, standard deviation, and the frames farther from the
+/// reference (`rod_length`, else the median) than five robust standard deviations (at least
+/// 2 % of the length).
+pub fn check_geometry(rec: &Recording, rod_length: Option<f64>) -> Option<Geometry> {
+    let d = distances(rec);
+    if d.is_empty() {
+        return None;
+    }
+    let n = d.len() as f64;
+    let vals: Vec<f64> = d.iter().map(|x| x.1).collect();
+    let med = median(vals.clone());
+    let mean = vals.iter().sum::<f64>() / n;
+    let std = (vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
+    let reference = rod_length.unwrap_or(med);
+    let mad = median(vals.iter().map(|v| (v - med).abs()).collect());
+    let tolerance = (5.0 * 1.4826 * mad).max(0.02 * reference);
+    let outliers = d
+        .iter()
+        .filter(|(_, v)| (v - reference).abs() > tolerance)
+        .map(|(i, _)| *i)
+        .collect();
+    Some(Geometry {
+        frames: d.len(),
+        median: med,
+        std,
+        reference,
+        outliers,
+        tolerance,
+    })
+}

@@ -1,0 +1,957 @@
+//! Readers for the CSV family: plain wide, long (tidy), Tracker, DeepLabCut, OptiTrack Motive
+//! and Vicon Nexus. Each streams its rows through the `csv` crate and returns marker series in
+//! file units.
+
+use super::{DataError, Format, Parsed, Plane, ReadOptions, Series};
+use csv::StringRecord;
+use std::collections::HashMap;
+use std::io::{BufRead, BufReader, Read};
+use std::path::Path;
+
+/// Read one CSV-family file in format `f`.
+pub(crate) fn read(path: &Path, f: Format, opts: &ReadOptions) -> Result<Parsed, DataError> {
+    let file = std::fs::File::open(path).map_err(|source| DataError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    read_from(BufReader::with_capacity(1 << 16, file), path, f, opts)
+}
+
+/// Read CSV-family text from any reader; `path` labels errors.
+pub(crate) fn read_from(
+    input: impl Read,
+    path: &Path,
+    f: Format,
+    opts: &ReadOptions,
+) -> Result<Parsed, DataError> {
+    match f {
+        Format::Wide => read_wide(input, path, opts),
+        Format::Long => read_long(input, path, opts),
+        Format::Tracker => read_tracker(input, path),
+        Format::DeepLabCut => read_dlc(input, path, opts),
+        Format::Motive => read_motive(input, path, opts),
+        Format::Vicon => read_vicon(input, path, opts),
+        Format::Mcap => unreachable!("MCAP is not a CSV format"),
+    }
+}
+
+/// Rows of a delimited file with line numbers and errors that name the file.
+struct Rows<R: Read> {
+    rdr: csv::Reader<R>,
+    rec: StringRecord,
+    path: std::path::PathBuf,
+    line: u64,
+}
+
+impl<R: Read> Rows<R> {
+    fn new(input: R, path: &Path, delimiter: u8) -> Self {
+        Rows {
+            rdr: csv::ReaderBuilder::new()
+                .has_headers(false)
+                .flexible(true)
+                .delimiter(delimiter)
+                .from_reader(input),
+            rec: StringRecord::new(),
+            path: path.to_owned(),
+            line: 0,
+        }
+    }
+
+    /// Advance to the next row; `false` at the end.
+    fn next(&mut self) -> Result<bool, DataError> {
+        match self.rdr.read_record(&mut self.rec) {
+            Ok(more) => {
+                if let Some(p) = self.rec.position() {
+                    self.line = p.line();
+                }
+                Ok(more)
+            }
+            Err(e) => {
+                let line = e.position().map_or(self.line + 1, |p| p.line());
+                Err(DataError::parse(
+                    &self.path,
+                    format!("line {line}"),
+                    "row",
+                    "UTF-8 delimited text",
+                    e.to_string(),
+                ))
+            }
+        }
+    }
+
+    fn at(&self) -> String {
+        format!("line {}", self.line)
+    }
+
+    fn cell(&self, i: usize) -> &str {
+        self.rec.get(i).unwrap_or("")
+    }
+
+    fn is_blank(&self) -> bool {
+        self.rec.iter().all(|c| c.trim().is_empty())
+    }
+
+    fn err(
+        &self,
+        field: impl Into<String>,
+        expected: impl Into<String>,
+        found: impl Into<String>,
+    ) -> DataError {
+        DataError::parse(&self.path, self.at(), field, expected, found)
+    }
+
+    /// The header row, or `Empty`.
+    fn header(&mut self, expected: &str) -> Result<Vec<String>, DataError> {
+        if !self.next()? {
+            return Err(DataError::Empty {
+                path: self.path.clone(),
+                expected: expected.into(),
+            });
+        }
+        Ok(self.rec.iter().map(|c| c.trim().to_string()).collect())
+    }
+
+    /// A number cell: empty is `None`; text, NaN and infinities are errors.
+    fn num(&self, i: usize, field: &str, decimal_comma: bool) -> Result<Option<f64>, DataError> {
+        let raw = self.cell(i).trim();
+        if raw.is_empty() {
+            return Ok(None);
+        }
+        let fixed;
+        let c = if decimal_comma && raw.contains(',') {
+            fixed = raw.replace(',', ".");
+            fixed.as_str()
+        } else {
+            raw
+        };
+        match c.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(Some(v)),
+            Ok(_) => Err(self.err(field, "a finite number", format!("{raw:?}"))),
+            Err(_) => Err(self.err(field, "a number", format!("{raw:?}"))),
+        }
+    }
+
+    /// A number cell that must be there.
+    fn req(&self, i: usize, field: &str, decimal_comma: bool) -> Result<f64, DataError> {
+        self.num(i, field, decimal_comma)?
+            .ok_or_else(|| self.err(field, "a number", "an empty cell"))
+    }
+
+    /// A point from two or three cells: all empty is missing, some empty is an error.
+    fn point<const N: usize>(
+        &self,
+        idx: [usize; N],
+        name: &str,
+        decimal_comma: bool,
+    ) -> Result<Option<[f64; N]>, DataError> {
+        let mut out = [0.0; N];
+        let mut present = 0;
+        for (k, &i) in idx.iter().enumerate() {
+            if let Some(v) =
+                self.num(i, &format!("{name} {}", ["x", "y", "z"][k]), decimal_comma)?
+            {
+                out[k] = v;
+                present += 1;
+            }
+        }
+        match present {
+            0 => Ok(None),
+            p if p == N => Ok(Some(out)),
+            _ => Err(self.err(
+                name,
+                "all coordinates or none",
+                format!("{present} of {N} cells filled"),
+            )),
+        }
+    }
+
+    /// Reject a row that is shorter than the header.
+    fn width(&self, n: usize) -> Result<(), DataError> {
+        if self.rec.len() < n {
+            Err(self.err(
+                "row",
+                format!("{n} columns as in the header"),
+                format!("{} columns", self.rec.len()),
+            ))
+        } else {
+            Ok(())
+        }
+    }
+}
+
+/// Checks that one track's times increase.
+#[derive(Default)]
+struct Clock {
+    prev: Option<f64>,
+}
+
+impl Clock {
+    fn check(&mut self, path: &Path, at: &str, t: f64) -> Result<(), DataError> {
+        if let Some(prev) = self.prev {
+            if t <= prev {
+                return Err(DataError::Time {
+                    path: path.to_owned(),
+                    at: at.to_owned(),
+                    time: t,
+                    previous: prev,
+                    problem: if t == prev {
+                        "is repeated"
+                    } else {
+                        "goes backwards"
+                    },
+                });
+            }
+        }
+        self.prev = Some(t);
+        Ok(())
+    }
+}
+
+/// What a time column holds.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) enum TimeUnit {
+    /// Seconds times this factor.
+    Scaled(f64),
+    /// Frame numbers (needs a frame rate).
+    Frame,
+}
+
+/// The time column of a lower-cased header: seconds first, then ms, ns, then frames.
+pub(crate) fn time_column(header: &[String]) -> Option<(usize, TimeUnit)> {
+    let find = |names: &[&str]| header.iter().position(|h| names.contains(&h.as_str()));
+    if let Some(i) = find(&[
+        "t",
+        "time",
+        "t_s",
+        "time_s",
+        "time (s)",
+        "time (seconds)",
+        "timestamp",
+        "seconds",
+    ]) {
+        return Some((i, TimeUnit::Scaled(1.0)));
+    }
+    if let Some(i) = find(&["t_ms", "time_ms", "time (ms)"]) {
+        return Some((i, TimeUnit::Scaled(1e-3)));
+    }
+    if let Some(i) = find(&["t_ns", "time_ns", "timestamp_ns"]) {
+        return Some((i, TimeUnit::Scaled(1e-9)));
+    }
+    find(&[
+        "frame",
+        "frame_idx",
+        "frame_index",
+        "frame index",
+        "frame_id",
+    ])
+    .map(|i| (i, TimeUnit::Frame))
+}
+
+/// Time, marker, x and y columns of a long-form lower-cased header.
+pub(crate) fn long_columns(header: &[String]) -> Option<(usize, TimeUnit, usize, usize, usize)> {
+    let find = |names: &[&str]| header.iter().position(|h| names.contains(&h.as_str()));
+    let (t, unit) = time_column(header)?;
+    let m = find(&[
+        "marker",
+        "name",
+        "label",
+        "track",
+        "track_id",
+        "bodypart",
+        "body_part",
+        "point",
+        "object",
+    ])?;
+    let x = find(&["x", "x_m", "x (m)", "position_x", "pos_x"])?;
+    let y = find(&["y", "y_m", "y (m)", "position_y", "pos_y"])?;
+    Some((t, unit, m, x, y))
+}
+
+/// Turns a time cell into seconds relative to the first one (kept exact for integer
+/// nanoseconds), with the first one's absolute value as the base.
+struct TimeReader {
+    col: usize,
+    unit: TimeUnit,
+    fps: Option<f64>,
+    base: Option<f64>,
+    base_ns: Option<i64>,
+}
+
+impl TimeReader {
+    fn new(path: &Path, col: usize, unit: TimeUnit, opts: &ReadOptions) -> Result<Self, DataError> {
+        if unit == TimeUnit::Frame && opts.fps.is_none() {
+            return Err(DataError::Options {
+                path: path.to_owned(),
+                message: "the time column holds frame numbers: give the frame rate with --fps HZ"
+                    .into(),
+            });
+        }
+        Ok(TimeReader {
+            col,
+            unit,
+            fps: opts.fps,
+            base: None,
+            base_ns: None,
+        })
+    }
+
+    fn read<R: Read>(&mut self, rows: &Rows<R>) -> Result<f64, DataError> {
+        if self.unit == TimeUnit::Scaled(1e-9) {
+            let raw = rows.cell(self.col).trim();
+            if let Ok(ns) = raw.parse::<i64>() {
+                let base = *self.base_ns.get_or_insert(ns);
+                self.base.get_or_insert(base as f64 * 1e-9);
+                return Ok((ns - base) as f64 * 1e-9);
+            }
+        }
+        let v = rows.req(self.col, "time", false)?;
+        let secs = match self.unit {
+            TimeUnit::Scaled(f) => v * f,
+            TimeUnit::Frame => v / self.fps.expect("checked in new"),
+        };
+        let base = *self.base.get_or_insert(secs);
+        Ok(if base == 0.0 { secs } else { secs - base })
+    }
+}
+
+fn lower(h: &[String]) -> Vec<String> {
+    h.iter().map(|c| c.to_lowercase()).collect()
+}
+
+fn read_wide(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {
+    let mut rows = Rows::new(input, path, b',');
+    let header = rows.header("a header t,slider_x,slider_y,bob_x,bob_y")?;
+    let low = lower(&header);
+    let (tcol, unit) = time_column(&low).ok_or_else(|| {
+        rows.err(
+            "header",
+            "a time column (t, time, t_ms, t_ns, or frame with --fps)",
+            format!("{:?}", header.join(",")),
+        )
+    })?;
+    let mut pairs = Vec::new();
+    for (i, h) in low.iter().enumerate() {
+        if let Some(stem) = h.strip_suffix("_x") {
+            let want = format!("{stem}_y");
+            let j = low.iter().position(|c| *c == want).ok_or_else(|| {
+                rows.err(
+                    "header",
+                    format!("a column {want} beside {h}"),
+                    format!("{:?}", header.join(",")),
+                )
+            })?;
+            pairs.push((header[i][..header[i].len() - 2].to_string(), i, j));
+        }
+    }
+    if pairs.is_empty() {
+        return Err(rows.err(
+            "header",
+            "NAME_x,NAME_y column pairs (e.g. slider_x,slider_y,bob_x,bob_y)",
+            format!("{:?}", header.join(",")),
+        ));
+    }
+    let mut time = TimeReader::new(path, tcol, unit, opts)?;
+    let mut times = Vec::new();
+    let mut tracks: Vec<Vec<Option<[f64; 2]>>> = vec![Vec::new(); pairs.len()];
+    let mut clock = Clock::default();
+    while rows.next()? {
+        if rows.is_blank() {
+            continue;
+        }
+        rows.width(header.len())?;
+        let t = time.read(&rows)?;
+        clock.check(path, &rows.at(), t)?;
+        times.push(t);
+        for (k, (name, i, j)) in pairs.iter().enumerate() {
+            tracks[k].push(rows.point([*i, *j], name, false)?);
+        }
+    }
+    if times.is_empty() {
+        return Err(DataError::NoFrames {
+            path: path.to_owned(),
+            what: "a header".into(),
+        });
+    }
+    let series = pairs
+        .into_iter()
+        .zip(tracks)
+        .map(|((name, _, _), points)| Series {
+            name,
+            times: times.clone(),
+            points,
+        })
+        .collect();
+    Ok(Parsed {
+        series,
+        scale: opts
+            .scale
+            .is_none()
+            .then(|| (1.0, "metres, as the wide CSV is".to_string())),
+        time_base: time.base.unwrap_or(0.0),
+        ..Parsed::default()
+    })
+}
+
+fn read_long(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {
+    let mut rows = Rows::new(input, path, b',');
+    let header = rows.header("a header t,marker,x,y")?;
+    let (tcol, unit, mcol, xcol, ycol) = long_columns(&lower(&header)).ok_or_else(|| {
+        rows.err(
+            "header",
+            "columns for time, marker, x and y (e.g. t,marker,x,y)",
+            format!("{:?}", header.join(",")),
+        )
+    })?;
+    let mut time = TimeReader::new(path, tcol, unit, opts)?;
+    let mut index: HashMap<String, usize> = HashMap::new();
+    let mut series: Vec<Series> = Vec::new();
+    let mut clocks: Vec<Clock> = Vec::new();
+    let mut rowcount = 0usize;
+    while rows.next()? {
+        if rows.is_blank() {
+            continue;
+        }
+        rows.width(header.len())?;
+        let t = time.read(&rows)?;
+        let name = rows.cell(mcol).trim();
+        if name.is_empty() {
+            return Err(rows.err("marker", "a marker name", "an empty cell"));
+        }
+        let k = match index.get(name) {
+            Some(&k) => k,
+            None => {
+                index.insert(name.to_string(), series.len());
+                series.push(Series {
+                    name: name.to_string(),
+                    ..Series::default()
+                });
+                clocks.push(Clock::default());
+                series.len() - 1
+            }
+        };
+        clocks[k].check(path, &format!("{} (marker {name:?})", rows.at()), t)?;
+        let p = rows.point([xcol, ycol], name, false)?;
+        series[k].times.push(t);
+        series[k].points.push(p);
+        rowcount += 1;
+    }
+    if rowcount == 0 {
+        return Err(DataError::NoFrames {
+            path: path.to_owned(),
+            what: "a header".into(),
+        });
+    }
+    Ok(Parsed {
+        series,
+        scale: opts.scale.is_none().then(|| {
+            (
+                1.0,
+                "metres assumed (long CSV carries no units)".to_string(),
+            )
+        }),
+        time_base: time.base.unwrap_or(0.0),
+        ..Parsed::default()
+    })
+}
+
+fn read_tracker(input: impl Read, path: &Path) -> Result<Parsed, DataError> {
+    let mut input = BufReader::new(input);
+    let mut line1 = String::new();
+    let mut line2 = String::new();
+    let io = |source| DataError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    input.read_line(&mut line1).map_err(io)?;
+    if line1.trim().is_empty() {
+        return Err(DataError::Empty {
+            path: path.to_owned(),
+            expected: "a Tracker export (track name, then t x y)".into(),
+        });
+    }
+    input.read_line(&mut line2).map_err(io)?;
+    let name = line1
+        .trim()
+        .trim_start_matches('\u{feff}')
+        .trim_matches('"')
+        .to_string();
+    let delim = [b'\t', b';', b',', b' ']
+        .into_iter()
+        .find(|&d| line2.trim().bytes().filter(|&b| b == d).count() >= 2)
+        .ok_or_else(|| {
+            DataError::parse(
+                path,
+                "line 2",
+                "header",
+                "column names t, x, y separated by tab, comma, semicolon or space",
+                format!("{:?}", line2.trim()),
+            )
+        })?;
+    let cols: Vec<String> = line2
+        .trim()
+        .split(delim as char)
+        .map(|c| c.trim().trim_matches('"').to_lowercase())
+        .collect();
+    let find = |n: &str| cols.iter().position(|c| c == n);
+    let (Some(tc), Some(xc), Some(yc)) = (find("t"), find("x"), find("y")) else {
+        return Err(DataError::parse(
+            path,
+            "line 2",
+            "header",
+            "columns t, x and y",
+            format!("{:?}", line2.trim()),
+        ));
+    };
+    let decimal_comma = delim != b',';
+    let mut rows = Rows::new(input, path, delim);
+    let mut s = Series {
+        name,
+        ..Series::default()
+    };
+    let mut clock = Clock::default();
+    while rows.next()? {
+        if rows.is_blank() {
+            continue;
+        }
+        rows.line += 2;
+        let t = match rows.num(tc, "t", decimal_comma)? {
+            Some(t) => t,
+            None if rows.point([xc, yc], "point", decimal_comma)?.is_none() => continue,
+            None => return Err(rows.err("t", "a time", "an empty cell")),
+        };
+        clock.check(path, &rows.at(), t)?;
+        s.times.push(t);
+        s.points.push(rows.point([xc, yc], &s.name, decimal_comma)?);
+    }
+    if s.times.is_empty() {
+        return Err(DataError::NoFrames {
+            path: path.to_owned(),
+            what: "a track name and a header".into(),
+        });
+    }
+    let notes = vec![format!(
+        "Tracker file {}: track {:?}, delimiter {:?}{}",
+        path.display(),
+        s.name,
+        delim as char,
+        if decimal_comma {
+            ", decimal comma accepted"
+        } else {
+            ""
+        }
+    )];
+    Ok(Parsed {
+        series: vec![s],
+        scale: Some((
+            1.0,
+            "metres assumed: Tracker writes no units (use --scale if calibrated otherwise)".into(),
+        )),
+        notes,
+        ..Parsed::default()
+    })
+}
+
+fn read_dlc(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {
+    let mut rows = Rows::new(input, path, b',');
+    let scorer = rows.header("DeepLabCut header rows scorer, bodyparts, coords")?;
+    if scorer.first().map(|s| s.to_lowercase()) != Some("scorer".into()) {
+        return Err(rows.err(
+            "first cell",
+            "\"scorer\"",
+            format!("{:?}", scorer.first().cloned().unwrap_or_default()),
+        ));
+    }
+    let next_header = |rows: &mut Rows<_>, want: &[&str]| -> Result<Vec<String>, DataError> {
+        if !rows.next()? {
+            return Err(DataError::NoFrames {
+                path: path.to_owned(),
+                what: "an incomplete DeepLabCut header".into(),
+            });
+        }
+        let row: Vec<String> = rows.rec.iter().map(|c| c.trim().to_string()).collect();
+        let key = row.first().map(|c| c.to_lowercase()).unwrap_or_default();
+        if !want.contains(&key.as_str()) {
+            return Err(rows.err("first cell", want.join(" or "), format!("{key:?}")));
+        }
+        Ok(row)
+    };
+    let r1 = next_header(&mut rows, &["individuals", "bodyparts"])?;
+    let (individuals, bodyparts) = if r1[0].eq_ignore_ascii_case("individuals") {
+        (Some(r1), next_header(&mut rows, &["bodyparts"])?)
+    } else {
+        (None, r1)
+    };
+    let coords = next_header(&mut rows, &["coords"])?;
+    let fps = opts.fps.ok_or_else(|| DataError::Options {
+        path: path.to_owned(),
+        message: "DeepLabCut files have no time column: give the video's frame rate with --fps HZ"
+            .into(),
+    })?;
+    // name -> [x, y, likelihood] columns
+    let mut markers: Vec<(String, [Option<usize>; 3])> = Vec::new();
+    for j in 1..coords.len() {
+        let part = bodyparts.get(j).cloned().unwrap_or_default();
+        let name = match &individuals {
+            Some(ind) if !ind.get(j).is_none_or(|i| i.is_empty() || i == "single") => {
+                format!("{}/{part}", ind[j])
+            }
+            _ => part,
+        };
+        let k = match markers.iter().position(|(n, _)| *n == name) {
+            Some(k) => k,
+            None => {
+                markers.push((name, [None; 3]));
+                markers.len() - 1
+            }
+        };
+        let slot = match coords[j].to_lowercase().as_str() {
+            "x" => 0,
+            "y" => 1,
+            "likelihood" => 2,
+            other => {
+                return Err(rows.err(
+                    format!("coords column {}", j + 1),
+                    "x, y or likelihood",
+                    format!("{other:?}"),
+                ))
+            }
+        };
+        markers[k].1[slot] = Some(j);
+    }
+    let mut cols = Vec::new();
+    for (name, [x, y, l]) in &markers {
+        let (Some(x), Some(y)) = (x, y) else {
+            return Err(rows.err(
+                "coords",
+                format!("x and y columns for {name:?}"),
+                "only some",
+            ));
+        };
+        cols.push((*x, *y, *l));
+    }
+    let mut series: Vec<Series> = markers
+        .iter()
+        .map(|(n, _)| Series {
+            name: n.clone(),
+            ..Series::default()
+        })
+        .collect();
+    let mut times = Vec::new();
+    let mut clock = Clock::default();
+    let mut dropped = 0usize;
+    while rows.next()? {
+        if rows.is_blank() {
+            continue;
+        }
+        rows.width(coords.len())?;
+        let frame = rows.req(0, "frame index", false)?;
+        let t = frame / fps;
+        clock.check(path, &rows.at(), t)?;
+        times.push(t);
+        for (k, &(x, y, l)) in cols.iter().enumerate() {
+            let mut p = rows.point([x, y], &series[k].name, false)?;
+            if let (Some(_), Some(l)) = (p, l) {
+                if rows.num(l, "likelihood", false)?.unwrap_or(0.0) < opts.min_likelihood {
+                    p = None;
+                    dropped += 1;
+                }
+            }
+            series[k].points.push(p);
+        }
+    }
+    if times.is_empty() {
+        return Err(DataError::NoFrames {
+            path: path.to_owned(),
+            what: "DeepLabCut header rows".into(),
+        });
+    }
+    for s in &mut series {
+        s.times = times.clone();
+    }
+    Ok(Parsed {
+        series,
+        scale: None,
+        y_down: true,
+        notes: vec![format!(
+            "DeepLabCut: pixels with y down, t = frame / {fps} Hz; {dropped} point(s) under likelihood {} counted as missing",
+            opts.min_likelihood
+        )],
+        ..Parsed::default()
+    })
+}
+
+fn unit_scale(unit: &str) -> Option<f64> {
+    match unit.trim().to_lowercase().as_str() {
+        "m" | "meters" | "metres" | "meter" | "metre" => Some(1.0),
+        "cm" | "centimeters" | "centimetres" => Some(0.01),
+        "mm" | "millimeters" | "millimetres" => Some(0.001),
+        _ => None,
+    }
+}
+
+/// Group 3-D position columns `(name, [x, y, z])` from per-column names and axis labels.
+fn group_xyz(
+    names: impl Iterator<Item = (usize, String)>,
+    axis: &[String],
+) -> Vec<(String, [Option<usize>; 3])> {
+    let mut out: Vec<(String, [Option<usize>; 3])> = Vec::new();
+    for (j, name) in names {
+        let slot = match axis.get(j).map(|a| a.trim().to_lowercase()) {
+            Some(a) if a == "x" => 0,
+            Some(a) if a == "y" => 1,
+            Some(a) if a == "z" => 2,
+            _ => continue,
+        };
+        let k = match out.iter().position(|(n, _)| *n == name) {
+            Some(k) => k,
+            None => {
+                out.push((name, [None; 3]));
+                out.len() - 1
+            }
+        };
+        out[k].1[slot] = Some(j);
+    }
+    out
+}
+
+/// Read 3-D rows into series: `time(rows)` gives each row's time.
+fn read_xyz_rows<R: Read>(
+    rows: &mut Rows<R>,
+    path: &Path,
+    markers: &[(String, [usize; 3])],
+    plane: Plane,
+    mut time: impl FnMut(&Rows<R>) -> Result<f64, DataError>,
+    stop_at_blank: bool,
+) -> Result<Vec<Series>, DataError> {
+    let mut series: Vec<Series> = markers
+        .iter()
+        .map(|(n, _)| Series {
+            name: n.clone(),
+            ..Series::default()
+        })
+        .collect();
+    let mut times = Vec::new();
+    let mut clock = Clock::default();
+    while rows.next()? {
+        // The csv crate skips blank lines: a section ends at a row of one cell (a blank line or
+        // the next section's title).
+        if stop_at_blank && rows.rec.len() == 1 {
+            break;
+        }
+        if rows.is_blank() {
+            continue;
+        }
+        let t = time(rows)?;
+        clock.check(path, &rows.at(), t)?;
+        times.push(t);
+        for (k, (name, idx)) in markers.iter().enumerate() {
+            series[k]
+                .points
+                .push(rows.point(*idx, name, false)?.map(|p| plane.project(p)));
+        }
+    }
+    if times.is_empty() {
+        return Err(DataError::NoFrames {
+            path: path.to_owned(),
+            what: "header rows".into(),
+        });
+    }
+    for s in &mut series {
+        s.times = times.clone();
+    }
+    Ok(series)
+}
+
+fn complete(
+    rows_err: impl Fn(&str) -> DataError,
+    groups: Vec<(String, [Option<usize>; 3])>,
+) -> Result<Vec<(String, [usize; 3])>, DataError> {
+    if groups.is_empty() {
+        return Err(rows_err("marker position columns X, Y, Z"));
+    }
+    groups
+        .into_iter()
+        .map(|(n, [x, y, z])| match (x, y, z) {
+            (Some(x), Some(y), Some(z)) => Ok((n, [x, y, z])),
+            _ => Err(rows_err(&format!("X, Y and Z columns for {n:?}"))),
+        })
+        .collect()
+}
+
+fn read_motive(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {
+    let mut rows = Rows::new(input, path, b',');
+    let meta = rows.header("a Motive export (Format Version, ...)")?;
+    let mut units = None;
+    let mut rate = None;
+    for kv in meta.chunks(2) {
+        if let [k, v] = kv {
+            match k.as_str() {
+                "Length Units" => units = Some(v.clone()),
+                "Export Frame Rate" => rate = Some(v.clone()),
+                _ => {}
+            }
+        }
+    }
+    let mut names: Option<Vec<String>> = None;
+    let mut kinds: Vec<String> = Vec::new();
+    let header = loop {
+        if !rows.next()? {
+            return Err(DataError::NoFrames {
+                path: path.to_owned(),
+                what: "no Frame,Time header row and".into(),
+            });
+        }
+        let row: Vec<String> = rows.rec.iter().map(|c| c.trim().to_string()).collect();
+        if row.first().is_some_and(|c| c.eq_ignore_ascii_case("frame")) {
+            break row;
+        }
+        if row.get(1).is_some_and(|c| c == "Name") {
+            names = Some(row);
+        } else if !rows.is_blank() {
+            kinds = row;
+        }
+    };
+    let names =
+        names.ok_or_else(|| rows.err("header", "a ,Name row before the Frame row", "none"))?;
+    let groups = group_xyz(
+        (2..header.len()).filter_map(|j| {
+            let kind = kinds.get(j).map(String::as_str).unwrap_or("");
+            (kind.eq_ignore_ascii_case("position") && !names.get(j)?.is_empty())
+                .then(|| (j, names[j].clone()))
+        }),
+        &header,
+    );
+    let markers = complete(
+        |e| rows.err("header", e, format!("{:?}", header.join(","))),
+        groups,
+    )?;
+    let plane = opts.plane.unwrap_or(Plane::Xy);
+    let scale = units.as_deref().and_then(unit_scale);
+    let mut base = None;
+    let series = read_xyz_rows(
+        &mut rows,
+        path,
+        &markers,
+        plane,
+        |r| {
+            let t = r.req(1, "Time (Seconds)", false)?;
+            let b = *base.get_or_insert(t);
+            Ok(t - b)
+        },
+        false,
+    )?;
+    Ok(Parsed {
+        series,
+        scale: Some(match scale {
+            Some(s) => (
+                s,
+                format!("Length Units {} from the file", units.unwrap_or_default()),
+            ),
+            None => (1.0, "metres assumed: no Length Units in the file".into()),
+        }),
+        time_base: base.unwrap_or(0.0),
+        notes: vec![format!(
+            "Motive: plane {} (Motive's y is up; --plane to change){}",
+            plane.name(),
+            rate.map(|r| format!(", export rate {r} Hz"))
+                .unwrap_or_default()
+        )],
+        ..Parsed::default()
+    })
+}
+
+fn read_vicon(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {
+    let mut rows = Rows::new(input, path, b',');
+    let mut any = false;
+    loop {
+        if !rows.next()? {
+            return Err(if any {
+                DataError::parse(
+                    path,
+                    format!("line {}", rows.line),
+                    "section",
+                    "a Trajectories section",
+                    "end of file",
+                )
+            } else {
+                DataError::Empty {
+                    path: path.to_owned(),
+                    expected: "a Vicon Nexus export with a Trajectories section".into(),
+                }
+            });
+        }
+        any = true;
+        if rows.cell(0).trim().eq_ignore_ascii_case("trajectories") {
+            break;
+        }
+    }
+    let need = |rows: &mut Rows<_>, what: &str| -> Result<Vec<String>, DataError> {
+        if !rows.next()? {
+            return Err(DataError::NoFrames {
+                path: path.to_owned(),
+                what: format!("a Trajectories section without {what}"),
+            });
+        }
+        Ok(rows.rec.iter().map(|c| c.trim().to_string()).collect())
+    };
+    need(&mut rows, "a frame rate")?;
+    let rate = rows.req(0, "frame rate (Hz)", false)?;
+    if rate <= 0.0 {
+        return Err(rows.err("frame rate (Hz)", "a positive number", rate.to_string()));
+    }
+    let names = need(&mut rows, "marker names")?;
+    let header = need(&mut rows, "a Frame,Sub Frame,X,Y,Z header")?;
+    if !header
+        .first()
+        .is_some_and(|c| c.eq_ignore_ascii_case("frame"))
+    {
+        return Err(rows.err(
+            "header",
+            "Frame,Sub Frame,X,Y,Z,...",
+            format!("{:?}", header.join(",")),
+        ));
+    }
+    let units = need(&mut rows, "a units row")?;
+    let mut current = String::new();
+    let groups = group_xyz(
+        (2..header.len()).map(|j| {
+            if let Some(n) = names.get(j).filter(|n| !n.is_empty()) {
+                current = n.clone();
+            }
+            (j, current.clone())
+        }),
+        &header,
+    );
+    let markers = complete(
+        |e| rows.err("header", e, format!("{:?}", names.join(","))),
+        groups,
+    )?;
+    let unit = units.get(markers[0].1[0]).cloned().unwrap_or_default();
+    let scale = unit_scale(&unit);
+    let plane = opts.plane.unwrap_or(Plane::Xz);
+    let mut first = None;
+    let series = read_xyz_rows(
+        &mut rows,
+        path,
+        &markers,
+        plane,
+        |r| {
+            let f = r.req(0, "Frame", false)?;
+            let f0 = *first.get_or_insert(f);
+            Ok((f - f0) / rate)
+        },
+        true,
+    )?;
+    Ok(Parsed {
+        series,
+        scale: Some(match scale {
+            Some(s) => (s, format!("units {unit} from the file")),
+            None => (0.001, format!("units {unit:?} not recognised: millimetres assumed")),
+        }),
+        notes: vec![format!(
+            "Vicon: {rate} Hz, t = (frame - first frame) / rate; plane {} (Vicon's z is up; --plane to change)",
+            plane.name()
+        )],
+        ..Parsed::default()
+    })
+}

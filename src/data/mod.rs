@@ -1,0 +1,484 @@
+//! Recordings in and out: readers for the CSV family and MCAP, calibration into the rail frame,
+//! the canonical CSV and synthetic recordings with a known mu.
+//!
+//! Every reader produces marker series in file units; [`read_recording`] picks the slider and
+//! the bob, aligns them on common frame times and calibrates them into one [`Recording`], so
+//! the fit never sees a format.
+
+pub mod calibrate;
+mod csv_formats;
+mod error;
+pub mod mcap;
+mod recording;
+pub mod synth;
+
+pub use error::DataError;
+pub use recording::{
+    Calibration, Format, Geometry, Provenance, Recording, Track, CANONICAL_HEADER,
+};
+
+use std::collections::BTreeMap;
+use std::io::Read;
+use std::path::{Path, PathBuf};
+
+/// Which two axes of a 3-D recording form the plane of motion: the first becomes x (along the
+/// rail), the second y (up).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Plane {
+    /// x and y.
+    Xy,
+    /// x and z.
+    Xz,
+    /// y and z.
+    Yz,
+}
+
+impl Plane {
+    /// The name used by `--plane`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Plane::Xy => "xy",
+            Plane::Xz => "xz",
+            Plane::Yz => "yz",
+        }
+    }
+
+    /// The plane named `name`.
+    pub fn from_name(name: &str) -> Option<Plane> {
+        [Plane::Xy, Plane::Xz, Plane::Yz]
+            .into_iter()
+            .find(|p| p.name() == name)
+    }
+
+    /// Project a 3-D point onto the plane.
+    pub fn project(self, p: [f64; 3]) -> [f64; 2] {
+        match self {
+            Plane::Xy => [p[0], p[1]],
+            Plane::Xz => [p[0], p[2]],
+            Plane::Yz => [p[1], p[2]],
+        }
+    }
+}
+
+/// How to read a recording: what the file does not say. Built by the CLI's resolve step or by
+/// hand; [`ReadOptions::default`] detects everything.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ReadOptions {
+    /// The format; `None` detects it from the header.
+    pub format: Option<Format>,
+    /// The slider's marker name; `None` takes the one name containing "slider".
+    pub slider: Option<String>,
+    /// The bob's marker name; `None` takes the one name containing "bob".
+    pub bob: Option<String>,
+    /// Metres per file unit; overrides the file's units.
+    pub scale: Option<f64>,
+    /// Frame rate (Hz) for formats that give frame numbers only.
+    pub fps: Option<f64>,
+    /// Plane of motion for 3-D formats (default: xy for Motive and MCAP, xz for Vicon).
+    pub plane: Option<Plane>,
+    /// Override whether the file's y axis points down.
+    pub y_down: Option<bool>,
+    /// Rotate and shift into the rail frame fitted from the slider's track.
+    pub rail_frame: bool,
+    /// Known rod length (m): the reference for the geometry check, and the scale when the file
+    /// has no units and `scale` is not given.
+    pub rod_length: Option<f64>,
+    /// DeepLabCut likelihood under which a point counts as missing.
+    pub min_likelihood: f64,
+    /// Remove outlier frames (set both markers missing) instead of only flagging them.
+    pub drop_outliers: bool,
+}
+
+impl Default for ReadOptions {
+    fn default() -> Self {
+        ReadOptions {
+            format: None,
+            slider: None,
+            bob: None,
+            scale: None,
+            fps: None,
+            plane: None,
+            y_down: None,
+            rail_frame: false,
+            rod_length: None,
+            min_likelihood: 0.6,
+            drop_outliers: false,
+        }
+    }
+}
+
+/// One marker's samples as a reader found them: times in seconds (strictly increasing after
+/// [`Series::finish`]) and positions in file units, 2-D.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct Series {
+    pub name: String,
+    pub times: Vec<f64>,
+    pub points: Vec<Option<[f64; 2]>>,
+}
+
+/// What a reader returns: marker series in file units and what the file says about them.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Parsed {
+    pub series: Vec<Series>,
+    /// Metres per unit when the file says (with the wording for the report).
+    pub scale: Option<(f64, String)>,
+    /// Whether y points down in the file (pixels).
+    pub y_down: bool,
+    /// The file-clock time (seconds) that the series' times are relative to.
+    pub time_base: f64,
+    pub notes: Vec<String>,
+    pub warnings: Vec<String>,
+    pub metadata: BTreeMap<String, String>,
+}
+
+/// Read a recording from one file, or from one file per marker (Tracker), and calibrate it
+/// into the rail frame. The format is detected unless `opts.format` is set.
+pub fn read_recording(paths: &[PathBuf], opts: &ReadOptions) -> Result<Recording, DataError> {
+    let Some(first) = paths.first() else {
+        return Err(DataError::Options {
+            path: PathBuf::from("(no input)"),
+            message: "no input file given".into(),
+        });
+    };
+    let mut parsed: Option<Parsed> = None;
+    let mut format = opts.format;
+    let detected = format.is_none();
+    for path in paths {
+        let f = match opts.format {
+            Some(f) => f,
+            None => {
+                let f = detect(path)?;
+                if let Some(prev) = format {
+                    if prev != f {
+                        return Err(DataError::Options {
+                            path: path.clone(),
+                            message: format!(
+                                "looks like {f} but {} is {prev}: inputs must share a format",
+                                first.display()
+                            ),
+                        });
+                    }
+                }
+                f
+            }
+        };
+        format = Some(f);
+        let p = match f {
+            Format::Mcap => {
+                if paths.len() > 1 {
+                    return Err(DataError::Options {
+                        path: path.clone(),
+                        message: "MCAP recordings are read one file at a time".into(),
+                    });
+                }
+                mcap::read(path, opts)?
+            }
+            _ => csv_formats::read(path, f, opts)?,
+        };
+        parsed = Some(match parsed {
+            None => p,
+            Some(mut acc) => {
+                for s in p.series {
+                    if acc.series.iter().any(|a| a.name == s.name) {
+                        return Err(DataError::Options {
+                            path: path.clone(),
+                            message: format!(
+                                "marker {:?} appears in more than one input file",
+                                s.name
+                            ),
+                        });
+                    }
+                    acc.series.push(s);
+                }
+                acc.notes.extend(p.notes);
+                acc.warnings.extend(p.warnings);
+                acc
+            }
+        });
+    }
+    let parsed = parsed.expect("at least one path");
+    let format = format.expect("format set with the first path");
+    assemble(paths, format, detected, parsed, opts)
+}
+
+/// Pick the slider and bob series, align them, calibrate.
+fn assemble(
+    paths: &[PathBuf],
+    format: Format,
+    detected: bool,
+    mut parsed: Parsed,
+    opts: &ReadOptions,
+) -> Result<Recording, DataError> {
+    let label = paths_label(paths);
+    let si = select(&label, &parsed.series, "slider", opts.slider.as_deref())?;
+    let bi = select(&label, &parsed.series, "bob", opts.bob.as_deref())?;
+    if si == bi {
+        return Err(DataError::AmbiguousMarker {
+            path: label,
+            role: "bob",
+            wanted: format!("{:?}", parsed.series[bi].name),
+            candidates: "the slider's marker".into(),
+        });
+    }
+    let available = parsed
+        .series
+        .iter()
+        .map(|s| format!("{:?}", s.name))
+        .collect::<Vec<_>>()
+        .join(", ");
+    let a = std::mem::take(&mut parsed.series[si]);
+    let b = std::mem::take(&mut parsed.series[bi]);
+    let (slider_name, bob_name) = (a.name.clone(), b.name.clone());
+    let (times, slider, bob) = align(a, b);
+    if times.is_empty() {
+        return Err(DataError::NoFrames {
+            path: label,
+            what: "a header".into(),
+        });
+    }
+    let t0 = times[0];
+    let mut rec = Recording {
+        times: times.iter().map(|t| t - t0).collect(),
+        slider,
+        bob,
+        provenance: Provenance {
+            sources: paths.to_vec(),
+            format: Some(format),
+            detected,
+            slider_name,
+            bob_name,
+            time_origin: parsed.time_base + t0,
+            notes: parsed.notes,
+            warnings: parsed.warnings,
+            metadata: parsed.metadata,
+            ..Provenance::default()
+        },
+    };
+    if rec.seen().0 == 0 || rec.seen().1 == 0 {
+        let role = if rec.seen().0 == 0 { "slider" } else { "bob" };
+        let name = if role == "slider" {
+            &rec.provenance.slider_name
+        } else {
+            &rec.provenance.bob_name
+        };
+        return Err(DataError::MissingMarker {
+            path: paths_label(paths),
+            role,
+            wanted: format!("{name:?} (named, but never with a position)"),
+            available,
+        });
+    }
+    calibrate::calibrate(&mut rec, parsed.scale, parsed.y_down, opts).map_err(|message| {
+        DataError::Options {
+            path: paths_label(paths),
+            message,
+        }
+    })?;
+    Ok(rec)
+}
+
+fn paths_label(paths: &[PathBuf]) -> PathBuf {
+    PathBuf::from(
+        paths
+            .iter()
+            .map(|p| p.display().to_string())
+            .collect::<Vec<_>>()
+            .join(" + "),
+    )
+}
+
+/// The index of the series for `role`: an exact name, else the one name containing `wanted`
+/// (or the role itself), case-insensitively.
+fn select(
+    path: &Path,
+    series: &[Series],
+    role: &'static str,
+    wanted: Option<&str>,
+) -> Result<usize, DataError> {
+    let needle = wanted.unwrap_or(role);
+    if let Some(i) = series.iter().position(|s| s.name == needle) {
+        return Ok(i);
+    }
+    let lower = needle.to_lowercase();
+    let hits: Vec<usize> = (0..series.len())
+        .filter(|&i| series[i].name.to_lowercase().contains(&lower))
+        .collect();
+    let rule = match wanted {
+        Some(w) => format!("{w:?}"),
+        None => format!("(a name containing {role:?}; --{role} NAME to choose)"),
+    };
+    match hits.as_slice() {
+        [i] => Ok(*i),
+        [] => Err(DataError::MissingMarker {
+            path: path.to_owned(),
+            role,
+            wanted: rule,
+            available: if series.is_empty() {
+                "none".into()
+            } else {
+                series
+                    .iter()
+                    .map(|s| format!("{:?}", s.name))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            },
+        }),
+        many => Err(DataError::AmbiguousMarker {
+            path: path.to_owned(),
+            role,
+            wanted: rule,
+            candidates: many
+                .iter()
+                .map(|&i| format!("{:?}", series[i].name))
+                .collect::<Vec<_>>()
+                .join(", "),
+        }),
+    }
+}
+
+/// Merge two series with increasing times into common frames: the union of their times, each
+/// marker missing where it has no sample.
+fn align(a: Series, b: Series) -> (Vec<f64>, Track, Track) {
+    if a.times == b.times {
+        return (a.times, a.points, b.points);
+    }
+    let n = a.times.len().max(b.times.len());
+    let (mut t, mut pa, mut pb) = (
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+        Vec::with_capacity(n),
+    );
+    let (mut i, mut j) = (0, 0);
+    while i < a.times.len() || j < b.times.len() {
+        let ta = a.times.get(i).copied().unwrap_or(f64::INFINITY);
+        let tb = b.times.get(j).copied().unwrap_or(f64::INFINITY);
+        if ta == tb {
+            t.push(ta);
+            pa.push(a.points[i]);
+            pb.push(b.points[j]);
+            i += 1;
+            j += 1;
+        } else if ta < tb {
+            t.push(ta);
+            pa.push(a.points[i]);
+            pb.push(None);
+            i += 1;
+        } else {
+            t.push(tb);
+            pa.push(None);
+            pb.push(b.points[j]);
+            j += 1;
+        }
+    }
+    (t, pa, pb)
+}
+
+/// Read one recording from any reader (a file or bytes in memory); `label` names it in
+/// errors and provenance. The format is detected from the first bytes unless given.
+pub fn read_recording_from(
+    mut input: impl Read,
+    label: &Path,
+    opts: &ReadOptions,
+) -> Result<Recording, DataError> {
+    let mut head = Vec::with_capacity(4096);
+    input
+        .by_ref()
+        .take(4096)
+        .read_to_end(&mut head)
+        .map_err(|source| DataError::Io {
+            path: label.to_owned(),
+            source,
+        })?;
+    let detected = opts.format.is_none();
+    let format = match opts.format {
+        Some(f) => f,
+        None => detect_head(&head, label)?,
+    };
+    let chained = head.as_slice().chain(input);
+    let parsed = match format {
+        Format::Mcap => mcap::read_from(chained, label, opts)?,
+        f => csv_formats::read_from(chained, label, f, opts)?,
+    };
+    assemble(&[label.to_owned()], format, detected, parsed, opts)
+}
+
+/// Tell the format from the file's first bytes and lines.
+pub fn detect(path: &Path) -> Result<Format, DataError> {
+    let mut head = Vec::with_capacity(4096);
+    std::fs::File::open(path)
+        .and_then(|f| f.take(4096).read_to_end(&mut head))
+        .map_err(|source| DataError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+    detect_head(&head, path)
+}
+
+/// Tell the format from a file's first bytes (up to 4 KiB); `path` names it in errors.
+pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
+    if head.starts_with(::mcap::MAGIC) {
+        return Ok(Format::Mcap);
+    }
+    if head.is_empty() {
+        return Err(DataError::Empty {
+            path: path.to_owned(),
+            expected: "a recording (CSV or MCAP)".into(),
+        });
+    }
+    let text = String::from_utf8_lossy(head);
+    let text = text.trim_start_matches('\u{feff}');
+    let lines: Vec<&str> = text.lines().take(8).collect();
+    let first = lines.first().copied().unwrap_or("").trim();
+    let unknown = || DataError::UnknownFormat {
+        path: path.to_owned(),
+        first_line: first.chars().take(80).collect(),
+        supported: Format::names(),
+    };
+    if path
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
+    {
+        return Ok(Format::Mcap);
+    }
+    let cells = |l: &str| -> Vec<String> {
+        l.split([',', '\t', ';'])
+            .map(|c| c.trim().trim_matches('"').to_lowercase())
+            .collect()
+    };
+    let c0 = cells(first);
+    let key = c0.first().cloned().unwrap_or_default();
+    if key == "scorer" {
+        return Ok(Format::DeepLabCut);
+    }
+    if key == "format version" {
+        return Ok(Format::Motive);
+    }
+    if [
+        "trajectories",
+        "devices",
+        "model outputs",
+        "joints",
+        "segments",
+    ]
+    .contains(&key.as_str())
+    {
+        return Ok(Format::Vicon);
+    }
+    // Tracker: a lone track name, then a header starting with t.
+    if lines.len() >= 2 && c0.len() == 1 && !first.contains(' ') {
+        let c1: Vec<String> = lines[1]
+            .split(['\t', ',', ';', ' '])
+            .map(|c| c.trim().to_lowercase())
+            .collect();
+        if c1.first().is_some_and(|c| c == "t") && c1.contains(&"x".to_string()) {
+            return Ok(Format::Tracker);
+        }
+    }
+    if csv_formats::long_columns(&c0).is_some() {
+        return Ok(Format::Long);
+    }
+    if csv_formats::time_column(&c0).is_some() && c0.iter().any(|c| c.ends_with("_x")) {
+        return Ok(Format::Wide);
+    }
+    Err(unknown())
+}

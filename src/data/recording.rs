@@ -1,0 +1,254 @@
+//! The one recording type every reader produces: frame times and two marker tracks in the rail
+//! frame (metres, x along the rail, y up), with what was inferred on the way.
+
+use std::collections::BTreeMap;
+use std::fmt;
+use std::io::Write;
+use std::path::PathBuf;
+
+/// A marker position `[x, y]` in metres, or `None` where the marker was not seen.
+pub type Track = Vec<Option<[f64; 2]>>;
+
+/// The formats the readers know.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// Plain wide CSV: a time column and `NAME_x`, `NAME_y` pairs (`t,slider_x,...`).
+    Wide,
+    /// Long (tidy) CSV: one row per marker per frame (`t,marker,x,y`).
+    Long,
+    /// Open Source Physics Tracker export: one file per marker.
+    Tracker,
+    /// DeepLabCut CSV: 3 or 4 header rows, pixels, frame index.
+    DeepLabCut,
+    /// OptiTrack Motive CSV export.
+    Motive,
+    /// Vicon Nexus CSV (Trajectories section).
+    Vicon,
+    /// MCAP (JSON, ROS 2 CDR messages).
+    Mcap,
+}
+
+impl Format {
+    /// Every format, in the order detection tries them.
+    pub const ALL: [Format; 7] = [
+        Format::Wide,
+        Format::Long,
+        Format::Tracker,
+        Format::DeepLabCut,
+        Format::Motive,
+        Format::Vicon,
+        Format::Mcap,
+    ];
+
+    /// The name used by `--format`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Format::Wide => "wide",
+            Format::Long => "long",
+            Format::Tracker => "tracker",
+            Format::DeepLabCut => "dlc",
+            Format::Motive => "motive",
+            Format::Vicon => "vicon",
+            Format::Mcap => "mcap",
+        }
+    }
+
+    /// The format named `name` (as in `--format`).
+    pub fn from_name(name: &str) -> Option<Format> {
+        Format::ALL.into_iter().find(|f| f.name() == name)
+    }
+
+    /// The names of all formats, comma separated (for messages).
+    pub fn names() -> String {
+        Format::ALL.map(|f| f.name()).join(", ")
+    }
+}
+
+impl fmt::Display for Format {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// How the file's coordinates were turned into rail-frame metres.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Calibration {
+    /// Metres per file unit.
+    pub scale: f64,
+    /// Where the scale came from (`file`, `--scale`, `rod length`, `assumed`).
+    pub scale_source: String,
+    /// Whether the file's y axis pointed down and was flipped.
+    pub y_flipped: bool,
+    /// The rail axis angle in the (flipped, scaled) file frame, radians, when `--rail-frame`
+    /// rotated the data.
+    pub rail_angle: Option<f64>,
+    /// The file-frame point (metres) that became the origin, when `--rail-frame` shifted it.
+    pub origin: Option<[f64; 2]>,
+    /// RMS distance of the slider from the fitted rail line (metres), when fitted.
+    pub rail_rms: Option<f64>,
+}
+
+/// The slider-bob distance over the frames where both were seen.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Geometry {
+    /// Frames with both markers.
+    pub frames: usize,
+    /// Median distance (metres).
+    pub median: f64,
+    /// Standard deviation of the distance (metres).
+    pub std: f64,
+    /// The reference length: `--rod-length` when given, else the median.
+    pub reference: f64,
+    /// Frames whose distance is far from the reference (indices into the recording).
+    pub outliers: Vec<usize>,
+    /// The tolerance that made a frame an outlier (metres).
+    pub tolerance: f64,
+}
+
+/// Where a recording came from and what was inferred while reading it.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Provenance {
+    /// The files read.
+    pub sources: Vec<PathBuf>,
+    /// The format read.
+    pub format: Option<Format>,
+    /// Whether the format was detected (`false`: given by `--format`).
+    pub detected: bool,
+    /// The file's name for the slider marker.
+    pub slider_name: String,
+    /// The file's name for the bob marker.
+    pub bob_name: String,
+    /// The file's time of the first frame (seconds in the file's clock).
+    pub time_origin: f64,
+    /// Scale, flip and rail-frame transform.
+    pub calibration: Calibration,
+    /// Rod length check.
+    pub geometry: Option<Geometry>,
+    /// Human-readable notes on what was inferred.
+    pub notes: Vec<String>,
+    /// Problems that did not stop the reading (a truncated file, dropped samples).
+    pub warnings: Vec<String>,
+    /// Key-value metadata stored in the file (an MCAP `truth` record, for instance).
+    pub metadata: BTreeMap<String, String>,
+}
+
+/// A recording: frame times and the two marker tracks, in the rail frame, y up, metres.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Recording {
+    /// Frame times, seconds from the first frame, strictly increasing.
+    pub times: Vec<f64>,
+    /// The slider (pivot) track, one entry per frame.
+    pub slider: Track,
+    /// The bob track, one entry per frame.
+    pub bob: Track,
+    /// Where it came from and what was inferred.
+    pub provenance: Provenance,
+}
+
+/// The canonical wide CSV header.
+pub const CANONICAL_HEADER: &str = "t,slider_x,slider_y,bob_x,bob_y";
+
+impl Recording {
+    /// Number of frames.
+    pub fn len(&self) -> usize {
+        self.times.len()
+    }
+
+    /// Whether there are no frames.
+    pub fn is_empty(&self) -> bool {
+        self.times.is_empty()
+    }
+
+    /// Frames where the slider, and where the bob, was seen.
+    pub fn seen(&self) -> (usize, usize) {
+        (
+            self.slider.iter().flatten().count(),
+            self.bob.iter().flatten().count(),
+        )
+    }
+
+    /// Write the canonical wide CSV (`t,slider_x,slider_y,bob_x,bob_y`; seconds and metres,
+    /// empty cells for missing samples). Numbers are written in the shortest form that reads
+    /// back to the same `f64`.
+    pub fn write_csv(&self, w: &mut dyn Write) -> std::io::Result<()> {
+        writeln!(w, "{CANONICAL_HEADER}")?;
+        for i in 0..self.times.len() {
+            write!(w, "{}", self.times[i])?;
+            for p in [self.slider[i], self.bob[i]] {
+                match p {
+                    Some([x, y]) => write!(w, ",{x},{y}")?,
+                    None => write!(w, ",,")?,
+                }
+            }
+            writeln!(w)?;
+        }
+        Ok(())
+    }
+
+    /// A readable summary of what was read and inferred, one item per line.
+    pub fn summary(&self) -> String {
+        let p = &self.provenance;
+        let mut s = String::new();
+        let files: Vec<String> = p.sources.iter().map(|f| f.display().to_string()).collect();
+        let format = p.format.map_or("?", |f| f.name());
+        s += &format!(
+            "read {} ({} format, {})\n",
+            files.join(", "),
+            format,
+            if p.detected { "detected" } else { "given" }
+        );
+        let (ns, nb) = self.seen();
+        let span = self.times.last().copied().unwrap_or(0.0);
+        s += &format!(
+            "frames: {} over {:.6} s; slider \"{}\" seen in {}, bob \"{}\" seen in {}\n",
+            self.len(),
+            span,
+            p.slider_name,
+            ns,
+            p.bob_name,
+            nb
+        );
+        let c = &p.calibration;
+        s += &format!(
+            "scale: {} m per file unit ({}); y {}\n",
+            c.scale,
+            c.scale_source,
+            if c.y_flipped {
+                "down in the file, flipped to up"
+            } else {
+                "up"
+            }
+        );
+        if let (Some(a), Some(o)) = (c.rail_angle, c.origin) {
+            s += &format!(
+                "rail frame: axis at {:.4} deg from the file's x, origin at ({:.6}, {:.6}) m, slider rms off the line {:.3e} m\n",
+                a.to_degrees(),
+                o[0],
+                o[1],
+                c.rail_rms.unwrap_or(f64::NAN)
+            );
+        }
+        if let Some(g) = &p.geometry {
+            s += &format!(
+                "rod: slider-bob distance median {:.6} m, std {:.3e} m over {} frames; {} outlier frame(s) beyond {:.3e} m of {:.6} m\n",
+                g.median,
+                g.std,
+                g.frames,
+                g.outliers.len(),
+                g.tolerance,
+                g.reference
+            );
+        }
+        if !p.metadata.is_empty() {
+            let kv: Vec<String> = p.metadata.iter().map(|(k, v)| format!("{k}={v}")).collect();
+            s += &format!("metadata: {}\n", kv.join(", "));
+        }
+        for n in &p.notes {
+            s += &format!("note: {n}\n");
+        }
+        for w in &p.warnings {
+            s += &format!("warning: {w}\n");
+        }
+        s
+    }
+}
