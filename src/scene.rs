@@ -19,8 +19,9 @@ pub struct RigSpec {
     pub rod_length: f64,
     /// Gravity (m/s^2).
     pub gravity: f64,
-    /// Kinetic friction coefficient.
-    pub mu_kinetic: f64,
+    /// Kinetic friction coefficient (required in scenes; a starting guess in rig files for
+    /// fitting, where it may be left out).
+    pub mu_kinetic: Option<f64>,
     /// Static friction coefficient (defaults to `mu_kinetic`).
     pub mu_static: Option<f64>,
 }
@@ -28,14 +29,28 @@ pub struct RigSpec {
 impl RigSpec {
     /// The validated rig.
     pub fn rig(&self) -> Result<Rig<f64>, RigError> {
+        let mu_kinetic = self
+            .mu_kinetic
+            .ok_or(RigError::Missing { key: "mu_kinetic" })?;
         Rig::new(
             self.slider_mass,
             self.bob_mass,
             self.rod_length,
             self.gravity,
-            self.mu_kinetic,
+            mu_kinetic,
             self.mu_static,
         )
+    }
+
+    /// The validated rig, with `mu_guess` where mu_kinetic is left out (rig files for fitting:
+    /// mu there is only a starting value).
+    pub fn rig_or_guess(&self, mu_guess: f64) -> Result<Rig<f64>, RigError> {
+        RigSpec {
+            mu_kinetic: Some(self.mu_kinetic.unwrap_or(mu_guess)),
+            mu_static: self.mu_static.or(self.mu_kinetic).or(Some(mu_guess)),
+            ..*self
+        }
+        .rig()
     }
 }
 
@@ -279,6 +294,25 @@ impl RigFile {
             source,
         })?;
         Self::parse(&text, path)
+    }
+
+    /// Read a rig file for fitting: mu values are optional starting guesses (`mu_guess` when
+    /// left out).
+    pub fn load_for_fit(path: &Path, mu_guess: f64) -> Result<Rig<f64>, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        let file: RigFile = toml::from_str(&text).map_err(|e| SceneError::Parse {
+            path: path.to_owned(),
+            message: e.to_string().trim_end().to_owned(),
+        })?;
+        file.rig
+            .rig_or_guess(mu_guess)
+            .map_err(|e| SceneError::Invalid {
+                path: path.to_owned(),
+                message: e.to_string(),
+            })
     }
 
     /// Parse and validate rig-file text; `path` only labels errors.

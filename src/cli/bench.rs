@@ -40,12 +40,12 @@ pub fn run(args: Args) -> Result<(), Failure> {
     };
     let timing = time_scene(&scene, args.batches).map_err(|e| Failure::Run(anyhow!(e)))?;
     if args.json {
-        println!(
+        outln!(
             "{}",
             serde_json::json!({"scene": name, "method": scene.options.method.name(), "rtol": scene.options.rtol, "timing": timing})
         );
     } else {
-        println!(
+        outln!(
             "{name}: {} rtol {:e}: median {:.1} us per simulation (fastest {:.1} us, {} runs); {} steps, {} rejected, {} rhs evaluations, {} events",
             scene.options.method.name(),
             scene.options.rtol,

@@ -31,9 +31,9 @@ pub fn run(args: Args) -> Result<(), Failure> {
         )));
     }
     let rec = read_recording(inputs, &opts).map_err(|e| Failure::Input(e.into()))?;
-    print!("{}", rec.summary());
+    out!("{}", rec.summary());
     synth::write(output, &rec, &Default::default()).map_err(|e| Failure::Run(e.into()))?;
-    println!(
+    outln!(
         "wrote {} frames to {} ({})",
         rec.len(),
         output.display(),

@@ -1,8 +1,30 @@
 //! Command-line interface: clap derive structs that only parse, and one function per
 //! command that calls the library and prints.
 
+/// `println!` that ends the process quietly when stdout is closed (`appell ... | head`),
+/// instead of panicking on the broken pipe.
+macro_rules! outln {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        if writeln!(std::io::stdout().lock(), $($t)*).is_err() {
+            std::process::exit(0);
+        }
+    }};
+}
+
+/// `print!` with the same broken-pipe handling as `outln!`.
+macro_rules! out {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        if write!(std::io::stdout().lock(), $($t)*).is_err() {
+            std::process::exit(0);
+        }
+    }};
+}
+
 mod bench;
 mod convert;
+mod fit;
 pub mod recording_args;
 mod regions;
 mod simulate;
@@ -21,6 +43,8 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// Fit mu and the initial state to a recording (or a directory of recordings).
+    Fit(fit::Args),
     /// Simulate a scene and print its event timeline.
     Simulate(simulate::Args),
     /// Time the simulator on a scene (median of repeats).
@@ -56,6 +80,7 @@ impl Failure {
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
+        Command::Fit(args) => fit::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Bench(args) => bench::run(args),
         Command::Regions(args) => regions::run(args),

@@ -62,11 +62,11 @@ pub fn run(args: Args) -> Result<(), Failure> {
         })?;
     }
     if args.json {
-        println!("{}", regions_json(&map, &trajectories));
+        outln!("{}", regions_json(&map, &trajectories));
     } else {
-        print!("{}", regions_summary(&rig, &map, &trajectories));
+        out!("{}", regions_summary(&rig, &map, &trajectories));
         if let Some(path) = &args.plot {
-            println!("figure written to {}", path.display());
+            outln!("figure written to {}", path.display());
         }
     }
     Ok(())

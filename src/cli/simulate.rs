@@ -43,11 +43,11 @@ pub fn run(args: Args) -> Result<(), Failure> {
         .map_err(|e| Failure::Run(anyhow!(e).context(format!("writing {}", path.display()))))?;
     }
     if args.json {
-        println!("{}", report::simulation_json(&scene, &sol));
+        outln!("{}", report::simulation_json(&scene, &sol));
     } else {
-        print!("{}", report::timeline(&scene, &sol));
+        out!("{}", report::timeline(&scene, &sol));
         if let Some(path) = &args.out {
-            println!(
+            outln!(
                 "trajectory: {} samples written to {}",
                 sol.samples.len(),
                 path.display()

@@ -54,7 +54,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
     })?;
     synth::write(&args.output, &syn.recording, &syn.truth).map_err(|e| Failure::Run(e.into()))?;
     let (ns, nb) = syn.recording.seen();
-    println!(
+    outln!(
         "wrote {} frames at {} Hz to {} ({}); slider seen in {ns}, bob in {nb}; mu_kinetic {}, seed {}",
         syn.recording.len(),
         opts.fps,
@@ -64,7 +64,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         opts.seed
     );
     if let Some(t) = syn.stopped_at {
-        println!(
+        outln!(
             "note: the run stopped at t = {t} s (a paradox it does not resolve); frames end there"
         );
     }

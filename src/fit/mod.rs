@@ -577,13 +577,22 @@ pub fn fit(
     if rho.abs() * (n_res as f64).sqrt() > 8.0 && rho.abs() > 0.3 {
         warnings.push(format!("residuals show structure (lag-1 autocorrelation {rho:.2}): the model may not describe this recording (rod length, rail tilt, time offset, a marker mix-up)"));
     }
-    let spread: Vec<f64> = starts.iter().map(|s| s.mu_end).collect();
-    if let (Some(lo), Some(hi)) = (
-        spread.iter().cloned().reduce(f64::min),
-        spread.iter().cloned().reduce(f64::max),
+    // Starts that ended statistically as good as the best (cost within the 1-dof likelihood
+    // ratio, 2 / n relative) but at a different mu are a real ambiguity; a start that stalled
+    // at a worse cost is only a failed start.
+    let best_cost = starts.iter().map(|s| s.cost).fold(f64::INFINITY, f64::min);
+    let tied: Vec<f64> = starts
+        .iter()
+        .filter(|s| s.cost <= best_cost * (1.0 + 2.0 / n_rows))
+        .map(|s| s.mu_end)
+        .collect();
+    if let (Some(lo), Some(hi), true) = (
+        tied.iter().cloned().reduce(f64::min),
+        tied.iter().cloned().reduce(f64::max),
+        identifiable,
     ) {
         if hi - lo > 3.0 * se[0].max(1e-6) {
-            warnings.push(format!("starts disagree: mu_kinetic converged to values from {lo:.5} to {hi:.5}; the best cost was kept"));
+            warnings.push(format!("starts disagree: equally good fits have mu_kinetic from {lo:.5} to {hi:.5}; the best was kept"));
         }
     }
     Ok(FitReport {

@@ -309,3 +309,13 @@ impl LeastSquares for TrajectoryProblem {
         }
     }
 }
+
+impl From<&crate::data::Recording> for Observations {
+    fn from(rec: &crate::data::Recording) -> Self {
+        Observations {
+            times: rec.times.clone(),
+            slider: rec.slider.clone(),
+            bob: rec.bob.clone(),
+        }
+    }
+}

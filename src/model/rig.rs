@@ -40,6 +40,12 @@ pub enum RigError {
         /// The offending value.
         value: f64,
     },
+    /// A required parameter is missing.
+    #[error("rig.{key} is missing")]
+    Missing {
+        /// Scene key of the parameter.
+        key: &'static str,
+    },
     /// Static friction below kinetic friction.
     #[error("rig.mu_static ({mu_static}) must be >= rig.mu_kinetic ({mu_kinetic})")]
     StaticBelowKinetic {

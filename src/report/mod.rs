@@ -1,5 +1,6 @@
 //! Reports: readable timelines, JSON objects and CSV tables, each written whole or not at all.
 
+pub mod fit;
 pub mod plot;
 pub mod regions;
 mod simulate;

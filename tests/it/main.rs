@@ -1,5 +1,6 @@
 //! Integration tests: one binary, shared helpers, one module per capability.
 
+mod cli_fit;
 mod cli_regions;
 mod cli_simulate;
 mod fit;

@@ -1,0 +1,196 @@
+//! `appell fit RECORDING... --rig RIG.toml`: estimate mu and the initial state; a directory of
+//! recordings is fitted in parallel, one JSON line per recording.
+
+use super::recording_args::RecordingArgs;
+use super::Failure;
+use anyhow::anyhow;
+use appell::data::{read_recording, ReadOptions};
+use appell::fit::{fit, FitReport, FitSettings, Loss, Observations, StaticMode};
+use appell::report::fit::{fit_json, fit_text, FitFigure};
+use appell::report::plot::render;
+use appell::scene::RigFile;
+use indicatif::{ProgressBar, ProgressStyle};
+use rayon::prelude::*;
+use std::path::{Path, PathBuf};
+
+/// Arguments of `appell fit`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Recording file(s) (Tracker: one file per marker), or one directory of recordings.
+    #[arg(required = true, value_name = "RECORDING")]
+    inputs: Vec<PathBuf>,
+    /// Rig file: the [rig] section of a scene; mu values there are only starting guesses.
+    #[arg(long, value_name = "RIG.toml")]
+    rig: PathBuf,
+    /// Print JSON (one object; one line per recording for a directory).
+    #[arg(long)]
+    json: bool,
+    /// Draw data, fit, residuals and mode bands (SVG or PNG by extension).
+    #[arg(long, value_name = "FILE.svg")]
+    plot: Option<PathBuf>,
+    /// Robust loss for mis-tracked frames.
+    #[arg(long, value_parser = ["huber", "cauchy"])]
+    robust: Option<String>,
+    /// Also fit the rod length.
+    #[arg(long)]
+    fit_rod_length: bool,
+    /// mu_static: freed when the recording shows a stick-to-slide onset (auto), always equal
+    /// to mu_kinetic (tied), or held at the rig's value (fixed).
+    #[arg(long, default_value = "auto", value_parser = ["auto", "tied", "fixed"])]
+    mu_static: String,
+    /// Skip the profile intervals (faster; intervals are then value +- 1.96 stderr).
+    #[arg(long)]
+    no_profile: bool,
+    /// Extra starting values of mu_kinetic for the multi-start search.
+    #[arg(long, value_delimiter = ',', value_name = "MU,...")]
+    starts: Vec<f64>,
+    #[command(flatten)]
+    recording: RecordingArgs,
+}
+
+fn settings(args: &Args) -> FitSettings {
+    FitSettings {
+        fit_rod_length: args.fit_rod_length,
+        mu_static: match args.mu_static.as_str() {
+            "tied" => StaticMode::Tied,
+            "fixed" => StaticMode::Fixed,
+            _ => StaticMode::Auto,
+        },
+        loss: match args.robust.as_deref() {
+            Some("huber") => Loss::Huber(3.0),
+            Some("cauchy") => Loss::Cauchy(3.0),
+            _ => Loss::Squares,
+        },
+        extra_starts: args.starts.clone(),
+        profile: !args.no_profile,
+        ..FitSettings::default()
+    }
+}
+
+/// Recordings in a directory: files with a recording extension, sorted.
+fn directory_files(dir: &Path) -> Result<Vec<PathBuf>, Failure> {
+    let entries = std::fs::read_dir(dir)
+        .map_err(|e| Failure::Input(anyhow!("{}: cannot list: {e}", dir.display())))?;
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.is_file())
+        .filter(|p| {
+            !p.file_name()
+                .and_then(|n| n.to_str())
+                .is_some_and(|n| n.starts_with('.'))
+        })
+        .filter(|p| {
+            p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
+                ["csv", "mcap", "txt", "tsv"].contains(&e.to_ascii_lowercase().as_str())
+            })
+        })
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        return Err(Failure::Input(anyhow!(
+            "{}: no recordings (.csv, .mcap, .txt, .tsv) in this directory",
+            dir.display()
+        )));
+    }
+    Ok(files)
+}
+
+fn fit_one(
+    paths: &[PathBuf],
+    opts: &ReadOptions,
+    rig: &appell::model::Rig<f64>,
+    settings: &FitSettings,
+) -> Result<(Observations, FitReport), Failure> {
+    let rec = read_recording(paths, opts).map_err(|e| Failure::Input(e.into()))?;
+    let obs = Observations::from(&rec);
+    let report = fit(obs.clone(), rig, settings)
+        .map_err(|e| Failure::Run(anyhow!(e).context(format!("fitting {}", paths[0].display()))))?;
+    Ok((obs, report))
+}
+
+pub fn run(args: Args) -> Result<(), Failure> {
+    let opts = args
+        .recording
+        .resolve()
+        .map_err(|e| Failure::Input(anyhow!(e)))?;
+    let rig = RigFile::load_for_fit(&args.rig, 0.3).map_err(|e| Failure::Input(e.into()))?;
+    let settings = settings(&args);
+    if let Some(p) = &args.plot {
+        appell::report::plot::ImageFormat::from_path(p).map_err(|e| Failure::Input(e.into()))?;
+    }
+    if args.inputs.len() == 1 && args.inputs[0].is_dir() {
+        let files = directory_files(&args.inputs[0])?;
+        let bar = ProgressBar::new(files.len() as u64);
+        bar.set_style(
+            ProgressStyle::with_template("{bar:40} {pos}/{len} recordings fitted ({elapsed})")
+                .unwrap_or_else(|_| ProgressStyle::default_bar()),
+        );
+        let results: Vec<(PathBuf, Result<(Observations, FitReport), Failure>)> = files
+            .par_iter()
+            .map(|f| {
+                let r = fit_one(std::slice::from_ref(f), &opts, &rig, &settings);
+                bar.inc(1);
+                (f.clone(), r)
+            })
+            .collect();
+        bar.finish_and_clear();
+        let mut failed = 0;
+        for (file, r) in results {
+            match r {
+                Ok((_, rep)) => {
+                    let mut v = fit_json(&rep);
+                    v["recording"] = serde_json::json!(file.display().to_string());
+                    if args.json {
+                        outln!("{v}");
+                    } else {
+                        let mu = rep.mu_kinetic.map_or("not identifiable".to_owned(), |m| {
+                            format!("{:.6} +- {:.2e}", m.value, m.stderr)
+                        });
+                        outln!(
+                            "{}: mu_kinetic {mu}; rms {:.3e} m",
+                            file.display(),
+                            rep.rms_residual_m
+                        );
+                    }
+                }
+                Err(Failure::Input(e) | Failure::Run(e)) => {
+                    failed += 1;
+                    if args.json {
+                        outln!(
+                            "{}",
+                            serde_json::json!({"recording": file.display().to_string(), "error": format!("{e:#}")})
+                        );
+                    } else {
+                        eprintln!("{}: error: {e:#}", file.display());
+                    }
+                }
+            }
+        }
+        if failed > 0 {
+            return Err(Failure::Run(anyhow!(
+                "{failed} recording(s) could not be fitted"
+            )));
+        }
+        return Ok(());
+    }
+    let (obs, rep) = fit_one(&args.inputs, &opts, &rig, &settings)?;
+    if let Some(p) = &args.plot {
+        render(
+            p,
+            &FitFigure {
+                obs: &obs,
+                report: &rep,
+            },
+        )
+        .map_err(|e| Failure::Run(anyhow!(e)))?;
+    }
+    if args.json {
+        outln!("{}", fit_json(&rep));
+    } else {
+        out!("{}", fit_text(&rep));
+        if let Some(p) = &args.plot {
+            outln!("figure written to {}", p.display());
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,135 @@
+//! `appell fit` as a user runs it: the shared example recordings (mu = 0.12, FORMATS.md) in
+//! every encoding, a directory of recordings, a figure, and bad input.
+
+use std::process::Command;
+
+fn appell(args: &[&str]) -> std::process::Output {
+    Command::new(env!("CARGO_BIN_EXE_appell"))
+        .args(args)
+        .output()
+        .expect("runs")
+}
+
+fn path(rel: &str) -> String {
+    format!("{}/{rel}", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The example recordings were made with mu = 0.12: every encoding fits to an interval that
+/// contains it, with residuals at the documented 0.2 mm noise.
+#[test]
+fn example_recordings_fit_to_their_true_mu() {
+    for file in [
+        "tests/data/markers_json_zstd.mcap",
+        "tests/data/markers_ros2_pointstamped.mcap",
+        "tests/data/markers_reference.csv",
+    ] {
+        let out = appell(&[
+            "fit",
+            &path(file),
+            "--rig",
+            &path("configs/rig_example.toml"),
+            "--json",
+        ]);
+        assert!(
+            out.status.success(),
+            "{file}: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let mu = &v["mu_kinetic"];
+        let (lo, hi) = (
+            mu["ci95"][0].as_f64().unwrap(),
+            mu["ci95"][1].as_f64().unwrap(),
+        );
+        assert!(lo < 0.12 && 0.12 < hi, "{file}: {mu}");
+        assert!(mu["stderr"].as_f64().unwrap() > 0.0);
+        assert_eq!(v["identifiable"], true);
+        let rms = v["rms_residual_m"].as_f64().unwrap();
+        assert!((rms - 2e-4).abs() < 2e-5, "{file}: rms {rms}");
+        for key in ["x", "theta", "x_dot", "theta_dot"] {
+            assert!(v["initial"][key].is_f64(), "{file}: initial.{key}");
+        }
+        // Released from rest 0.9 rad from the downward vertical: theta = pi/2 - 0.9.
+        assert!(
+            (v["initial"]["theta"].as_f64().unwrap() - (std::f64::consts::FRAC_PI_2 - 0.9)).abs()
+                < 1e-3
+        );
+    }
+}
+
+#[test]
+fn directory_gives_one_json_line_per_recording_and_a_figure() {
+    let dir = std::env::temp_dir().join(format!("appell-fitdir-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    for f in ["markers_json_zstd.mcap", "markers_reference.csv"] {
+        std::fs::copy(path(&format!("tests/data/{f}")), dir.join(f)).unwrap();
+    }
+    let out = appell(&[
+        "fit",
+        dir.to_str().unwrap(),
+        "--rig",
+        &path("configs/rig_example.toml"),
+        "--json",
+        "--no-profile",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let lines: Vec<serde_json::Value> = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap())
+        .collect();
+    assert_eq!(lines.len(), 2);
+    for v in &lines {
+        assert!(
+            (v["mu_kinetic"]["value"].as_f64().unwrap() - 0.12).abs() < 1e-4,
+            "{v}"
+        );
+        assert!(v["recording"].as_str().unwrap().contains("markers_"));
+    }
+    let svg = dir.join("fit.svg");
+    let out = appell(&[
+        "fit",
+        &path("tests/data/markers_reference.csv"),
+        "--rig",
+        &path("configs/rig_example.toml"),
+        "--no-profile",
+        "--plot",
+        svg.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = std::fs::read_to_string(&svg).unwrap();
+    assert!(text.starts_with("<svg") && text.contains("residuals"));
+}
+
+#[test]
+fn bad_rig_or_recording_exits_2_with_the_cause() {
+    let dir = std::env::temp_dir().join(format!("appell-fitbad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let rig = dir.join("rig.toml");
+    std::fs::write(&rig, "[rig]\nslider_mass = 0.5\nbob_mass = 0.2\nrod_length = 0.3\ngravity = 9.81\nfriction = 0.1\n").unwrap();
+    let out = appell(&[
+        "fit",
+        &path("tests/data/markers_reference.csv"),
+        "--rig",
+        rig.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("friction"));
+    let empty = dir.join("empty.csv");
+    std::fs::write(&empty, "").unwrap();
+    let out = appell(&[
+        "fit",
+        empty.to_str().unwrap(),
+        "--rig",
+        &path("configs/rig_example.toml"),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("empty.csv"));
+}
