@@ -146,6 +146,9 @@ pub struct FitFigure<'a> {
     pub report: &'a FitReport,
 }
 
+/// Points of one coordinate: data, fit and residuals, each (t, value).
+type Panel = (Vec<(f64, f64)>, Vec<(f64, f64)>, Vec<(f64, f64)>);
+
 fn mode_color(m: Mode) -> RGBColor {
     match m {
         Mode::Stick => RGBColor(230, 230, 230),
@@ -185,7 +188,7 @@ impl Figure for FitFigure<'_> {
             .map(|s| (s.t, markers(&rep.rig, &s.state), s.mode))
             .collect();
         let panels = root.split_evenly((3, 1));
-        let series = |k: usize| -> (Vec<(f64, f64)>, Vec<(f64, f64)>, Vec<(f64, f64)>) {
+        let series = |k: usize| -> Panel {
             let mut data = Vec::new();
             let mut fit = Vec::new();
             let mut resid = Vec::new();
@@ -233,8 +236,7 @@ impl Figure for FitFigure<'_> {
                 Some('b') => (vec![2, 3], false),
                 _ => (vec![0, 2, 3], true),
             };
-            let all: Vec<(Vec<(f64, f64)>, Vec<(f64, f64)>, Vec<(f64, f64)>)> =
-                data_sets.iter().map(|&k| series(k)).collect();
+            let all: Vec<Panel> = data_sets.iter().map(|&k| series(k)).collect();
             let scale = if is_resid { 1e3 } else { 1.0 };
             let ys = all
                 .iter()
