@@ -95,12 +95,15 @@ fn directory_files(dir: &Path) -> Result<Vec<PathBuf>, Failure> {
     Ok(files)
 }
 
+/// A recording's observations and fit, or why not.
+type Fitted = Result<(Observations, FitReport), Failure>;
+
 fn fit_one(
     paths: &[PathBuf],
     opts: &ReadOptions,
     rig: &appell::model::Rig<f64>,
     settings: &FitSettings,
-) -> Result<(Observations, FitReport), Failure> {
+) -> Fitted {
     let rec = read_recording(paths, opts).map_err(|e| Failure::Input(e.into()))?;
     let obs = Observations::from(&rec);
     let report = fit(obs.clone(), rig, settings)
@@ -125,7 +128,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
             ProgressStyle::with_template("{bar:40} {pos}/{len} recordings fitted ({elapsed})")
                 .unwrap_or_else(|_| ProgressStyle::default_bar()),
         );
-        let results: Vec<(PathBuf, Result<(Observations, FitReport), Failure>)> = files
+        let results: Vec<(PathBuf, Fitted)> = files
             .par_iter()
             .map(|f| {
                 let r = fit_one(std::slice::from_ref(f), &opts, &rig, &settings);
