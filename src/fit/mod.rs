@@ -267,7 +267,8 @@ pub fn fit(
     // which no small nonzero x'(0) reproduces (the mode at t = 0 jumps there). And a stuck
     // start lasts as long as mu_static allows, which mu_static = mu_kinetic cannot reproduce
     // when they differ: onsets seen in the data give mu_static a start of its own.
-    let mut candidates = vec![problem.clone()];
+    let free_model = problem.clone();
+    let mut candidates = Vec::new();
     if at_rest {
         let mut rest = problem.clone();
         rest.free.retain(|&q| q != Param::XDot);
@@ -281,16 +282,18 @@ pub fn fit(
                 )
             })
             .flatten();
+        candidates.push(rest.clone());
         if let Some(mu_s) =
             mu_s_data.filter(|&m| m > 1.05 * rig.mu_kinetic.min(mu_data.unwrap_or(f64::INFINITY)))
         {
-            let mut m = rest.clone();
+            let mut m = rest;
             m.free.push(Param::MuStatic);
             m.tie_static = false;
             m.rig.mu_static = mu_s;
             candidates.push(m);
         }
-        candidates.push(rest);
+    } else {
+        candidates.push(free_model.clone());
     }
     let mu0 = mu_data.unwrap_or(rig.mu_kinetic);
     let start_values = |m: &TrajectoryProblem, mu: f64| {
@@ -301,61 +304,78 @@ pub fn fit(
         }
         p0
     };
-    let first: Vec<Solved> = candidates
+    // One parallel batch: every candidate from the data's mu, and the first candidate from
+    // the other starts over mu (the cost is only piecewise smooth in mu).
+    let mut jobs: Vec<(usize, f64)> = (0..candidates.len()).map(|m| (m, mu0)).collect();
+    for mu in [rig.mu_kinetic]
+        .into_iter()
+        .chain(settings.extra_starts.iter().copied())
+    {
+        if (mu - mu0).abs() > 1e-3 * mu0.abs().max(1e-3) {
+            jobs.push((0, mu));
+        }
+    }
+    let solved: Vec<(usize, f64, Solved)> = jobs
         .par_iter()
-        .map(|m| solve(m, start_values(m, mu0), settings.max_iters))
+        .map(|&(m, mu)| {
+            (
+                m,
+                mu,
+                solve(
+                    &candidates[m],
+                    start_values(&candidates[m], mu),
+                    settings.max_iters,
+                ),
+            )
+        })
         .collect();
     // Model choice by an information criterion: residual sum of squares times (1 + 2k/n),
     // so a parameter must pay for itself (Akaike's criterion for Gaussian noise).
     let n_rows = problem.n_rows() as f64;
+    let score = |p: &DVector<f64>, c: f64| c * (1.0 + 2.0 * p.len() as f64 / n_rows);
     let mut starts = Vec::new();
     let mut last_err = String::new();
     let mut best: Option<(usize, DVector<f64>, f64)> = None;
-    for (m, r) in first.into_iter().enumerate() {
+    for (m, mu, r) in solved {
         match r {
             Ok((p, c)) => {
                 starts.push(StartOutcome {
-                    mu_start: mu0,
+                    mu_start: mu,
                     mu_end: p[0],
                     cost: c,
                 });
-                let score = c * (1.0 + 2.0 * p.len() as f64 / n_rows);
-                if best.as_ref().is_none_or(|(bm, bp, bc)| {
-                    score < bc * (1.0 + 2.0 * bp.len() as f64 / n_rows) || *bm == usize::MAX
-                }) {
+                if best
+                    .as_ref()
+                    .is_none_or(|(_, bp, bc)| score(&p, c) < score(bp, *bc))
+                {
                     best = Some((m, p, c));
                 }
             }
             Err(e) => last_err = e,
         }
     }
-    let (choice, mut p, mut cost) = best.ok_or(FitError::NoStart(last_err))?;
+    let (choice, mut p, cost) = best.ok_or(FitError::NoStart(last_err))?;
     problem = candidates.swap_remove(choice);
-    // A few more starts over mu on the chosen model: the cost is only piecewise smooth in mu.
-    let mut more: Vec<f64> = [rig.mu_kinetic]
-        .into_iter()
-        .chain(settings.extra_starts.iter().copied())
-        .collect();
-    more.retain(|mu| (mu - mu0).abs() > 1e-3 * mu0.abs().max(1e-3));
-    let others: Vec<(f64, Solved)> = more
-        .par_iter()
-        .map(|&mu| {
-            (
-                mu,
-                solve(&problem, start_values(&problem, mu), settings.max_iters),
-            )
-        })
-        .collect();
-    for (mu, r) in others {
-        if let Ok((q, c)) = r {
-            starts.push(StartOutcome {
-                mu_start: mu,
-                mu_end: q[0],
-                cost: c,
-            });
-            if c < cost {
-                p = q;
-                cost = c;
+    // A release judged "from rest" whose fit leaves structured residuals may have had a small
+    // push: then the model with x'(0) free competes too.
+    if at_rest {
+        let structured = problem.raw_residuals(&p).map(|raw| {
+            let r: Vec<f64> = raw.iter().map(|x| x.1).collect();
+            lag1(&problem, &r)
+        });
+        if structured.is_ok_and(|rho| rho > 0.3) {
+            let mut p0 = free_model.values();
+            p0[0] = p[0];
+            if let Ok((q, c)) = solve(&free_model, p0, settings.max_iters) {
+                starts.push(StartOutcome {
+                    mu_start: p[0],
+                    mu_end: q[0],
+                    cost: c,
+                });
+                if score(&q, c) < score(&p, cost) {
+                    problem = free_model;
+                    p = q;
+                }
             }
         }
     }
