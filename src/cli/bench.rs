@@ -1,9 +1,14 @@
-//! `appell bench [SCENE.toml]`: time a scene on this machine.
+//! `appell bench [SCENE.toml]`: time a scene on this machine; `appell bench --work-precision`:
+//! run time against error for each integrator over a ladder of tolerances.
 
 use super::Failure;
 use anyhow::anyhow;
+use appell::bench::plot::WorkPrecisionPlot;
 use appell::bench::time_scene;
+use appell::bench::work_precision::{self, WorkPrecision, WpConfig, WpPoint};
+use appell::report::plot::render;
 use appell::scene::Scene;
+use appell::sim::Method;
 use std::path::PathBuf;
 
 /// The paper's rig released from rest with the rod horizontal, 2 s at rtol 1e-10: the
@@ -14,16 +19,165 @@ const REFERENCE_SCENE: &str = include_str!("../../configs/paper_rest_horizontal.
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Scene to time (default: the shipped paper scene, configs/paper_rest_horizontal.toml).
+    #[arg(conflicts_with = "work_precision")]
     scene: Option<PathBuf>,
-    /// Timed batches (the median is reported).
-    #[arg(long, default_value_t = 31)]
-    batches: usize,
+    /// Timed batches (the median is reported; work-precision default 7).
+    #[arg(long)]
+    batches: Option<usize>,
     /// Print JSON.
     #[arg(long)]
     json: bool,
+    /// Run the work-precision benchmark on the built-in reference scenes instead.
+    #[arg(long)]
+    work_precision: bool,
+    /// Work-precision: draw run time against error (log axes) to this SVG or PNG.
+    #[arg(long, value_name = "FILE.svg", requires = "work_precision")]
+    plot: Option<PathBuf>,
+    /// Work-precision: comma-separated tolerance ladder (default 1e-4,1e-5,...,1e-12).
+    #[arg(long, value_delimiter = ',', requires = "work_precision")]
+    rtols: Vec<f64>,
+    /// Work-precision: comma-separated scene names (default all: paper, unequal, rotation,
+    /// near_critical, stuck, frictionless).
+    #[arg(long, value_delimiter = ',', requires = "work_precision")]
+    scenes: Vec<String>,
+    /// Work-precision: wall time spent timing each point (s).
+    #[arg(long, default_value_t = 0.03, requires = "work_precision")]
+    seconds_per_point: f64,
+}
+
+/// A validated work-precision run, from the parsed arguments.
+fn wp_config(args: &Args) -> Result<WpConfig, Failure> {
+    let mut config = WpConfig::default();
+    if !args.rtols.is_empty() {
+        if let Some(bad) = args.rtols.iter().find(|r| !(**r > 0.0 && **r < 1.0)) {
+            return Err(Failure::Input(anyhow!("--rtols: {bad} is not in (0, 1)")));
+        }
+        config.rtols = args.rtols.clone();
+    }
+    if !args.scenes.is_empty() {
+        let known: Vec<_> = config.scenes.iter().map(|s| s.name).collect();
+        if let Some(bad) = args.scenes.iter().find(|s| !known.contains(&s.as_str())) {
+            return Err(Failure::Input(anyhow!(
+                "--scenes: unknown scene {bad:?} (known: {})",
+                known.join(", ")
+            )));
+        }
+        config
+            .scenes
+            .retain(|s| args.scenes.iter().any(|n| n == s.name));
+    }
+    if !(args.seconds_per_point.is_finite() && args.seconds_per_point >= 0.0) {
+        return Err(Failure::Input(anyhow!(
+            "--seconds-per-point must be a finite number >= 0"
+        )));
+    }
+    config.seconds_per_point = args.seconds_per_point;
+    if let Some(b) = args.batches {
+        config.batches = b.max(1);
+    }
+    config.methods = Method::ALL.to_vec();
+    Ok(config)
+}
+
+fn fmt_opt(v: Option<f64>) -> String {
+    v.map_or_else(|| "-".to_owned(), |v| format!("{v:.1e}"))
+}
+
+fn row(p: &WpPoint) -> String {
+    format!(
+        "{:<13} {:<7} {:>7.0e} {:>11} {:>10} {:>10} {:>10} {:>10} {:>9} {:>7} {:>8}{}",
+        p.scene,
+        p.method,
+        p.rtol,
+        p.seconds
+            .map_or_else(|| "-".to_owned(), |s| format!("{:.1}", s * 1e6)),
+        fmt_opt(p.event_time_error_s),
+        fmt_opt(p.state_error),
+        fmt_opt(p.marker_error_m),
+        fmt_opt(p.energy_defect),
+        fmt_opt(p.momentum_defect),
+        p.steps,
+        p.rhs_evals,
+        p.failure
+            .as_ref()
+            .map_or_else(String::new, |f| format!("  FAILED: {f}"))
+    )
+}
+
+fn print_summary(wp: &WorkPrecision) {
+    println!(
+        "\nreferences (DP5 vs DOP853 at rtol {:e}; the floor of the errors above):",
+        work_precision::REFERENCE_RTOL
+    );
+    for r in &wp.references {
+        println!(
+            "  {:<13} {} events, event times agree to {}, final state to {:.1e}{}  ({})",
+            r.scene,
+            r.events,
+            fmt_opt(r.event_time_disagreement_s),
+            r.state_disagreement,
+            r.closed_form_error
+                .map_or_else(String::new, |e| format!(", closed form to {e:.1e}")),
+            r.about
+        );
+    }
+    println!("\ngoals:");
+    for g in &wp.goals {
+        let verdict = match g.met {
+            Some(true) => "met    ",
+            Some(false) => "NOT met",
+            None => "unknown",
+        };
+        println!("  {verdict} {:<13} {}", g.scene, g.detail);
+    }
+}
+
+fn run_work_precision(args: &Args) -> Result<(), Failure> {
+    let config = wp_config(args)?;
+    if !args.json {
+        println!(
+            "{:<13} {:<7} {:>7} {:>11} {:>10} {:>10} {:>10} {:>10} {:>9} {:>7} {:>8}",
+            "scene",
+            "method",
+            "rtol",
+            "median us",
+            "event [s]",
+            "state",
+            "marker [m]",
+            "energy",
+            "momentum",
+            "steps",
+            "rhs"
+        );
+    }
+    let json = args.json;
+    let wp = work_precision::run(&config, |p| {
+        if !json {
+            println!("{}", row(p));
+        }
+    });
+    if let Some(path) = &args.plot {
+        render(path, &WorkPrecisionPlot { result: &wp })
+            .map_err(|e| Failure::Run(anyhow!(e).context("drawing the work-precision plot")))?;
+    }
+    if json {
+        println!(
+            "{}",
+            serde_json::to_string(&wp).map_err(|e| Failure::Run(e.into()))?
+        );
+    } else {
+        print_summary(&wp);
+        if let Some(path) = &args.plot {
+            println!("\nplot written to {}", path.display());
+        }
+    }
+    Ok(())
 }
 
 pub fn run(args: Args) -> Result<(), Failure> {
+    if args.work_precision {
+        return run_work_precision(&args);
+    }
     let (scene, name) = match &args.scene {
         Some(p) => (
             Scene::from_path(p).map_err(|e| Failure::Input(e.into()))?,
@@ -38,7 +192,8 @@ pub fn run(args: Args) -> Result<(), Failure> {
             "configs/paper_rest_horizontal.toml (built in)".to_owned(),
         ),
     };
-    let timing = time_scene(&scene, args.batches).map_err(|e| Failure::Run(anyhow!(e)))?;
+    let timing =
+        time_scene(&scene, args.batches.unwrap_or(31)).map_err(|e| Failure::Run(anyhow!(e)))?;
     if args.json {
         outln!(
             "{}",

@@ -47,7 +47,8 @@ enum Command {
     Fit(fit::Args),
     /// Simulate a scene and print its event timeline.
     Simulate(simulate::Args),
-    /// Time the simulator on a scene (median of repeats).
+    /// Time the simulator on a scene (median of repeats), or run the work-precision
+    /// benchmark (run time against error per integrator and tolerance).
     Bench(bench::Args),
     /// Regions of the stick and sliding models in the (theta, theta') plane, the paradox
     /// band, and phase portraits.

@@ -8,3 +8,4 @@ mod helpers;
 mod recordings;
 mod regions;
 mod simulate_oracles;
+mod stress;

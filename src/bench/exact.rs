@@ -1,0 +1,113 @@
+//! Closed forms that serve as references independent of the integrator: the stuck pendulum
+//! through Jacobi's elliptic functions (PHYSICS.md, "Pendulum model").
+
+use crate::model::Rig;
+use std::f64::consts::{FRAC_PI_2, PI};
+
+/// Complete elliptic integral of the first kind K(k) (modulus k, 0 <= k < 1), by the
+/// arithmetic-geometric mean.
+pub fn elliptic_k(k: f64) -> f64 {
+    let (mut a, mut b) = (1.0_f64, (1.0 - k * k).sqrt());
+    // Quadratic convergence: 40 rounds are far more than enough, and a fixed count cannot
+    // cycle on rounding the way a tolerance test can.
+    for _ in 0..40 {
+        (a, b) = (0.5 * (a + b), (a * b).sqrt());
+    }
+    PI / (a + b)
+}
+
+/// Jacobi elliptic functions (sn, cn, dn)(u, k) for modulus 0 <= k < 1, by the descending
+/// Landen (AGM) scheme of Abramowitz and Stegun 16.4: accurate to rounding for every u.
+pub fn jacobi_sn_cn_dn(u: f64, k: f64) -> (f64, f64, f64) {
+    if k < 1e-300 {
+        return (u.sin(), u.cos(), 1.0);
+    }
+    let mut a = vec![1.0_f64];
+    let mut c = vec![k];
+    let mut b = (1.0 - k * k).sqrt();
+    while c[c.len() - 1].abs() > 1e-17 && a.len() < 40 {
+        let an = a[a.len() - 1];
+        c.push(0.5 * (an - b));
+        a.push(0.5 * (an + b));
+        b = (an * b).sqrt();
+    }
+    let n = a.len() - 1;
+    let mut phi = 2f64.powi(n as i32) * a[n] * u;
+    for j in (1..=n).rev() {
+        phi = 0.5 * (phi + (c[j] / a[j] * phi.sin()).asin());
+    }
+    let (sn, cn) = phi.sin_cos();
+    (sn, cn, (1.0 - k * k * sn * sn).sqrt())
+}
+
+/// The stuck pendulum (slider held, PHYSICS.md "Pendulum model") released from rest at
+/// amplitude `amplitude` (rad from hanging, below pi): the exact state (x = 0, theta, 0, w)
+/// at time `t`, with theta = pi/2 - phi and sin(phi/2) = k sn(K - w0 t, k), k = sin(A/2).
+pub fn stuck_pendulum(rig: &Rig<f64>, amplitude: f64, t: f64) -> [f64; 4] {
+    let w0 = (rig.gravity / rig.rod_length).sqrt();
+    let k = (0.5 * amplitude).sin();
+    let kk = elliptic_k(k);
+    let (sn, cn, _) = jacobi_sn_cn_dn(kk - w0 * t, k);
+    let phi = 2.0 * (k * sn).asin();
+    // phi' = -2 k w0 cn(K - w0 t), and theta' = -phi'.
+    [0.0, FRAC_PI_2 - phi, 0.0, 2.0 * k * w0 * cn]
+}
+
+/// The exact period of the stuck pendulum of amplitude `amplitude`: 4 sqrt(l/g) K(sin(A/2)).
+pub fn stuck_period(rig: &Rig<f64>, amplitude: f64) -> f64 {
+    4.0 * (rig.rod_length / rig.gravity).sqrt() * elliptic_k((0.5 * amplitude).sin())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn small_modulus_is_trigonometric_and_identities_hold() {
+        let (sn, cn, dn) = jacobi_sn_cn_dn(0.7, 0.0);
+        assert!((sn - 0.7f64.sin()).abs() < 1e-15 && (cn - 0.7f64.cos()).abs() < 1e-15);
+        assert_eq!(dn, 1.0);
+        for k in [0.1, 0.5, 0.9, 0.999] {
+            let kk = elliptic_k(k);
+            let (sn, cn, _) = jacobi_sn_cn_dn(kk, k);
+            assert!(
+                (sn - 1.0).abs() < 1e-12 && cn.abs() < 1e-7,
+                "k={k}: {sn} {cn}"
+            );
+            for u in [0.3, 1.1, 2.5, -4.0] {
+                let (sn, cn, dn2) = jacobi_sn_cn_dn(u, k);
+                assert!((sn * sn + cn * cn - 1.0).abs() < 1e-14);
+                assert!((dn2 * dn2 + k * k * sn * sn - 1.0).abs() < 1e-14);
+            }
+            // sn' = cn dn, by a central difference.
+            let (u, h) = (0.8, 1e-5);
+            let d = (jacobi_sn_cn_dn(u + h, k).0 - jacobi_sn_cn_dn(u - h, k).0) / (2.0 * h);
+            let (_, cn, dn) = jacobi_sn_cn_dn(u, k);
+            assert!((d - cn * dn).abs() < 1e-9, "k={k}");
+        }
+    }
+
+    #[test]
+    fn pendulum_solution_satisfies_its_equation_and_energy() {
+        let rig = Rig::paper(2.5);
+        let a = 1.2;
+        let y0 = stuck_pendulum(&rig, a, 0.0);
+        assert!((y0[1] - (FRAC_PI_2 - a)).abs() < 1e-14 && y0[3].abs() < 1e-14);
+        let gl = rig.gravity / rig.rod_length;
+        let e = |y: [f64; 4]| y[3] * y[3] - 2.0 * gl * y[1].sin();
+        for t in [0.1, 0.37, 1.3] {
+            let h = 1e-4;
+            let (ym, y, yp) = (
+                stuck_pendulum(&rig, a, t - h),
+                stuck_pendulum(&rig, a, t),
+                stuck_pendulum(&rig, a, t + h),
+            );
+            assert!((e(y) - e(y0)).abs() < 1e-11);
+            let acc = (ym[1] - 2.0 * y[1] + yp[1]) / (h * h);
+            assert!((acc - gl * y[1].cos()).abs() < 1e-5, "t={t}: {acc}");
+        }
+        let half = 0.5 * stuck_period(&rig, a);
+        let y = stuck_pendulum(&rig, a, half);
+        assert!((y[1] - (FRAC_PI_2 + a)).abs() < 1e-12 && y[3].abs() < 1e-10);
+    }
+}
