@@ -2,7 +2,7 @@
 //! Key names are fixed (scripts use them); unknown keys are errors so typos never pass.
 
 use crate::model::{Rig, RigError, State};
-use crate::sim::{Method, Options, Request};
+use crate::sim::{Method, Options, Request, RestRule};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
@@ -82,6 +82,9 @@ pub struct RunSpec {
     pub method: Option<Method>,
     /// Step limit (default 1e6).
     pub max_steps: Option<usize>,
+    /// Choice at rest where the Painleve paradox allows several motions: `prefer_stick`
+    /// (default), `prefer_slide` or `halt`.
+    pub rest_rule: Option<RestRule>,
 }
 
 /// The optional `[output]` section: what the run should produce besides events and the
@@ -249,6 +252,7 @@ impl SceneFile {
                 atol,
                 method: r.method.unwrap_or_default(),
                 max_steps: r.max_steps.unwrap_or(defaults.max_steps),
+                rest_rule: r.rest_rule.unwrap_or_default(),
                 ..defaults
             },
             output: self.output,

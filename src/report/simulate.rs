@@ -22,10 +22,25 @@ pub fn timeline(scene: &Scene, sol: &Solution<f64>) -> String {
             e.t,
             e.from.name(),
             e.to.to_string(),
-            format!("{:?}", e.kind).to_lowercase(),
+            e.kind.name(),
             e.state[1].to_degrees(),
             e.state[0]
         );
+        // Paradox details on a line of their own, under the event they belong to.
+        if !e.alternatives.is_empty() && matches!(e.to, Outcome::Mode(_)) {
+            let names: Vec<_> = e.alternatives.iter().map(|m| m.name()).collect();
+            let _ = writeln!(s, "{:>16}chosen among {}", "", names.join(" | "));
+        }
+        if let Some(n) = e.peak_normal {
+            let _ = writeln!(s, "{:>16}peak |N| = {n:.6e} N", "");
+        }
+        if let Some(i) = e.impulse {
+            let _ = writeln!(
+                s,
+                "{:>16}impulsive stop from x' = {:.6e} m/s: P_N = {:.6e} N s, P_F = {:.6e} N s, energy lost {:.6e} J",
+                "", i.x_dot_before, i.normal, i.friction, i.energy_lost
+            );
+        }
     }
     if sol.events.is_empty() {
         let _ = writeln!(s, "(no events: {} throughout)", sol.final_mode);
@@ -37,7 +52,7 @@ pub fn timeline(scene: &Scene, sol: &Solution<f64>) -> String {
         sol.final_time, sol.final_mode, y[0], y[1], y[2], y[3]
     );
     if sol.final_time < scene.duration {
-        let _ = writeln!(s, "stopped early: the motion past the last event is not unique or does not exist (Painleve paradox)");
+        let _ = writeln!(s, "stopped early: the motion past the last event is not unique or does not exist (Painleve paradox, or a dynamic jam)");
     }
     let st = sol.stats;
     let _ = writeln!(
@@ -74,6 +89,16 @@ pub fn simulation_json(scene: &Scene, sol: &Solution<f64>) -> Value {
             if let Outcome::Indeterminate(alts) = &e.to {
                 v["alternatives"] = json!(alts.iter().map(|m| m.name()).collect::<Vec<_>>());
             }
+            if !e.alternatives.is_empty() {
+                v["alternatives"] =
+                    json!(e.alternatives.iter().map(|m| m.name()).collect::<Vec<_>>());
+            }
+            if let Some(i) = e.impulse {
+                v["impulse"] = json!(i);
+            }
+            if let Some(n) = e.peak_normal {
+                v["peak_normal"] = json!(n);
+            }
             v
         })
         .collect();
@@ -92,6 +117,8 @@ pub fn simulation_json(scene: &Scene, sol: &Solution<f64>) -> Value {
         out["friction_work"] = json!(w);
         out["energy_change"] =
             json!(energy(&scene.rig, &sol.final_state) - energy(&scene.rig, &scene.initial));
+        // Closes the balance: energy_change = friction_work - impulsive_losses.
+        out["impulsive_losses"] = json!(sol.impulsive_losses());
     }
     out
 }

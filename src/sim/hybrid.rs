@@ -3,11 +3,12 @@
 
 use super::rk::{Dop853, Dp5, OdeSystem, Stepper};
 use super::{
-    Event, EventKind, Method, Options, Outcome, Request, Sample, SimError, Solution, Stats,
+    Event, EventKind, Impulse, Method, Options, Outcome, Request, RestRule, Sample, SimError,
+    Solution, Stats,
 };
 use crate::model::{
-    choose_at_rest, re_state, regions, sign, Direction, Mode, RestChoice, Rig, Scalar, Shorthands,
-    State, X_DOT,
+    choose_at_rest, re_state, regions, Direction, Mode, RestChoice, Rig, Scalar, Shorthands, State,
+    THETA, THETA_DOT, X_DOT,
 };
 use num_dual::Dual64;
 use std::any::TypeId;
@@ -16,7 +17,11 @@ use std::any::TypeId;
 ///
 /// Mode transitions are located to about 1e-13 s on the dense output; for dual-number
 /// scalars the event times are differentiated implicitly, so sampled states carry exact
-/// derivatives through every switch. A paradox state ends the run with an event of its own.
+/// derivatives through every switch. Above mu* the run goes on through the Painleve paradox:
+/// at rest [`Options::rest_rule`] picks among several consistent motions (an `indeterminate`
+/// event), a slide whose normal force blows up near a band edge ends in a `sudden_stop`, and
+/// a sliding state with no solution in an `impulsive_stop`; only a dynamic jam (or the
+/// [`RestRule::Halt`] rule) ends the run early.
 pub fn simulate<T: Scalar + 'static>(
     rig: &Rig<T>,
     y0: &State<T>,
@@ -76,12 +81,13 @@ enum Guard {
     Stop,
     /// Slide: sigma Q (the normal force keeps its sign).
     NormalSign,
-    /// Slide above mu*: D - mu_k |a| (outside the paradox band).
-    BandEdge,
+    /// Slide above mu*: |D + mu s sigma a| - threshold (m1 + m2): the branch's denominator
+    /// stays clear of zero, where |N| grows without bound (the sudden stop).
+    Denominator,
 }
 
 impl Guard {
-    fn value<S: Scalar>(self, rig: &Rig<S>, y: &[S], mode: Mode, sigma: f64) -> S {
+    fn value<S: Scalar>(self, rig: &Rig<S>, y: &[S], mode: Mode, sigma: f64, thr: f64) -> S {
         match self {
             Guard::StickMargin => Shorthands::at(rig, y).stick_margin(rig.mu_static),
             Guard::Stop => {
@@ -92,7 +98,15 @@ impl Guard {
                 y[X_DOT] * s
             }
             Guard::NormalSign => Shorthands::at(rig, y).q * sigma,
-            Guard::BandEdge => Shorthands::at(rig, y).band_margin(rig.mu_kinetic),
+            Guard::Denominator => {
+                let s = match mode {
+                    Mode::Slide(d) => d.sign(),
+                    Mode::Stick => 1.0,
+                };
+                let sh = Shorthands::at(rig, y);
+                let delta = sh.d + sh.a * (rig.mu_kinetic * (s * sigma));
+                delta.abs() - (rig.slider_mass + rig.bob_mass) * thr
+            }
         }
     }
 }
@@ -113,6 +127,8 @@ struct Ctx<'a, T> {
     rig_re: Rig<f64>,
     rig_dual: Rig<Dual64>,
     paradox_possible: bool,
+    /// Sudden-stop threshold of the denominator guard, relative to m1 + m2.
+    thr: f64,
 }
 
 impl<T: Scalar> Ctx<'_, T> {
@@ -126,7 +142,7 @@ impl<T: Scalar> Ctx<'_, T> {
         sigma: f64,
     ) -> (f64, f64) {
         let yd: [Dual64; 4] = std::array::from_fn(|i| Dual64::new(y[i], f[i]));
-        let g = guard.value(&self.rig_dual, &yd, mode, sigma);
+        let g = guard.value(&self.rig_dual, &yd, mode, sigma, self.thr);
         (g.re, g.eps)
     }
 
@@ -134,7 +150,7 @@ impl<T: Scalar> Ctx<'_, T> {
         match (mode, self.paradox_possible) {
             (Mode::Stick, _) => &[Guard::StickMargin],
             (Mode::Slide(_), false) => &[Guard::Stop, Guard::NormalSign],
-            (Mode::Slide(_), true) => &[Guard::Stop, Guard::NormalSign, Guard::BandEdge],
+            (Mode::Slide(_), true) => &[Guard::Stop, Guard::NormalSign, Guard::Denominator],
         }
     }
 }
@@ -257,58 +273,179 @@ impl<T: Scalar> Output<T> {
     }
 }
 
+/// How the state changes at an event.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Reset {
+    /// Continuous state.
+    None,
+    /// x' is set to exactly zero (it crossed zero at the event).
+    ZeroVelocity,
+    /// An impulsive stop: x' -> 0 and theta' jumps (PHYSICS.md, tangential impact).
+    Impulsive,
+}
+
 /// The decision taken at a located guard crossing.
 struct Switch {
     outcome: Outcome,
     kind: EventKind,
     sigma: f64,
+    reset: Reset,
+    alternatives: Vec<Mode>,
 }
 
-/// The paradox met by a state: at rest, the consistent motions from rest; while sliding in
-/// `dir`, the sign rule of PHYSICS.md (inside the band two solutions when sign(Q) =
-/// sign(s a), none otherwise), which stays well defined on the band edge itself.
-fn paradox(rig: &Rig<f64>, y: &State<f64>, dir: Direction) -> Outcome {
-    if y[X_DOT] == 0.0 {
-        if let RestChoice::Indeterminate { alternatives } = choose_at_rest(rig, y) {
-            return Outcome::Indeterminate(alternatives);
+impl Switch {
+    fn new(outcome: Outcome, kind: EventKind, sigma: f64) -> Self {
+        Switch {
+            outcome,
+            kind,
+            sigma,
+            reset: Reset::None,
+            alternatives: Vec::new(),
         }
     }
-    let sh = Shorthands::at(rig, y);
-    if sign(sh.q) == sign(dir.sign() * sh.a) {
-        Outcome::Indeterminate(vec![Mode::Slide(dir)])
-    } else {
-        Outcome::Inconsistent
-    }
 }
 
-/// Mode and branch for a slide in `dir` starting at `y`, or the paradox that prevents it.
+/// The impulsive stop of PHYSICS.md (tangential impact at the bilateral contact): x' -> 0,
+/// theta' jumps by sin(theta) (0 - x') / l. Returns the new state and, in real parts, the
+/// normal impulse a dx', the friction impulse D dx' and the energy lost D x'^2 / 2.
+pub fn impulsive_stop<T: Scalar>(rig: &Rig<T>, y: &[T]) -> (State<T>, Impulse) {
+    let dx = -y[X_DOT];
+    let mut after = [y[0], y[1], y[2], y[3]];
+    after[X_DOT] = T::from(0.0);
+    after[THETA_DOT] = y[THETA_DOT] + y[THETA].sin() * dx / rig.rod_length;
+    let sh = Shorthands::at(&rig.re(), &re_state(y));
+    let dx = dx.re();
+    let impulse = Impulse {
+        x_dot_before: -dx,
+        normal: sh.a * dx,
+        friction: sh.d * dx,
+        energy_lost: 0.5 * sh.d * dx * dx,
+    };
+    (after, impulse)
+}
+
+/// Relative size below which Q and the band margin count as zero together (a dynamic jam).
+const JAM_TOL: f64 = 1e-7;
+
+/// A slide whose denominator is below this fraction of m1 + m2 when it stops by itself is
+/// reported as a sudden stop (|N| is then over a thousand times its scale (m1 + m2) g).
+const SUDDEN_FRACTION: f64 = 1e-3;
+
+/// Whether numerator Q and the band margin D - mu |a| vanish together: the singular point
+/// where the sliding equation is 0/0 and the future is not unique.
+fn is_jam(rig: &Rig<f64>, sh: &Shorthands<f64>) -> bool {
+    let m = rig.slider_mass + rig.bob_mass;
+    sh.band_margin(rig.mu_kinetic).abs() <= JAM_TOL * m
+        && sh.q.abs() <= JAM_TOL * rig.slider_mass * m * rig.gravity
+}
+
+/// The branch sigma for a slide in `dir` from `y`. From rest it must accelerate in its own
+/// direction (positive denominator preferred); while moving it is the consistent branch with
+/// positive denominator. `None`: the sliding equation has no solution here.
+fn slide_branch(rig: &Rig<f64>, y: &State<f64>, dir: Direction) -> Option<f64> {
+    let sh = Shorthands::at(rig, y);
+    let s = dir.sign();
+    if y[X_DOT] == 0.0 {
+        let b = rig.slide_branches(&sh, s);
+        let cands = [(b.plus, 1.0), (b.minus, -1.0)];
+        let accelerating = |want_positive: bool| {
+            cands.iter().find_map(|&(ok, sigma)| {
+                let d = rig.slide(&sh, s, sigma);
+                (ok && s * d.x_ddot > 0.0 && (!want_positive || d.delta > 0.0)).then_some(sigma)
+            })
+        };
+        if let Some(sigma) = accelerating(true).or_else(|| accelerating(false)) {
+            return Some(sigma);
+        }
+    }
+    rig.slide_sigma(&sh, s)
+}
+
+/// Mode and branch for a slide in `dir` starting at `y`; a moving state with no solution is
+/// resolved by an impulsive stop (or ends in a dynamic jam).
 fn start_slide(
     rig: &Rig<f64>,
     y: &State<f64>,
     dir: Direction,
     kind: EventKind,
-    paradox_possible: bool,
+    rule: RestRule,
 ) -> Switch {
-    let sh = Shorthands::at(rig, y);
-    let branches = rig.slide_branches(&sh, dir.sign());
-    match rig.slide_sigma(&sh, dir.sign()) {
-        Some(sigma) if !(paradox_possible && branches.count() > 1) => Switch {
-            outcome: Outcome::Mode(Mode::Slide(dir)),
-            kind,
-            sigma,
-        },
-        _ => Switch {
-            outcome: paradox(rig, y, dir),
-            kind: EventKind::Paradox,
-            sigma: 1.0,
-        },
+    if y[X_DOT] != 0.0 && is_jam(rig, &Shorthands::at(rig, y)) {
+        return Switch::new(
+            Outcome::Indeterminate(Vec::new()),
+            EventKind::DynamicJam,
+            1.0,
+        );
+    }
+    match slide_branch(rig, y, dir) {
+        Some(sigma) => Switch::new(Outcome::Mode(Mode::Slide(dir)), kind, sigma),
+        None if y[X_DOT] == 0.0 => Switch::new(Outcome::Inconsistent, EventKind::Paradox, 1.0),
+        None => stop_impulsively(rig, y, EventKind::ImpulsiveStop, rule),
+    }
+}
+
+/// End a slide by an impulsive stop and choose what follows from rest; a dynamic jam ends
+/// the run instead.
+fn stop_impulsively(rig: &Rig<f64>, y: &State<f64>, kind: EventKind, rule: RestRule) -> Switch {
+    if is_jam(rig, &Shorthands::at(rig, y)) {
+        return Switch::new(
+            Outcome::Indeterminate(Vec::new()),
+            EventKind::DynamicJam,
+            1.0,
+        );
+    }
+    let (after, _) = impulsive_stop(rig, y);
+    let c_dir = Direction::of(Shorthands::at(rig, &after).c);
+    // A slide has just failed here: preferring one again would repeat the stop in ever
+    // shorter slides (a Zeno sequence), so the stick is taken when admissible.
+    let rule = match rule {
+        RestRule::PreferSlide => RestRule::PreferStick,
+        other => other,
+    };
+    let mut switch = from_rest(rig, &after, rule, c_dir, |_| kind, EventKind::Stick);
+    // The stop names the event; an indeterminate choice after it shows in the alternatives.
+    switch.kind = kind;
+    switch.reset = Reset::Impulsive;
+    switch
+}
+
+/// The motion from a state at rest: the unique consistent one, or the [`RestRule`]'s choice
+/// among several (an `indeterminate` event). `slide_kind` names a unique slide by its
+/// direction; `stick_kind` names a unique stick.
+fn from_rest(
+    rig: &Rig<f64>,
+    y: &State<f64>,
+    rule: RestRule,
+    c_dir: Direction,
+    slide_kind: impl Fn(Direction) -> EventKind,
+    stick_kind: EventKind,
+) -> Switch {
+    match choose_at_rest(rig, y) {
+        RestChoice::Unique(Mode::Stick) => Switch::new(Outcome::Mode(Mode::Stick), stick_kind, 1.0),
+        RestChoice::Unique(Mode::Slide(dir)) => start_slide(rig, y, dir, slide_kind(dir), rule),
+        RestChoice::Indeterminate { alternatives } => {
+            let mut switch = match rule.choose(&alternatives, c_dir) {
+                Some(Mode::Stick) => {
+                    Switch::new(Outcome::Mode(Mode::Stick), EventKind::Indeterminate, 1.0)
+                }
+                Some(Mode::Slide(dir)) => start_slide(rig, y, dir, EventKind::Indeterminate, rule),
+                None => Switch::new(
+                    Outcome::Indeterminate(alternatives.clone()),
+                    EventKind::Paradox,
+                    1.0,
+                ),
+            };
+            switch.alternatives = alternatives;
+            switch
+        }
+        RestChoice::Inconsistent => Switch::new(Outcome::Inconsistent, EventKind::Paradox, 1.0),
     }
 }
 
 /// Apply the transition rules of PHYSICS.md at a located crossing of `guard`.
 fn decide(
-    ctx_rig: &Rig<f64>,
-    paradox_possible: bool,
+    rig: &Rig<f64>,
+    rule: RestRule,
     guard: Guard,
     mode: Mode,
     sigma: f64,
@@ -316,94 +453,91 @@ fn decide(
     c_hint: f64,
 ) -> Switch {
     let dir_of_c = |c: f64| Direction::of(if c != 0.0 { c } else { c_hint });
+    let sh = Shorthands::at(rig, y);
     match guard {
         Guard::StickMargin => {
-            let sh = Shorthands::at(ctx_rig, y);
-            match choose_at_rest(ctx_rig, y) {
-                RestChoice::Unique(Mode::Slide(dir)) => {
-                    start_slide(ctx_rig, y, dir, EventKind::Slip, paradox_possible)
+            let mut switch = from_rest(
+                rig,
+                y,
+                rule,
+                dir_of_c(sh.c),
+                |_| EventKind::Slip,
+                EventKind::Stick,
+            );
+            // The root lies on the violated side, so a stick verdict only means the margin
+            // is zero to rounding: the slider leaves the way friction-free motion goes.
+            // The same holds when stick is one of several alternatives: choose among the slides.
+            if switch.outcome == Outcome::Mode(Mode::Stick) {
+                let slides: Vec<Mode> = switch
+                    .alternatives
+                    .iter()
+                    .copied()
+                    .filter(|m| *m != Mode::Stick)
+                    .collect();
+                let dir = match RestRule::PreferSlide.choose(&slides, dir_of_c(sh.c)) {
+                    Some(Mode::Slide(dir)) => dir,
+                    _ => dir_of_c(sh.c),
+                };
+                let kind = if slides.len() > 1 {
+                    EventKind::Indeterminate
+                } else {
+                    EventKind::Slip
+                };
+                switch = start_slide(rig, y, dir, kind, rule);
+                if slides.len() > 1 {
+                    switch.alternatives = slides;
                 }
-                // The root lies on the violated side, so a stick verdict only means the margin
-                // is zero to rounding: the slider leaves the way friction-free motion goes.
-                RestChoice::Unique(Mode::Stick) => start_slide(
-                    ctx_rig,
-                    y,
-                    dir_of_c(sh.c),
-                    EventKind::Slip,
-                    paradox_possible,
-                ),
-                RestChoice::Indeterminate { alternatives } => Switch {
-                    outcome: Outcome::Indeterminate(alternatives),
-                    kind: EventKind::Paradox,
-                    sigma,
-                },
-                RestChoice::Inconsistent => Switch {
-                    outcome: Outcome::Inconsistent,
-                    kind: EventKind::Paradox,
-                    sigma,
-                },
             }
+            switch
         }
         Guard::Stop => {
             let Mode::Slide(old) = mode else {
                 unreachable!("stop guard only watches slides")
             };
-            match choose_at_rest(ctx_rig, y) {
-                RestChoice::Unique(Mode::Stick) => Switch {
-                    outcome: Outcome::Mode(Mode::Stick),
-                    kind: EventKind::Stick,
-                    sigma,
-                },
-                RestChoice::Unique(Mode::Slide(dir)) => {
-                    let kind = if dir == old {
+            let mut switch = from_rest(
+                rig,
+                y,
+                rule,
+                dir_of_c(sh.c),
+                |dir| {
+                    if dir == old {
                         EventKind::Continuation
                     } else {
                         EventKind::Reversal
-                    };
-                    start_slide(ctx_rig, y, dir, kind, paradox_possible)
-                }
-                RestChoice::Indeterminate { alternatives } => Switch {
-                    outcome: Outcome::Indeterminate(alternatives),
-                    kind: EventKind::Paradox,
-                    sigma,
+                    }
                 },
-                RestChoice::Inconsistent => Switch {
-                    outcome: Outcome::Inconsistent,
-                    kind: EventKind::Paradox,
-                    sigma,
-                },
+                EventKind::Stick,
+            );
+            let delta = rig.slide(&sh, old.sign(), sigma).delta;
+            let m = rig.slider_mass + rig.bob_mass;
+            if delta.abs() < SUDDEN_FRACTION * m && switch.kind != EventKind::Paradox {
+                switch.kind = EventKind::SuddenStop;
             }
+            switch.reset = Reset::ZeroVelocity;
+            switch
         }
-        Guard::NormalSign | Guard::BandEdge => {
+        Guard::NormalSign => {
             let Mode::Slide(dir) = mode else {
                 unreachable!("slide guards only watch slides")
             };
-            let sh = Shorthands::at(ctx_rig, y);
-            let branches = ctx_rig.slide_branches(&sh, dir.sign());
-            let new_sigma = if guard == Guard::NormalSign {
-                -sigma
-            } else {
-                sigma
-            };
+            let branches = rig.slide_branches(&sh, dir.sign());
+            let new_sigma = -sigma;
             let ok = if new_sigma > 0.0 {
                 branches.plus
             } else {
                 branches.minus
             };
-            if guard == Guard::NormalSign && ok && branches.count() == 1 {
-                Switch {
-                    outcome: Outcome::Mode(mode),
-                    kind: EventKind::NormalFlip,
-                    sigma: new_sigma,
-                }
+            // Q passes through zero: N changes sign on the branch that stays well defined
+            // (positive denominator). At Q = 0 to rounding both branches count as consistent,
+            // and staying on the old one would fire the guard again at once.
+            let positive = rig.slide(&sh, dir.sign(), new_sigma).delta > 0.0;
+            if ok && (branches.count() == 1 || positive) && !is_jam(rig, &sh) {
+                Switch::new(Outcome::Mode(mode), EventKind::NormalFlip, new_sigma)
             } else {
-                Switch {
-                    outcome: paradox(ctx_rig, y, dir),
-                    kind: EventKind::Paradox,
-                    sigma,
-                }
+                stop_impulsively(rig, y, EventKind::ImpulsiveStop, rule)
             }
         }
+        Guard::Denominator => stop_impulsively(rig, y, EventKind::SuddenStop, rule),
     }
 }
 
@@ -450,6 +584,7 @@ where
         rig_re,
         rig_dual: rig_re.lift(),
         paradox_possible: rig_re.mu_kinetic > regions::mu_critical(rig_re.mass_ratio()),
+        thr: options.stop_threshold,
     };
     let is_f64 = TypeId::of::<T>() == TypeId::of::<f64>();
     let mut y: [T; N] = std::array::from_fn(|i| if i < 4 { y0[i] } else { T::from(0.0) });
@@ -464,52 +599,51 @@ where
 
     // The initial mode, by the same rules as at any other instant.
     let y_re = re_state(&y);
-    let start = if y_re[X_DOT] == 0.0 {
-        match choose_at_rest(&rig_re, &y_re) {
-            RestChoice::Unique(Mode::Stick) => Switch {
-                outcome: Outcome::Mode(Mode::Stick),
-                kind: EventKind::Stick,
-                sigma: 1.0,
-            },
-            RestChoice::Unique(Mode::Slide(dir)) => {
-                start_slide(&rig_re, &y_re, dir, EventKind::Slip, ctx.paradox_possible)
-            }
-            RestChoice::Indeterminate { alternatives } => Switch {
-                outcome: Outcome::Indeterminate(alternatives),
-                kind: EventKind::Paradox,
-                sigma: 1.0,
-            },
-            RestChoice::Inconsistent => Switch {
-                outcome: Outcome::Inconsistent,
-                kind: EventKind::Paradox,
-                sigma: 1.0,
-            },
-        }
+    let rule = options.rest_rule;
+    let initial_mode = if y_re[X_DOT] == 0.0 {
+        Mode::Stick
     } else {
-        start_slide(
-            &rig_re,
-            &y_re,
-            Direction::of(y_re[X_DOT]),
-            EventKind::Slip,
-            ctx.paradox_possible,
-        )
+        Mode::Slide(Direction::of(y_re[X_DOT]))
     };
+    let start = match initial_mode {
+        Mode::Stick => {
+            let c_dir = Direction::of(Shorthands::at(&rig_re, &y_re).c);
+            from_rest(
+                &rig_re,
+                &y_re,
+                rule,
+                c_dir,
+                |_| EventKind::Slip,
+                EventKind::Stick,
+            )
+        }
+        Mode::Slide(dir) => start_slide(&rig_re, &y_re, dir, EventKind::Slip, rule),
+    };
+    if !matches!(
+        start.kind,
+        EventKind::Slip | EventKind::Stick | EventKind::NormalFlip
+    ) {
+        // A choice, an impulse or a paradox at t = 0 is an event of its own.
+        let impulse = (start.reset == Reset::Impulsive).then(|| {
+            let (after, impulse) = impulsive_stop(rig, &y[..4]);
+            y[..4].copy_from_slice(&after);
+            impulse
+        });
+        out.events.push(Event {
+            t: 0.0,
+            from: initial_mode,
+            to: start.outcome.clone(),
+            kind: start.kind,
+            state: re_state(&y),
+            alternatives: start.alternatives.clone(),
+            impulse,
+            peak_normal: None,
+        });
+        out.stats.events = 1;
+    }
     let (mut mode, mut sigma) = match start.outcome {
         Outcome::Mode(m) => (m, start.sigma),
-        other => {
-            let initial_mode = if y_re[X_DOT] == 0.0 {
-                Mode::Stick
-            } else {
-                Mode::Slide(Direction::of(y_re[X_DOT]))
-            };
-            out.events.push(Event {
-                t: 0.0,
-                from: initial_mode,
-                to: other,
-                kind: EventKind::Paradox,
-                state: y_re,
-            });
-            out.stats.events = 1;
+        _ => {
             out.emit(times, 0.0, 0.0, initial_mode, |_| y);
             return Ok(finish(out, 0.0, &y, initial_mode));
         }
@@ -520,6 +654,7 @@ where
 
     'segments: loop {
         let sys = ModeSystem { rig, mode, sigma };
+        let t_segment = t;
         stepper.reset(&sys, &y);
         // A new mode has new dynamics: the step carried over from the old one is only an upper
         // bound (an overlong first step after a slip costs a rejected 12-stage step).
@@ -612,6 +747,7 @@ where
                         &re_vec(&stepper.interpolate(th))[..4],
                         mode,
                         sigma,
+                        ctx.thr,
                     )
                 };
                 let grazing = st.armed && g1 > 0.0 && st.gdot < 0.0 && gdot1 > 0.0;
@@ -678,15 +814,26 @@ where
                 if guard == Guard::Stop {
                     at_event[X_DOT] = 0.0;
                 }
-                let switch = decide(
-                    &rig_re,
-                    ctx.paradox_possible,
-                    guard,
-                    mode,
-                    sigma,
-                    &at_event,
-                    c_hint,
-                );
+                // A slide that stopped the instant it began falls back to the maximal-dissipation
+                // choice: choosing it again would repeat the event forever.
+                let rule_here = if t_star == t_segment && guard == Guard::Stop {
+                    RestRule::PreferStick
+                } else {
+                    rule
+                };
+                let switch = decide(&rig_re, rule_here, guard, mode, sigma, &at_event, c_hint);
+                let impulse = (switch.reset == Reset::Impulsive).then(|| {
+                    let (after, impulse) = impulsive_stop(&rig_re, &ys_re);
+                    at_event = after;
+                    impulse
+                });
+                let peak_normal = (switch.kind == EventKind::SuddenStop).then(|| {
+                    let Mode::Slide(dir) = mode else {
+                        return f64::NAN;
+                    };
+                    let sh = Shorthands::at(&rig_re, &ys_re);
+                    rig_re.slide(&sh, dir.sign(), sigma).normal.abs()
+                });
                 out.stats.events += 1;
                 out.events.push(Event {
                     t: t_star,
@@ -694,6 +841,9 @@ where
                     to: switch.outcome.clone(),
                     kind: switch.kind,
                     state: at_event,
+                    alternatives: switch.alternatives,
+                    impulse,
+                    peak_normal,
                 });
                 out.stats.rhs_evals += stepper.rhs_evals();
                 stepper = M::default();
@@ -709,12 +859,17 @@ where
                 }
                 y = if is_f64 {
                     let mut yn = y_star;
-                    if guard == Guard::Stop {
-                        yn[X_DOT] = T::from(0.0);
-                    }
+                    apply_reset(ctx.rig, switch.reset, &mut yn);
                     yn
                 } else {
-                    jump_with_sensitivity(&ctx, guard, mode, sigma, new_mode, switch.sigma, &y_star)
+                    jump_with_sensitivity(
+                        &ctx,
+                        guard,
+                        (mode, sigma),
+                        (new_mode, switch.sigma),
+                        switch.reset,
+                        &y_star,
+                    )
                 };
                 t = t_star;
                 mode = new_mode;
@@ -751,10 +906,9 @@ where
 fn jump_with_sensitivity<T: Scalar, const N: usize>(
     ctx: &Ctx<'_, T>,
     guard: Guard,
-    old_mode: Mode,
-    old_sigma: f64,
-    new_mode: Mode,
-    new_sigma: f64,
+    (old_mode, old_sigma): (Mode, f64),
+    (new_mode, new_sigma): (Mode, f64),
+    reset: Reset,
     y_star: &[T; N],
 ) -> [T; N] {
     let old = ModeSystem {
@@ -769,7 +923,7 @@ fn jump_with_sensitivity<T: Scalar, const N: usize>(
     };
     let mut f_old = *y_star;
     OdeSystem::<T, N>::rhs(&old, y_star, &mut f_old);
-    let g = guard.value(ctx.rig, &y_star[..4], old_mode, old_sigma);
+    let g = guard.value(ctx.rig, &y_star[..4], old_mode, old_sigma, ctx.thr);
     let (_, gdot) = ctx.guard_with_rate(
         guard,
         &re_vec(y_star)[..4],
@@ -783,12 +937,24 @@ fn jump_with_sensitivity<T: Scalar, const N: usize>(
         T::from(0.0)
     };
     let mut ym: [T; N] = std::array::from_fn(|i| y_star[i] + f_old[i] * dt);
-    if guard == Guard::Stop {
-        ym[X_DOT] = T::from(0.0);
-    }
+    // The reset map in dual arithmetic: an impulsive stop carries d(theta')/dp through
+    // theta'+ = theta'- - sin(theta) x'- / l.
+    apply_reset(ctx.rig, reset, &mut ym);
     let mut f_new = ym;
     OdeSystem::<T, N>::rhs(&new, &ym, &mut f_new);
     std::array::from_fn(|i| ym[i] - f_new[i] * dt)
+}
+
+/// Apply an event's reset to a state (the friction work, when carried, is continuous).
+fn apply_reset<T: Scalar, const N: usize>(rig: &Rig<T>, reset: Reset, y: &mut [T; N]) {
+    match reset {
+        Reset::None => {}
+        Reset::ZeroVelocity => y[X_DOT] = T::from(0.0),
+        Reset::Impulsive => {
+            let (after, _) = impulsive_stop(rig, &y[..4]);
+            y[..4].copy_from_slice(&after);
+        }
+    }
 }
 
 fn finish<T: Scalar, const N: usize>(

@@ -5,9 +5,9 @@ mod hybrid;
 pub mod rk;
 pub mod tableau;
 
-pub use hybrid::simulate;
+pub use hybrid::{impulsive_stop, simulate};
 
-use crate::model::{Mode, State};
+use crate::model::{Direction, Mode, State};
 use serde::Serialize;
 use std::fmt;
 use thiserror::Error;
@@ -50,6 +50,48 @@ pub struct Options {
     pub max_steps: usize,
     /// Most events before the run fails (guards against stick-slip chattering).
     pub max_events: usize,
+    /// Which motion to take at rest where several are consistent (only above mu*).
+    pub rest_rule: RestRule,
+    /// Sudden-stop threshold: a slide whose denominator |D + mu s sigma a| falls below this
+    /// fraction of m1 + m2 is ended by an impulsive stop (the convergence test
+    /// `sudden_stop_converges_as_threshold_tightens` shows why 1e-9 is tight enough).
+    pub stop_threshold: f64,
+}
+
+/// The rule that picks one motion at rest when the Painleve paradox leaves several consistent
+/// ones (stick and one or two slides). The choice is recorded in an `indeterminate` event
+/// listing every alternative.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum RestRule {
+    /// Stick when sticking is admissible (the maximal-dissipation choice: no slide, no
+    /// friction work); otherwise the slide in the direction s = sign(c) the slider would
+    /// accelerate without friction, or else the other slide.
+    #[default]
+    PreferStick,
+    /// Slide when a slide is consistent (direction sign(c) first), stick otherwise: the
+    /// least-dissipating choice, for exploring the other future. After an impulsive stop, or
+    /// a slide that ended the instant it began, the stick is taken when admissible (choosing
+    /// the failed slide again would repeat the stop without end).
+    PreferSlide,
+    /// End the run with an `indeterminate` outcome (the behaviour before issue 6).
+    Halt,
+}
+
+impl RestRule {
+    /// Pick one of `alternatives` (stick listed first when present); `c_dir` is the
+    /// friction-free direction sign(c). `None` under [`RestRule::Halt`].
+    pub fn choose(self, alternatives: &[Mode], c_dir: Direction) -> Option<Mode> {
+        let slide = [Mode::Slide(c_dir), Mode::Slide(c_dir.flipped())]
+            .into_iter()
+            .find(|m| alternatives.contains(m));
+        let stick = alternatives.contains(&Mode::Stick).then_some(Mode::Stick);
+        match self {
+            RestRule::PreferStick => stick.or(slide),
+            RestRule::PreferSlide => slide.or(stick),
+            RestRule::Halt => None,
+        }
+    }
 }
 
 impl Default for Options {
@@ -60,6 +102,8 @@ impl Default for Options {
             method: Method::Dop853,
             max_steps: 1_000_000,
             max_events: 10_000,
+            rest_rule: RestRule::PreferStick,
+            stop_threshold: 1e-9,
         }
     }
 }
@@ -87,8 +131,53 @@ pub enum EventKind {
     Continuation,
     /// The rail reaction changed sign while sliding (the friction branch changes).
     NormalFlip,
-    /// The sliding equation stopped having exactly one solution (Painleve paradox).
+    /// The sliding equation stopped having exactly one solution (Painleve paradox) and the
+    /// run cannot go on (an inconsistent state at rest, or [`RestRule::Halt`]).
     Paradox,
+    /// At rest with several consistent motions: the [`RestRule`] chose one (`to`), the others
+    /// are listed in [`Event::alternatives`].
+    Indeterminate,
+    /// Sliding toward a band edge |N| grew without bound: the slider stopped there, by itself or
+    /// by an impulsive stop of the small velocity left at the threshold ([`Event::impulse`]).
+    SuddenStop,
+    /// A sliding state with no consistent solution, resolved by a tangential impact that stops
+    /// the slider ([`Event::impulse`]).
+    ImpulsiveStop,
+    /// Numerator and denominator of the sliding equation vanish together (Q = 0 on a band
+    /// edge): the future is not unique and the run ends.
+    DynamicJam,
+}
+
+impl EventKind {
+    /// The name in timelines and JSON (`slip`, `sudden_stop`, ...).
+    pub fn name(self) -> &'static str {
+        match self {
+            EventKind::Slip => "slip",
+            EventKind::Stick => "stick",
+            EventKind::Reversal => "reversal",
+            EventKind::Continuation => "continuation",
+            EventKind::NormalFlip => "normal_flip",
+            EventKind::Paradox => "paradox",
+            EventKind::Indeterminate => "indeterminate",
+            EventKind::SuddenStop => "sudden_stop",
+            EventKind::ImpulsiveStop => "impulsive_stop",
+            EventKind::DynamicJam => "dynamic_jam",
+        }
+    }
+}
+
+/// An impulsive stop of the slider (PHYSICS.md, tangential impact) taking x' from
+/// `x_dot_before` to 0 in no time.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Impulse {
+    /// Slider velocity just before the stop (m/s).
+    pub x_dot_before: f64,
+    /// Normal impulse P_N = a (x'+ - x'-) (N s).
+    pub normal: f64,
+    /// Friction impulse P_F = D (x'+ - x'-) (N s).
+    pub friction: f64,
+    /// Kinetic energy lost, D x'-^2 / 2 (J).
+    pub energy_lost: f64,
 }
 
 /// What the rig moves into at an event.
@@ -137,8 +226,22 @@ pub struct Event {
     pub to: Outcome,
     /// Why.
     pub kind: EventKind,
-    /// State (x, theta, x', theta') at the event, after any reset of x'.
+    /// State (x, theta, x', theta') at the event, after any reset of x' (and of theta' by an
+    /// impulsive stop).
     pub state: State<f64>,
+    /// Every consistent motion when the event is an indeterminate choice at rest.
+    pub alternatives: Vec<Mode>,
+    /// The impulsive stop applied at this event, if any.
+    pub impulse: Option<Impulse>,
+    /// Largest |N| (N) reached just before a sudden stop.
+    pub peak_normal: Option<f64>,
+}
+
+impl Event {
+    /// Energy the event took out of the rig in an impulsive stop (J), zero otherwise.
+    pub fn energy_lost(&self) -> f64 {
+        self.impulse.map_or(0.0, |i| i.energy_lost)
+    }
 }
 
 /// Work counters of a run.
@@ -188,6 +291,12 @@ pub struct Solution<T> {
 }
 
 impl<T> Solution<T> {
+    /// Energy taken out by every impulsive stop of the run (J): with the friction work this
+    /// closes the energy balance E(t) - E(0) = W_friction - sum of losses.
+    pub fn impulsive_losses(&self) -> f64 {
+        self.events.iter().map(Event::energy_lost).sum()
+    }
+
     /// Whether the run stopped early at a paradox it does not resolve.
     pub fn stopped_at_paradox(&self) -> bool {
         self.events

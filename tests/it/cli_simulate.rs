@@ -118,3 +118,38 @@ fn bad_scenes_name_the_key_and_exit_2() {
     let out = appell(&["simulate", "/nonexistent/scene.toml"]);
     assert_eq!(out.status.code(), Some(2));
 }
+
+/// The shipped light-slider scene above mu* shows a sudden stop in the JSON, with its peak
+/// normal force, and closes the energy balance with the impulsive losses.
+#[test]
+fn paradox_scene_json_reports_sudden_stop() {
+    let out = appell(&[
+        "simulate",
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/configs/paradox_light_slider.toml"
+        ),
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let stop = v["events"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .find(|e| e["kind"] == "sudden_stop")
+        .expect("a sudden stop");
+    assert_eq!(
+        (stop["from"].as_str(), stop["to"].as_str()),
+        (Some("slide+"), Some("stick"))
+    );
+    assert!(stop["t"].as_f64().unwrap() > 0.2 && stop["peak_normal"].as_f64().unwrap() > 50.0);
+    let balance = v["energy_change"].as_f64().unwrap() - v["friction_work"].as_f64().unwrap()
+        + v["impulsive_losses"].as_f64().unwrap();
+    assert!(balance.abs() < 1e-8, "{balance}");
+    assert_eq!(v["completed"], true);
+}

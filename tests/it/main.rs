@@ -5,6 +5,7 @@ mod cli_regions;
 mod cli_simulate;
 mod fit;
 mod helpers;
+mod paradox;
 mod recordings;
 mod regions;
 mod simulate_oracles;

@@ -317,10 +317,11 @@ fn event_times_converge_with_tolerance() {
     }
 }
 
-/// Above mu* the run never integrates through the paradox silently: it ends with an event of
-/// its own kind at the state where it happened, named by the sign rule of PHYSICS.md.
+/// Above mu* the run goes on through the paradox and says what it did, by the sign rule of
+/// PHYSICS.md: a slide with no solution is stopped impulsively (with its impulses), a slide
+/// with two takes the positive-denominator branch and runs on, also into the band.
 #[test]
-fn paradox_is_reported_not_integrated() {
+fn paradox_is_resolved_and_reported() {
     // Equal masses, mu = 3 > mu* = 2.83: the band is 45..63.43 deg (tan in (1, 2)).
     let rig = Rig::paper(3.0);
     let band = regions::paradox_band(1.0, 3.0).unwrap();
@@ -328,40 +329,31 @@ fn paradox_is_reported_not_integrated() {
     let th = 50f64.to_radians();
     // Inside the band Q < 0 and a > 0: sliding with s a > 0 (s = +1) has no solution,
     // with s a < 0 (s = -1) two.
-    for (x_dot, expect) in [(0.5, "inconsistent"), (-0.5, "indeterminate")] {
-        let sol = simulate(
-            &rig,
-            &[0.0, th, x_dot, 0.0],
-            1.0,
-            &Options::default(),
-            &Request::default(),
-        )
-        .unwrap();
-        assert_eq!(sol.events.len(), 1);
-        let e = &sol.events[0];
-        assert_eq!(
-            (e.t, e.kind, e.to.name()),
-            (0.0, EventKind::Paradox, expect)
-        );
-        assert!(sol.stopped_at_paradox() && sol.final_time == 0.0);
-    }
-    // Sliding (s = -1) from outside into the band: the run stops at the band edge, 45 deg.
-    let sol = simulate(
-        &rig,
-        &[0.0, 30f64.to_radians(), -3.0, 3.0],
-        1.0,
-        &Options::default(),
-        &Request::default(),
-    )
-    .unwrap();
-    let e = sol.events.last().unwrap();
-    assert_eq!((e.kind, e.to.name()), (EventKind::Paradox, "indeterminate"));
+    let run_from =
+        |y0: [f64; 4]| simulate(&rig, &y0, 1.0, &Options::default(), &Request::default()).unwrap();
+    let sol = run_from([0.0, th, 0.5, 0.0]);
+    let e = &sol.events[0];
+    assert_eq!((e.t, e.kind), (0.0, EventKind::ImpulsiveStop));
+    let imp = e.impulse.unwrap();
+    let sh = Shorthands::new(&rig, th, 0.0);
+    assert!((imp.friction + sh.d * 0.5).abs() < 1e-15 && (imp.normal + sh.a * 0.5).abs() < 1e-15);
+    assert!(e.state[2] == 0.0 && (e.state[3] + th.sin() * 0.5 / rig.rod_length).abs() < 1e-15);
+    assert!(!sol.stopped_at_paradox() && sol.final_time == 1.0);
+    let sol = run_from([0.0, th, -0.5, 0.0]);
     assert!(
-        (e.state[1] - band.0).abs() < 1e-9,
-        "stopped at {} deg",
-        e.state[1].to_degrees()
+        sol.events.first().is_none_or(|e| e.t > 0.0),
+        "{:?}",
+        sol.events
     );
-    assert!(sol.final_time == e.t && e.t > 0.0);
+    assert!(!sol.stopped_at_paradox() && sol.final_time == 1.0);
+    // Sliding (s = -1) from outside into the band: the branch keeps a positive denominator,
+    // so nothing happens at the band edge (45 deg).
+    let sol = run_from([0.0, 30f64.to_radians(), -3.0, 3.0]);
+    assert!(sol
+        .events
+        .iter()
+        .all(|e| (e.state[1] - band.0).abs() > 1e-3 || e.kind == EventKind::Stick));
+    assert!(sol.final_time == 1.0);
 }
 
 /// Failures carry where they happened: a step limit is an error with the time and state.
