@@ -177,11 +177,27 @@ pub fn mu_static_from_onsets(
             run += 1;
             continue;
         }
-        // An onset: a stuck stretch of at least a window, then motion.
+        // An onset: a stuck stretch of at least a window, then motion. The smoothed rate
+        // crosses its threshold late; the onset time itself comes from a hinge fit of the raw
+        // track (at rest, then x0 + c (t - t*)^2), and the needed ratio is read there.
         if run >= h && k > 0 {
-            let a = fits[k - 1].2;
-            let sh = Shorthands::new(rig, a[0], a[1]);
-            ratios.push(sh.c.abs() / sh.b.abs());
+            let first_moving = k + h;
+            let lo = first_moving.saturating_sub(4 * h);
+            let hi = (first_moving + 2 * h).min(ts.len() - 1);
+            let onset = (lo + 1..hi).min_by(|&a, &b| {
+                hinge_sse(&ts[lo..=hi], &xs[lo..=hi], ts[a]).total_cmp(&hinge_sse(
+                    &ts[lo..=hi],
+                    &xs[lo..=hi],
+                    ts[b],
+                ))
+            });
+            if let Some(j) = onset {
+                let (a0, a1) = (j.saturating_sub(h), (j + h).min(ta.len() - 1));
+                if let Some(a) = quadratic_at(&ta[a0..=a1], &th[a0..=a1], ts[j]) {
+                    let sh = Shorthands::new(rig, a[0], a[1]);
+                    ratios.push(sh.c.abs() / sh.b.abs());
+                }
+            }
         }
         run = 0;
     }
@@ -190,4 +206,28 @@ pub fn mu_static_from_onsets(
     }
     ratios.sort_by(f64::total_cmp);
     Some(ratios[ratios.len() / 2])
+}
+
+/// Residual sum of squares of the hinge x = x0 (t <= t*), x0 + c2 u^2 + c3 u^3 (u = t - t*
+/// > 0) fitted by linear least squares: a slip starts with a jump in x'' when mu_s > mu_k
+/// (the u^2 term) and smoothly when they are equal (the u^3 term).
+fn hinge_sse(t: &[f64], x: &[f64], t_star: f64) -> f64 {
+    let basis = |ti: f64| {
+        let u = (ti - t_star).max(0.0);
+        nalgebra::Vector3::new(1.0, u * u, u * u * u)
+    };
+    let mut a = nalgebra::Matrix3::zeros();
+    let mut b = nalgebra::Vector3::zeros();
+    for (&ti, &xi) in t.iter().zip(x) {
+        let phi = basis(ti);
+        a += phi * phi.transpose();
+        b += phi * xi;
+    }
+    let Some(c) = a.lu().solve(&b) else {
+        return f64::INFINITY;
+    };
+    t.iter()
+        .zip(x)
+        .map(|(&ti, &xi)| (xi - basis(ti).dot(&c)).powi(2))
+        .sum()
 }

@@ -215,6 +215,7 @@ fn chattering_ends_or_is_reported_with_bounded_work() {
                 method,
                 max_steps: 200_000,
                 max_events: 200,
+                ..Options::default()
             };
             let result = within(Duration::from_secs(20), move || {
                 simulate(
