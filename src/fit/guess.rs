@@ -172,8 +172,8 @@ pub fn mu_static_from_onsets(
     let still = |f: &([f64; 3], f64, [f64; 3])| f.0[1].abs() < (3.0 * f.1).max(0.02 * vmax);
     let mut ratios = Vec::new();
     let mut run = 0;
-    for k in 0..fits.len() {
-        if still(&fits[k]) {
+    for (k, fit) in fits.iter().enumerate() {
+        if still(fit) {
             run += 1;
             continue;
         }
@@ -208,9 +208,9 @@ pub fn mu_static_from_onsets(
     Some(ratios[ratios.len() / 2])
 }
 
-/// Residual sum of squares of the hinge x = x0 (t <= t*), x0 + c2 u^2 + c3 u^3 (u = t - t*
-/// > 0) fitted by linear least squares: a slip starts with a jump in x'' when mu_s > mu_k
-/// (the u^2 term) and smoothly when they are equal (the u^3 term).
+/// Residual sum of squares of the hinge x = x0 (t <= t*), x0 + c2 u^2 + c3 u^3 (u = t - t*,
+/// for t > t*) fitted by linear least squares: a slip starts with a jump in x'' when
+/// mu_s > mu_k (the u^2 term) and smoothly when they are equal (the u^3 term).
 fn hinge_sse(t: &[f64], x: &[f64], t_star: f64) -> f64 {
     let basis = |ti: f64| {
         let u = (ti - t_star).max(0.0);
