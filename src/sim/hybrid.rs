@@ -198,6 +198,39 @@ fn initial_step<T: Scalar, S: OdeSystem<T, N>, const N: usize>(
     (100.0 * h0).min(h1).min(span)
 }
 
+/// Minimum of `g` on [a, b] by golden-section search, to `tol` in the argument.
+fn golden_min(mut a: f64, mut b: f64, tol: f64, g: impl Fn(f64) -> f64) -> (f64, f64) {
+    let r = (5f64.sqrt() - 1.0) / 2.0;
+    let (mut c, mut d) = (b - r * (b - a), a + r * (b - a));
+    let (mut gc, mut gd) = (g(c), g(d));
+    while b - a > tol {
+        if gc < gd {
+            b = d;
+            d = c;
+            gd = gc;
+            c = b - r * (b - a);
+            gc = g(c);
+        } else {
+            a = c;
+            c = d;
+            gc = gd;
+            d = a + r * (b - a);
+            gd = g(d);
+        }
+        if gc <= 0.0 {
+            return (c, gc);
+        }
+        if gd <= 0.0 {
+            return (d, gd);
+        }
+    }
+    if gc < gd {
+        (c, gc)
+    } else {
+        (d, gd)
+    }
+}
+
 /// Bracketing root finder (Illinois variant of regula falsi): `g(a) > 0 >= g(b)`. Returns the
 /// first point found on the violated side, within `tol` of the crossing.
 fn find_root(
@@ -737,6 +770,10 @@ where
             };
             // Earliest guard crossing in this step, as a fraction of the step.
             let mut hit: Option<(f64, usize)> = None;
+            // A mode that may end within a sixteenth of this step is resolved with a shorter
+            // step rather than declared zero-length (short slips near a grazing onset).
+            let mut retry = false;
+            let h_floor = 1e3 * h_min;
             let mut new_g = [(0.0, 0.0); 3];
             for (gi, st) in gs.iter().enumerate() {
                 let (g1, gdot1) = ctx.guard_with_rate(st.guard, &y1r, &f1r, mode, sigma);
@@ -760,9 +797,13 @@ where
                     let k = 16;
                     let mut prev = (0.0, if st.armed { st.g } else { f64::NAN });
                     let mut found = None;
+                    let mut lowest = (0.0, if st.armed { st.g } else { f64::INFINITY });
                     for j in 1..=k {
                         let th = j as f64 / k as f64;
                         let gj = if j == k { g1 } else { g_at(&stepper, th) };
+                        if gj < lowest.1 {
+                            lowest = (th, gj);
+                        }
                         if gj > 0.0 {
                             prev = (th, gj);
                         } else if prev.1 > 0.0 {
@@ -770,9 +811,27 @@ where
                             break;
                         }
                     }
+                    if found.is_none() && grazing {
+                        // A dip narrower than the sampling: minimise the guard around its
+                        // lowest sample (golden section; the dip is a single minimum there)
+                        // and bracket the crossing if the minimum is below zero.
+                        let h = 1.0 / k as f64;
+                        let (lo, hi) = ((lowest.0 - h).max(0.0), (lowest.0 + h).min(1.0));
+                        let (th_min, g_min) = golden_min(lo, hi, 1e-10, |th| g_at(&stepper, th));
+                        if g_min <= 0.0 {
+                            let g_lo = if lo == 0.0 { st.g } else { g_at(&stepper, lo) };
+                            if g_lo > 0.0 {
+                                found = Some((lo, g_lo, th_min, g_min));
+                            }
+                        }
+                    }
                     match found {
                         Some(b) => Some(b),
                         // Never positive: the mode is left the instant it starts.
+                        None if !st.armed && step > h_floor => {
+                            retry = true;
+                            None
+                        }
                         None if !st.armed => Some((0.0, 0.0, 0.0, 0.0)),
                         None => None,
                     }
@@ -791,6 +850,12 @@ where
                         hit = Some((th, gi));
                     }
                 }
+            }
+            if retry && hit.is_none_or(|(th, _)| th > 0.0) {
+                out.stats.steps -= 1;
+                out.stats.rejected += 1;
+                h = step / 16.0;
+                continue;
             }
             if let Some((th, gi)) = hit {
                 let t_star = if th >= 1.0 { t1 } else { t + th * step };
