@@ -2,6 +2,7 @@
 //! and the work-precision diagram (run time against error for each integrator).
 
 pub mod exact;
+pub mod fit;
 pub mod plot;
 pub mod work_precision;
 

@@ -30,11 +30,15 @@ pub struct Args {
     /// Run the work-precision benchmark on the built-in reference scenes instead.
     #[arg(long)]
     work_precision: bool,
+    /// Time the fit instead: a 2 s, 1000 Hz recording from a start 30% off in mu, over a
+    /// ladder of integration tolerances (run time against mu error).
+    #[arg(long, conflicts_with_all = ["work_precision", "scene"])]
+    fit: bool,
     /// Work-precision: draw run time against error (log axes) to this SVG or PNG.
     #[arg(long, value_name = "FILE.svg", requires = "work_precision")]
     plot: Option<PathBuf>,
     /// Work-precision: comma-separated tolerance ladder (default 1e-4,1e-5,...,1e-12).
-    #[arg(long, value_delimiter = ',', requires = "work_precision")]
+    #[arg(long, value_delimiter = ',')]
     rtols: Vec<f64>,
     /// Work-precision: comma-separated scene names (default all: paper, unequal, rotation,
     /// near_critical, stuck, frictionless).
@@ -174,7 +178,49 @@ fn run_work_precision(args: &Args) -> Result<(), Failure> {
     Ok(())
 }
 
+/// `appell bench --fit`: the fit's run time against its mu error.
+fn run_fit(args: &Args) -> Result<(), Failure> {
+    let rtols = if args.rtols.is_empty() {
+        vec![1e-5, 1e-6, 1e-7, 1e-8, 1e-10]
+    } else {
+        args.rtols.clone()
+    };
+    let points = appell::bench::fit::fit_benchmark(&rtols, args.batches.unwrap_or(7))
+        .map_err(|e| Failure::Run(anyhow!(e)))?;
+    if args.json {
+        outln!("{}", serde_json::json!({"fit": points}));
+        return Ok(());
+    }
+    outln!("fit of a 2 s, 1000 Hz two-marker recording (example rig, mu = 0.12, 0.2 mm noise), start 30% off in mu:");
+    outln!(
+        "{:>8} {:>8} {:>11} {:>12} {:>10} {:>12} {:>18}",
+        "rtol",
+        "profile",
+        "median ms",
+        "mu",
+        "stderr",
+        "|mu - 0.12|",
+        "integration error"
+    );
+    for p in points {
+        outln!(
+            "{:>8.0e} {:>8} {:>11.2} {:>12.8} {:>10.2e} {:>12.2e} {:>18.2e}",
+            p.rtol,
+            p.profile,
+            p.seconds * 1e3,
+            p.mu,
+            p.stderr,
+            p.mu_error,
+            p.integration_error
+        );
+    }
+    Ok(())
+}
+
 pub fn run(args: Args) -> Result<(), Failure> {
+    if args.fit {
+        return run_fit(&args);
+    }
     if args.work_precision {
         return run_work_precision(&args);
     }
