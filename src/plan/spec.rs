@@ -518,7 +518,7 @@ impl PlanFile {
             ));
         }
         let rail = range(path, "release.rail", rl.rail)?;
-        if !(rail[0] <= rl.x && rl.x <= rail[1]) || !rl.x.is_finite() {
+        if !(rail[0] <= rl.x && rl.x <= rail[1] && rl.x.is_finite()) {
             return Err(invalid(
                 path,
                 "release.x",
