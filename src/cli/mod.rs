@@ -25,6 +25,7 @@ macro_rules! out {
 mod bench;
 mod convert;
 mod fit;
+mod plan;
 pub mod recording_args;
 mod regions;
 mod simulate;
@@ -57,6 +58,9 @@ enum Command {
     Convert(convert::Args),
     /// Write a synthetic recording of a scene (CSV or MCAP) with noise, dropouts, outliers.
     Synth(synth::Args),
+    /// Plan releases that make the wanted mode transitions observable, ranked by how well
+    /// they pin down mu.
+    Plan(plan::Args),
 }
 
 /// A failed command: bad input (exit code 2) or a run that could not finish (exit code 1).
@@ -87,6 +91,7 @@ pub fn main() -> ExitCode {
         Command::Regions(args) => regions::run(args),
         Command::Convert(args) => convert::run(args),
         Command::Synth(args) => synth::run(args),
+        Command::Plan(args) => plan::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

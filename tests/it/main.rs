@@ -6,6 +6,7 @@ mod cli_simulate;
 mod fit;
 mod helpers;
 mod paradox;
+mod plan;
 mod recordings;
 mod regions;
 mod simulate_oracles;

@@ -1,0 +1,51 @@
+//! `appell plan PLAN.toml [--json] [--plot FILE.svg|FILE.png]`: releases that make the wanted
+//! transitions observable, ranked by the predicted standard error of mu.
+
+use super::Failure;
+use anyhow::anyhow;
+use appell::plan::{plan_with_progress, PlanSpec};
+use appell::report::plan::{plan_json, plan_table, PlanFigure};
+use appell::report::plot::{render, ImageFormat};
+use indicatif::{ProgressBar, ProgressStyle};
+use std::path::PathBuf;
+
+/// Arguments of `appell plan`.
+#[derive(Debug, clap::Args)]
+pub struct Args {
+    /// Plan file (TOML: [rig], [friction], [camera], [release], [goal], optional [search]).
+    plan: PathBuf,
+    /// Print one JSON object instead of the table.
+    #[arg(long)]
+    json: bool,
+    /// Draw the proposals in the (theta, theta') plane over the stick region (.svg or .png).
+    #[arg(long, value_name = "FILE.svg|FILE.png")]
+    plot: Option<PathBuf>,
+}
+
+pub fn run(args: Args) -> Result<(), Failure> {
+    if let Some(path) = &args.plot {
+        ImageFormat::from_path(path).map_err(|e| Failure::Input(e.into()))?;
+    }
+    let spec = PlanSpec::from_path(&args.plan).map_err(|e| Failure::Input(e.into()))?;
+    // Drawn only when stderr is a terminal (indicatif hides it otherwise).
+    let bar = ProgressBar::new(0);
+    bar.set_style(
+        ProgressStyle::with_template("{bar:40} {pos}/{len} releases screened ({elapsed})")
+            .unwrap_or_else(|_| ProgressStyle::default_bar()),
+    );
+    let report = plan_with_progress(&spec, &bar).map_err(|e| Failure::Run(e.into()))?;
+    if let Some(path) = &args.plot {
+        render(path, &PlanFigure { report: &report }).map_err(|e| {
+            Failure::Run(anyhow!(e).context(format!("plotting {}", path.display())))
+        })?;
+    }
+    if args.json {
+        outln!("{}", plan_json(&report));
+    } else {
+        out!("{}", plan_table(&report));
+        if let Some(path) = &args.plot {
+            outln!("figure written to {}", path.display());
+        }
+    }
+    Ok(())
+}

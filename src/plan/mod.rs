@@ -1,0 +1,373 @@
+//! Plan experiments: releases of the rig that make the wanted mode transitions happen inside
+//! the recording, large enough for the camera, for any mu within its uncertainty and any
+//! release within its execution error, ranked by how well a fit of the recording would pin
+//! down mu (the predicted standard error from the fit's own Jacobian).
+//!
+//! [`plan`] runs the search of [`search`] and, when no release can work, says why and what the
+//! nearest achievable release is.
+
+pub mod criteria;
+pub mod search;
+pub mod spec;
+
+pub use criteria::{Criteria, Evaluation, Hit};
+pub use spec::{PlanSpec, Target, Uncertain};
+
+use crate::model::regions::{max_mass_ratio_for_paradox, mu_critical};
+use crate::model::{Rig, Shorthands, State};
+use crate::sim::{Event, Request, Sample};
+use indicatif::ProgressBar;
+use rayon::prelude::*;
+use search::{Candidate, Draws, Evaluator, ReleaseValues};
+use std::f64::consts::PI;
+use thiserror::Error;
+
+/// One proposed release with its predicted recording.
+#[derive(Debug, Clone)]
+pub struct Proposal {
+    /// The release (x, theta, x', theta').
+    pub initial: State<f64>,
+    /// The nominal run's events.
+    pub events: Vec<Event>,
+    /// The nominal run's verdict with every margin.
+    pub nominal: Evaluation,
+    /// Claimed robustness: a one-sided 95% lower bound of the fraction of draws (mu across its
+    /// uncertainty, release error) showing every target.
+    pub robustness: f64,
+    /// The fraction observed in the check's draws.
+    pub robustness_observed: f64,
+    /// Number of draws of the check.
+    pub draws: usize,
+    /// Predicted standard error of mu_kinetic (fit of mu and the initial state).
+    pub predicted_mu_stderr: f64,
+    /// Samples of the nominal run at the frame rate (for figures).
+    pub samples: Vec<Sample<f64>>,
+}
+
+/// What the plan cannot do, and the closest thing it can.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Nearest {
+    /// One or more sentences: why, and what would work.
+    pub message: String,
+    /// A release outside the feasible set that shows every target at the nominal friction
+    /// (x, theta, x', theta'), when one was found.
+    pub release: Option<State<f64>>,
+    /// Its robustness over the search's draws.
+    pub robustness: Option<f64>,
+}
+
+/// The planner's answer.
+#[derive(Debug, Clone)]
+pub struct PlanReport {
+    /// Whether some release meets every criterion with the required robustness.
+    pub feasible: bool,
+    /// The targets.
+    pub targets: Vec<Target>,
+    /// Proposals, best first (feasible ones by predicted stderr, then the rest by robustness).
+    pub proposals: Vec<Proposal>,
+    /// When infeasible: why, and the nearest achievable.
+    pub nearest: Option<Nearest>,
+    /// Facts worth knowing (paradox threshold and the like).
+    pub notes: Vec<String>,
+    /// Releases simulated at the nominal friction during the search.
+    pub evaluated: usize,
+    /// The rig at nominal friction.
+    pub rig: Rig<f64>,
+}
+
+/// A plan that could not be computed.
+#[derive(Debug, Error)]
+pub enum PlanError {
+    /// The nominal run of a proposal could not be repeated for the report.
+    #[error("simulating the proposal from {initial:?} failed: {message}")]
+    Simulation {
+        /// The release.
+        initial: State<f64>,
+        /// The simulator's message.
+        message: String,
+    },
+}
+
+/// Plan with no progress display.
+pub fn plan(spec: &PlanSpec) -> Result<PlanReport, PlanError> {
+    plan_with_progress(spec, &ProgressBar::hidden())
+}
+
+/// Plan, advancing `bar` once per release judged on the grid.
+pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanReport, PlanError> {
+    let ev = Evaluator::new(spec);
+    let ranges = search::release_box(spec);
+    let points = search::grid(&ranges, spec.search.grid_points);
+    bar.set_length(points.len() as u64);
+    let draws = Draws::new(spec.search.draws, spec.search.seed);
+    let min_rob = spec.goal.min_robustness;
+    let mut notes = paradox_notes(spec);
+    let mut grid_found = search::screen(&ev, &points, &draws, bar);
+    let evaluated = points.len();
+    grid_found.retain(|c| c.stderr.is_finite() || c.robustness > 0.0);
+    if grid_found.is_empty() {
+        bar.finish_and_clear();
+        let nearest = nearest(&ev, &draws);
+        return Ok(PlanReport {
+            feasible: false,
+            targets: spec.goal.targets.clone(),
+            proposals: Vec::new(),
+            nearest: Some(nearest),
+            notes,
+            evaluated,
+            rig: spec.rig,
+        });
+    }
+    grid_found.sort_by(|a, b| a.objective(min_rob).total_cmp(&b.objective(min_rob)));
+    // Refine a few distinct grid winners; keep the rest of the grid as fallbacks.
+    let seeds = distinct(&grid_found, &ranges, spec.search.top.min(4));
+    let refined: Vec<Candidate> = seeds
+        .par_iter()
+        .map(|c| search::refine(&ev, &draws, c, 30))
+        .collect();
+    let mut pool = refined;
+    pool.extend(grid_found.iter().copied());
+    pool.sort_by(|a, b| a.objective(min_rob).total_cmp(&b.objective(min_rob)));
+    let chosen = distinct(&pool, &ranges, spec.search.top);
+    // The claim comes from fresh draws, so selection on the search's draws cannot inflate it.
+    let check = Draws::new(
+        spec.search.verify_draws,
+        spec.search.seed.wrapping_add(0x5eed),
+    );
+    let frames = spec.camera.frame_times();
+    let mut proposals = chosen
+        .par_iter()
+        .map(|c| {
+            let passed = ev.passes(&c.release, &check);
+            let y0 = ev.initial(&c.release);
+            let request = Request {
+                sample_times: frames.clone(),
+                friction_work: false,
+            };
+            let (sol, nominal) =
+                ev.run(&spec.rig, &y0, &request)
+                    .ok_or_else(|| PlanError::Simulation {
+                        initial: y0,
+                        message: "the nominal run failed".into(),
+                    })?;
+            Ok(Proposal {
+                initial: y0,
+                events: sol.events,
+                nominal,
+                robustness: search::robustness_lower_bound(passed, check.len()),
+                robustness_observed: passed as f64 / check.len() as f64,
+                draws: check.len(),
+                predicted_mu_stderr: c.stderr,
+                samples: sol.samples,
+            })
+        })
+        .collect::<Result<Vec<_>, PlanError>>()?;
+    bar.finish_and_clear();
+    let good = |p: &Proposal| p.robustness >= min_rob && p.predicted_mu_stderr.is_finite();
+    proposals.sort_by(|a, b| {
+        good(b).cmp(&good(a)).then_with(|| {
+            if good(a) {
+                a.predicted_mu_stderr.total_cmp(&b.predicted_mu_stderr)
+            } else {
+                b.robustness.total_cmp(&a.robustness)
+            }
+        })
+    });
+    let feasible = proposals.first().is_some_and(good);
+    let nearest = (!feasible).then(|| {
+        let best = &proposals[0];
+        Nearest {
+            message: format!(
+                "every target shows at the nominal friction, but no release in the feasible set reaches robustness {:.2}: the best, theta = {:.1} deg, theta' = {:.2} rad/s, x' = {:.3} m/s, shows them in {:.0}% of {} draws; narrow the uncertainty of mu, reduce the release error, or widen the release ranges",
+                min_rob,
+                best.initial[1].to_degrees(),
+                best.initial[3],
+                best.initial[2],
+                100.0 * best.robustness_observed,
+                best.draws
+            ),
+            release: Some(best.initial),
+            robustness: Some(best.robustness_observed),
+        }
+    });
+    if !feasible {
+        notes.push("no proposal meets the required robustness".into());
+    }
+    Ok(PlanReport {
+        feasible,
+        targets: spec.goal.targets.clone(),
+        proposals,
+        nearest,
+        notes,
+        evaluated,
+        rig: spec.rig,
+    })
+}
+
+/// Candidates (sorted best first) at least half a grid cell apart, so the proposals differ.
+fn distinct(sorted: &[Candidate], ranges: &[[f64; 2]; 3], n: usize) -> Vec<Candidate> {
+    let mut out: Vec<Candidate> = Vec::new();
+    for c in sorted {
+        let far = out.iter().all(|o| {
+            (0..3).any(|k| {
+                let w = ranges[k][1] - ranges[k][0];
+                w > 0.0 && (o.release[k] - c.release[k]).abs() > 0.04 * w
+            })
+        });
+        if far {
+            out.push(*c);
+        }
+        if out.len() == n {
+            break;
+        }
+    }
+    out
+}
+
+/// The paradox threshold of the rig, and for a sudden-stop target what mass ratio it needs.
+fn paradox_notes(spec: &PlanSpec) -> Vec<String> {
+    let r = spec.rig.mass_ratio();
+    let mu_star = mu_critical(r);
+    let [_, mu_hi] = spec.mu_kinetic.span();
+    let mut notes = vec![format!(
+        "mass ratio r = m1/m2 = {r:.3}: mu* = 2 sqrt(r (1 + r)) = {mu_star:.3}; mu_kinetic = {}",
+        spec.mu_kinetic
+    )];
+    if spec.goal.targets.contains(&Target::SuddenStop) && mu_hi <= mu_star {
+        notes.push(sudden_stop_advice(spec));
+    }
+    notes
+}
+
+fn sudden_stop_advice(spec: &PlanSpec) -> String {
+    let r = spec.rig.mass_ratio();
+    let mu = spec.rig.mu_kinetic;
+    let r_max = max_mass_ratio_for_paradox(mu);
+    format!(
+        "sudden_stop needs mu above mu* = {:.3} (r = {r:.3}); with mu = {mu} a mass ratio r = m1/m2 below {r_max:.4} brings mu* below mu (slider mass below {:.4} kg with this bob, or bob mass above {:.4} kg with this slider)",
+        mu_critical(r),
+        r_max * spec.rig.bob_mass,
+        spec.rig.slider_mass / r_max
+    )
+}
+
+/// Largest friction ratio |c| / |b| the stuck pendulum needs along its swing from
+/// (theta0, w0): slip from such a release is impossible when mu_static is above it. The
+/// swing is the arc reachable with the pendulum's energy (whole turns when it rotates).
+pub fn max_stick_ratio(rig: &Rig<f64>, theta0: f64, w0: f64) -> f64 {
+    let k = 2.0 * rig.gravity / rig.rod_length;
+    let w2 = |th: f64| w0 * w0 + k * (th.sin() - theta0.sin());
+    let ratio = |th: f64| {
+        let w = w2(th).max(0.0).sqrt();
+        let sh = Shorthands::new(rig, th, w);
+        sh.c.abs() / sh.b.abs().max(1e-300)
+    };
+    let n = 1440;
+    let step = 2.0 * PI / n as f64;
+    let mut best = ratio(theta0);
+    for dir in [1.0, -1.0] {
+        for i in 1..=n {
+            let th = theta0 + dir * step * i as f64;
+            if w2(th) < 0.0 {
+                break;
+            }
+            best = best.max(ratio(th));
+        }
+    }
+    best
+}
+
+/// Why nothing in the feasible set works, and the nearest release that does: first wider
+/// pushes, then wider angles.
+fn nearest(ev: &Evaluator, draws: &Draws) -> Nearest {
+    let spec = ev.spec;
+    let ranges = search::release_box(spec);
+    let mut reasons = Vec::new();
+    let mu_s = spec.rig.mu_static;
+    let needs_slip = spec.goal.targets.iter().any(|t| {
+        matches!(
+            t,
+            Target::StickToSlide | Target::StickSlipCycles(_) | Target::SlideToStick
+        )
+    });
+    let sudden_impossible = spec.goal.targets.contains(&Target::SuddenStop)
+        && spec.mu_kinetic.span()[1] <= mu_critical(spec.rig.mass_ratio());
+    if sudden_impossible {
+        reasons.push(sudden_stop_advice(spec));
+    }
+    if needs_slip && ranges[2] == [0.0, 0.0] {
+        let pts = search::grid(&ranges, spec.search.grid_points);
+        let best = pts
+            .iter()
+            .map(|p| max_stick_ratio(&spec.rig, p[0], p[1]))
+            .fold(0.0, f64::max);
+        if best < mu_s {
+            reasons.push(format!(
+                "no slip for mu_static above {best:.3} from any release in the feasible set (the stuck pendulum never needs more friction than that; the plan's mu_static is {mu_s})"
+            ));
+        }
+    }
+    if sudden_impossible {
+        return Nearest {
+            message: reasons.join("; "),
+            release: None,
+            robustness: None,
+        };
+    }
+    // Widen the push first (the cheapest change to a release mechanism), then the angle.
+    let w_now = ranges[1][0].abs().max(ranges[1][1].abs());
+    let mut tries: Vec<[[f64; 2]; 3]> = [1.0, 2.0, 3.0, 5.0, 8.0, 12.0]
+        .iter()
+        .filter(|&&w| w > w_now)
+        .map(|&w| [ranges[0], [-w, w], ranges[2]])
+        .collect();
+    tries.push([
+        [(-60f64).to_radians(), 240f64.to_radians()],
+        [-12f64.max(w_now), 12f64.max(w_now)],
+        ranges[2],
+    ]);
+    let distance = |p: &ReleaseValues| -> f64 {
+        // Distance outside the feasible box, angle in degrees and push in rad/s weighted alike.
+        let out = |v: f64, [lo, hi]: [f64; 2]| (lo - v).max(v - hi).max(0.0);
+        out(p[0], ranges[0]).to_degrees() / 10.0 + out(p[1], ranges[1]) + out(p[2], ranges[2])
+    };
+    for wide in tries {
+        let pts = search::grid(&wide, spec.search.grid_points.max(13) + 8);
+        let ok: Vec<ReleaseValues> = pts
+            .par_iter()
+            .filter(|p| ev.nominal_ok(p))
+            .copied()
+            .collect();
+        if let Some(p) = ok.iter().min_by(|a, b| distance(a).total_cmp(&distance(b))) {
+            let rob = ev.passes(p, draws) as f64 / draws.len() as f64;
+            let push = if p[1] < ranges[1][0] || p[1] > ranges[1][1] {
+                format!("a push of at least |theta'| = {:.2} rad/s", p[1].abs())
+            } else {
+                format!("theta' = {:.2} rad/s", p[1])
+            };
+            reasons.push(format!(
+                "nearest achievable: {push} at theta = {:.1} deg (x' = {:.3} m/s) shows every target at the nominal friction, in {:.0}% of the draws; the release ranges allow theta {:.1}..{:.1} deg, theta' {}..{} rad/s",
+                p[0].to_degrees(),
+                p[2],
+                100.0 * rob,
+                ranges[0][0].to_degrees(),
+                ranges[0][1].to_degrees(),
+                ranges[1][0],
+                ranges[1][1]
+            ));
+            return Nearest {
+                message: reasons.join("; "),
+                release: Some(ev.initial(p)),
+                robustness: Some(rob),
+            };
+        }
+    }
+    reasons.push(
+        "no release with theta in -60..240 deg and |theta'| up to 12 rad/s shows every target: relax the targets, the camera criteria or the rail".into(),
+    );
+    Nearest {
+        message: reasons.join("; "),
+        release: None,
+        robustness: None,
+    }
+}

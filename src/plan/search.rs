@@ -1,0 +1,408 @@
+//! The search over the feasible release set: a coarse grid screened by the nominal run and a
+//! few common draws, then Nelder-Mead (argmin) on the predicted standard error of mu with the
+//! robustness as a penalty, then a fresh Monte Carlo check of the best points.
+
+use super::criteria::{Criteria, Evaluation};
+use super::spec::PlanSpec;
+use crate::fit::lm::LeastSquares;
+use crate::fit::{Observations, Param, TrajectoryProblem};
+use crate::model::{Rig, State};
+use crate::sim::{simulate, Options, Request, Solution};
+use argmin::core::{CostFunction, Error, Executor};
+use argmin::solver::neldermead::NelderMead;
+use indicatif::ProgressBar;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use rand_distr::StandardNormal;
+use rayon::prelude::*;
+use std::sync::Arc;
+
+/// Standard draws of the uncertain quantities, shared by every candidate of a search so that
+/// the robustness is a smooth-ish function of the release (common random numbers).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Draws {
+    /// Standard normal draws for mu_kinetic.
+    pub mu_kinetic: Vec<f64>,
+    /// Standard normal draws for mu_static.
+    pub mu_static: Vec<f64>,
+    /// Uniform draws in [-1, 1] for the execution errors of (theta, theta', x').
+    pub release: Vec<[f64; 3]>,
+}
+
+impl Draws {
+    /// `n` draws from `seed`.
+    pub fn new(n: usize, seed: u64) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(seed);
+        let mut d = Draws {
+            mu_kinetic: Vec::with_capacity(n),
+            mu_static: Vec::with_capacity(n),
+            release: Vec::with_capacity(n),
+        };
+        for _ in 0..n {
+            d.mu_kinetic.push(rng.sample(StandardNormal));
+            d.mu_static.push(rng.sample(StandardNormal));
+            d.release
+                .push(std::array::from_fn(|_| rng.random_range(-1.0..=1.0)));
+        }
+        d
+    }
+
+    /// Number of draws.
+    pub fn len(&self) -> usize {
+        self.mu_kinetic.len()
+    }
+
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.mu_kinetic.is_empty()
+    }
+}
+
+/// A release the mechanism can set: (theta rad, theta' rad/s, x' m/s); x is the plan's.
+pub type ReleaseValues = [f64; 3];
+
+/// Everything needed to judge releases of one plan: the criteria, simulator settings, the
+/// frame times and a placeholder recording for the Fisher information.
+pub struct Evaluator<'a> {
+    /// The plan.
+    pub spec: &'a PlanSpec,
+    /// Its checks.
+    pub criteria: Criteria,
+    /// Simulator settings of the planner (looser than a fit's: decisions need ~1e-8).
+    pub options: Options,
+    obs: Arc<Observations>,
+}
+
+impl<'a> Evaluator<'a> {
+    /// The evaluator of `spec`.
+    pub fn new(spec: &'a PlanSpec) -> Self {
+        let times = spec.camera.frame_times();
+        let n = times.len();
+        // The Jacobian does not depend on the observed values: zeros will do.
+        let obs = Arc::new(Observations {
+            times,
+            slider: vec![Some([0.0; 2]); n],
+            bob: vec![Some([0.0; 2]); n],
+        });
+        Evaluator {
+            spec,
+            criteria: Criteria::new(spec),
+            options: Options {
+                rtol: 1e-8,
+                atol: 1e-10,
+                max_steps: 200_000,
+                max_events: 400,
+                ..Options::default()
+            },
+            obs,
+        }
+    }
+
+    /// The initial state of a release.
+    pub fn initial(&self, p: &ReleaseValues) -> State<f64> {
+        [self.spec.release.x, p[0], p[2], p[1]]
+    }
+
+    /// The rig of draw `i` of `draws` (mu_static never below mu_kinetic).
+    pub fn rig_of(&self, draws: &Draws, i: usize) -> Rig<f64> {
+        let mut rig = self.spec.rig;
+        rig.mu_kinetic = self.spec.mu_kinetic.at(draws.mu_kinetic[i]);
+        rig.mu_static = match &self.spec.mu_static {
+            Some(u) => u.at(draws.mu_static[i]).max(rig.mu_kinetic),
+            None => rig.mu_kinetic,
+        };
+        rig
+    }
+
+    /// Simulate and judge one run; a run the simulator cannot finish counts as a failure.
+    pub fn run(
+        &self,
+        rig: &Rig<f64>,
+        y0: &State<f64>,
+        request: &Request,
+    ) -> Option<(Solution<f64>, Evaluation)> {
+        let sol = simulate(rig, y0, self.spec.camera.duration, &self.options, request).ok()?;
+        let ev = self.criteria.evaluate(rig, y0, &sol);
+        Some((sol, ev))
+    }
+
+    /// Whether the release passes every criterion at the nominal friction.
+    pub fn nominal_ok(&self, p: &ReleaseValues) -> bool {
+        self.run(&self.spec.rig, &self.initial(p), &Request::default())
+            .is_some_and(|(_, e)| e.ok)
+    }
+
+    /// Number of draws (friction and execution error) in which the release passes.
+    pub fn passes(&self, p: &ReleaseValues, draws: &Draws) -> usize {
+        let err = self.spec.release.error;
+        (0..draws.len())
+            .filter(|&i| {
+                let u = draws.release[i];
+                let q = [
+                    p[0] + err[0] * u[0],
+                    p[1] + err[1] * u[1],
+                    p[2] + err[2] * u[2],
+                ];
+                let rig = self.rig_of(draws, i);
+                self.run(&rig, &self.initial(&q), &Request::default())
+                    .is_some_and(|(_, e)| e.ok)
+            })
+            .count()
+    }
+
+    /// Predicted standard error of mu_kinetic from a recording of this release with the
+    /// plan's camera: sqrt of the (mu, mu) element of (J^T J)^-1, J the Jacobian of the
+    /// noise-weighted marker residuals with respect to mu and the whole initial state (the
+    /// nuisance), at the nominal friction. Infinite when mu is not identifiable.
+    pub fn mu_stderr(&self, p: &ReleaseValues) -> f64 {
+        let mut free = vec![
+            Param::MuKinetic,
+            Param::X,
+            Param::Theta,
+            Param::XDot,
+            Param::ThetaDot,
+        ];
+        if self.spec.mu_static.is_some() {
+            free.push(Param::MuStatic);
+        }
+        let mut problem = TrajectoryProblem::new(
+            self.obs.clone(),
+            self.spec.rig,
+            self.initial(p),
+            free,
+            self.options,
+        );
+        problem.tie_static = self.spec.mu_static.is_none();
+        let noise = self.spec.camera.noise_m;
+        problem.sigma = [noise, noise];
+        let Ok((_, j)) = problem.residuals_jacobian(&problem.values()) else {
+            return f64::INFINITY;
+        };
+        let info = j.transpose() * &j;
+        match info.cholesky() {
+            Some(ch) => {
+                let var = ch.inverse()[(0, 0)];
+                if var.is_finite() && var > 0.0 {
+                    var.sqrt()
+                } else {
+                    f64::INFINITY
+                }
+            }
+            None => f64::INFINITY,
+        }
+    }
+}
+
+/// A release judged by the search.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Candidate {
+    /// The release.
+    pub release: ReleaseValues,
+    /// Fraction of the search's draws that pass.
+    pub robustness: f64,
+    /// Predicted standard error of mu.
+    pub stderr: f64,
+}
+
+impl Candidate {
+    /// What the search minimises: log stderr, plus a steep penalty for every bit of
+    /// robustness missing (a constraint softened so Nelder-Mead can feel its way back).
+    pub fn objective(&self, min_robustness: f64) -> f64 {
+        self.stderr.ln() + 20.0 * (min_robustness - self.robustness).max(0.0)
+    }
+}
+
+/// The grid of the release box: `n` points along theta, fewer along the push and the moving
+/// start, one along any range of zero width.
+pub fn grid(ranges: &[[f64; 2]; 3], n: usize) -> Vec<ReleaseValues> {
+    let counts = [n, n.div_ceil(3) * 2 - 1, n.div_ceil(2)];
+    let axis = |k: usize| -> Vec<f64> {
+        let [lo, hi] = ranges[k];
+        if hi <= lo {
+            return vec![lo];
+        }
+        let m = counts[k].max(2);
+        (0..m)
+            .map(|i| lo + (hi - lo) * i as f64 / (m - 1) as f64)
+            .collect()
+    };
+    let (a, b, c) = (axis(0), axis(1), axis(2));
+    let mut out = Vec::with_capacity(a.len() * b.len() * c.len());
+    for &t in &a {
+        for &w in &b {
+            for &v in &c {
+                out.push([t, w, v]);
+            }
+        }
+    }
+    out
+}
+
+/// Judge releases on the nominal run, then (passing ones) on the draws and the Fisher
+/// information. Releases failing the nominal run are dropped.
+pub fn screen(
+    ev: &Evaluator,
+    points: &[ReleaseValues],
+    draws: &Draws,
+    bar: &ProgressBar,
+) -> Vec<Candidate> {
+    points
+        .par_iter()
+        .filter_map(|p| {
+            let ok = ev.nominal_ok(p);
+            let out = ok.then(|| Candidate {
+                release: *p,
+                robustness: ev.passes(p, draws) as f64 / draws.len() as f64,
+                stderr: ev.mu_stderr(p),
+            });
+            bar.inc(1);
+            out
+        })
+        .collect()
+}
+
+/// The release box as ranges (theta, theta', x').
+pub fn release_box(spec: &PlanSpec) -> [[f64; 2]; 3] {
+    let r = &spec.release;
+    [r.theta, r.theta_dot, r.x_dot]
+}
+
+/// Nelder-Mead's cost: the objective over the box scaled to the unit cube, with releases
+/// outside the box (or failing at the nominal friction) priced out.
+struct Refine<'e, 'a> {
+    ev: &'e Evaluator<'a>,
+    draws: &'e Draws,
+    ranges: [[f64; 2]; 3],
+    dims: Vec<usize>,
+    base: ReleaseValues,
+}
+
+impl Refine<'_, '_> {
+    fn release(&self, u: &[f64]) -> (ReleaseValues, f64) {
+        let mut p = self.base;
+        let mut outside = 0.0;
+        for (&k, &v) in self.dims.iter().zip(u) {
+            let c = v.clamp(0.0, 1.0);
+            outside += (v - c).abs();
+            let [lo, hi] = self.ranges[k];
+            p[k] = lo + (hi - lo) * c;
+        }
+        (p, outside)
+    }
+
+    fn unit(&self, p: &ReleaseValues) -> Vec<f64> {
+        self.dims
+            .iter()
+            .map(|&k| {
+                let [lo, hi] = self.ranges[k];
+                (p[k] - lo) / (hi - lo)
+            })
+            .collect()
+    }
+
+    fn candidate(&self, u: &[f64]) -> Option<Candidate> {
+        let (p, _) = self.release(u);
+        self.ev.nominal_ok(&p).then(|| Candidate {
+            release: p,
+            robustness: self.ev.passes(&p, self.draws) as f64 / self.draws.len() as f64,
+            stderr: self.ev.mu_stderr(&p),
+        })
+    }
+}
+
+impl CostFunction for Refine<'_, '_> {
+    type Param = Vec<f64>;
+    type Output = f64;
+
+    fn cost(&self, u: &Vec<f64>) -> Result<f64, Error> {
+        let (_, outside) = self.release(u);
+        let min_rob = self.ev.spec.goal.min_robustness;
+        let value = match self.candidate(u) {
+            Some(c) if c.stderr.is_finite() => c.objective(min_rob),
+            _ => 1e6,
+        };
+        Ok(value + 1e3 * outside)
+    }
+}
+
+/// Refine a grid candidate by Nelder-Mead within the box; returns the better of the start
+/// and the end.
+pub fn refine(ev: &Evaluator, draws: &Draws, start: &Candidate, iters: u64) -> Candidate {
+    let ranges = release_box(ev.spec);
+    let dims: Vec<usize> = (0..3).filter(|&k| ranges[k][1] > ranges[k][0]).collect();
+    if dims.is_empty() {
+        return *start;
+    }
+    let problem = Refine {
+        ev,
+        draws,
+        ranges,
+        dims: dims.clone(),
+        base: start.release,
+    };
+    let u0 = problem.unit(&start.release);
+    // A simplex of about one grid cell around the start.
+    let step = 1.0 / (ev.spec.search.grid_points.max(2) - 1) as f64;
+    let mut simplex = vec![u0.clone()];
+    for i in 0..dims.len() {
+        let mut v = u0.clone();
+        v[i] += if v[i] + step <= 1.0 { step } else { -step };
+        simplex.push(v);
+    }
+    let solver = NelderMead::new(simplex)
+        .with_sd_tolerance(1e-3)
+        .expect("a positive tolerance");
+    let best = Executor::new(problem, solver)
+        .configure(|s| s.max_iters(iters))
+        .run()
+        .ok()
+        .and_then(|r| r.state.best_param.clone());
+    let problem = Refine {
+        ev,
+        draws,
+        ranges,
+        dims,
+        base: start.release,
+    };
+    let min_rob = ev.spec.goal.min_robustness;
+    best.and_then(|u| problem.candidate(&u))
+        .filter(|c| c.stderr.is_finite() && c.objective(min_rob) < start.objective(min_rob))
+        .unwrap_or(*start)
+}
+
+/// One-sided 95% Wilson lower bound of a pass fraction: what a proposal claims, so that an
+/// independent Monte Carlo with more draws sees at least that much.
+pub fn robustness_lower_bound(passed: usize, n: usize) -> f64 {
+    if n == 0 {
+        return 0.0;
+    }
+    let z: f64 = 1.645;
+    let nf = n as f64;
+    let p = passed as f64 / nf;
+    let z2 = z * z;
+    let centre = p + z2 / (2.0 * nf);
+    let half = z * (p * (1.0 - p) / nf + z2 / (4.0 * nf * nf)).sqrt();
+    ((centre - half) / (1.0 + z2 / nf)).clamp(0.0, 1.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn wilson_bound_is_below_the_fraction_and_tightens() {
+        assert!(robustness_lower_bound(400, 400) > 0.99);
+        assert!(robustness_lower_bound(400, 400) < 1.0);
+        let a = robustness_lower_bound(90, 100);
+        let b = robustness_lower_bound(900, 1000);
+        assert!(a < b && b < 0.9);
+    }
+
+    #[test]
+    fn grid_collapses_zero_width_ranges() {
+        let g = grid(&[[0.0, 1.0], [0.0, 0.0], [0.0, 0.0]], 13);
+        assert_eq!(g.len(), 13);
+        let g = grid(&[[0.0, 1.0], [-1.0, 1.0], [0.0, 0.0]], 13);
+        assert_eq!(g.len(), 13 * 9);
+    }
+}

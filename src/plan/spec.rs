@@ -1,0 +1,665 @@
+//! Plan files: the rig with mu as an estimate and its uncertainty, the camera, what the
+//! release mechanism can do, and the transitions to film. Unknown keys are errors, and every
+//! value is checked with the file and the key named, like scenes.
+
+use crate::model::Rig;
+use crate::scene::SceneError;
+use serde::Deserialize;
+use std::fmt;
+use std::path::Path;
+
+/// The `[rig]` section of a plan: the rig without friction (friction is uncertain, see
+/// [`FrictionSpec`]).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PlanRigSpec {
+    /// Slider mass m1 (kg).
+    pub slider_mass: f64,
+    /// Bob mass m2 (kg).
+    pub bob_mass: f64,
+    /// Rod length l (m).
+    pub rod_length: f64,
+    /// Gravity (m/s^2).
+    pub gravity: f64,
+}
+
+/// The `[friction]` section: the estimate of mu and how uncertain it is, as a standard
+/// deviation (normal draws) or a range (uniform draws).
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct FrictionSpec {
+    /// Estimate of mu_kinetic.
+    pub mu_kinetic: f64,
+    /// Standard deviation of mu_kinetic.
+    pub mu_kinetic_sd: Option<f64>,
+    /// Range `[lo, hi]` of mu_kinetic (instead of a standard deviation).
+    pub mu_kinetic_range: Option<[f64; 2]>,
+    /// Estimate of mu_static; left out: mu_static = mu_kinetic in every draw.
+    pub mu_static: Option<f64>,
+    /// Standard deviation of mu_static.
+    pub mu_static_sd: Option<f64>,
+    /// Range of mu_static.
+    pub mu_static_range: Option<[f64; 2]>,
+}
+
+/// The `[camera]` section.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct CameraSpec {
+    /// Frame rate (Hz).
+    pub frame_rate: f64,
+    /// Scale (m per pixel).
+    pub metres_per_pixel: f64,
+    /// Marker localisation noise (pixels, standard deviation per coordinate).
+    pub noise_px: f64,
+    /// Recording duration (s).
+    pub duration: f64,
+    /// Field of view along the rail `[lo, hi]` (m, rail frame): both markers must stay inside.
+    pub field_of_view: [f64; 2],
+}
+
+/// The `[release]` section: ranges the release mechanism can set, the usable rail and how
+/// precisely a release is executed.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ReleaseSpec {
+    /// Initial slider position (m); default 0.
+    #[serde(default)]
+    pub x: f64,
+    /// Range of the initial angle (degrees, PHYSICS.md convention: 90 hangs down, 0 is the rod
+    /// horizontal with the bob on the +x side).
+    pub theta_deg: [f64; 2],
+    /// Range of the initial angular velocity (rad/s): a push. Default `[0, 0]`.
+    #[serde(default)]
+    pub theta_dot: [f64; 2],
+    /// Range of the initial slider velocity (m/s): a moving start. Default `[0, 0]`.
+    #[serde(default)]
+    pub x_dot: [f64; 2],
+    /// Usable rail `[lo, hi]` (m): the slider must stay on it.
+    pub rail: [f64; 2],
+    /// Execution error of the angle (degrees, +-, uniform).
+    #[serde(default)]
+    pub theta_error_deg: f64,
+    /// Execution error of the push (rad/s, +-, uniform).
+    #[serde(default)]
+    pub theta_dot_error: f64,
+    /// Execution error of the moving start (m/s, +-, uniform).
+    #[serde(default)]
+    pub x_dot_error: f64,
+}
+
+/// A transition (or pattern of transitions) a lab wants to film.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq, Eq, Hash)]
+#[serde(rename_all = "snake_case")]
+pub enum Target {
+    /// The stuck slider starts to slide.
+    StickToSlide,
+    /// The sliding slider stops and sticks.
+    SlideToStick,
+    /// The slider stops and slides back.
+    Reversal,
+    /// At least this many slides that end in a stick (`{ stick_slip_cycles = 3 }`).
+    StickSlipCycles(u32),
+    /// A slide that ends near the paradox band, where |N| grows and the slider stops hard
+    /// (only possible above mu* = 2 sqrt(r (1 + r))).
+    SuddenStop,
+}
+
+impl fmt::Display for Target {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            Target::StickToSlide => f.write_str("stick_to_slide"),
+            Target::SlideToStick => f.write_str("slide_to_stick"),
+            Target::Reversal => f.write_str("reversal"),
+            Target::StickSlipCycles(n) => write!(f, "stick_slip_cycles({n})"),
+            Target::SuddenStop => f.write_str("sudden_stop"),
+        }
+    }
+}
+
+fn default_min_slide_px() -> f64 {
+    20.0
+}
+fn default_min_frames() -> f64 {
+    10.0
+}
+fn default_edge_frames() -> f64 {
+    10.0
+}
+fn default_min_robustness() -> f64 {
+    0.9
+}
+
+/// The `[goal]` section: the targets (all must show in one recording) and what observable
+/// means for them.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct GoalSpec {
+    /// Targets, e.g. `["stick_to_slide", "slide_to_stick", { stick_slip_cycles = 2 }]`.
+    pub targets: Vec<Target>,
+    /// Least slider travel of the slide next to a transition (pixels). Default 20.
+    #[serde(default = "default_min_slide_px")]
+    pub min_slide_px: f64,
+    /// Least duration of each side of a transition (frames). Default 10.
+    #[serde(default = "default_min_frames")]
+    pub min_frames: f64,
+    /// A transition must not fall in the first or last this many frames. Default 10.
+    #[serde(default = "default_edge_frames")]
+    pub edge_frames: f64,
+    /// Least fraction of draws (mu and release error) that must show every target. Default 0.9.
+    #[serde(default = "default_min_robustness")]
+    pub min_robustness: f64,
+}
+
+/// The optional `[search]` section.
+#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct SearchSpec {
+    /// Draws per candidate while searching (common to all candidates). Default 32.
+    #[serde(default = "SearchSpec::default_draws")]
+    pub draws: usize,
+    /// Draws of the final check of each proposal (a fresh seed). Default 400.
+    #[serde(default = "SearchSpec::default_verify_draws")]
+    pub verify_draws: usize,
+    /// Seed of every draw. Default 1.
+    #[serde(default = "SearchSpec::default_seed")]
+    pub seed: u64,
+    /// Number of proposals reported. Default 5.
+    #[serde(default = "SearchSpec::default_top")]
+    pub top: usize,
+    /// Grid points along each release range of nonzero width. Default 13.
+    #[serde(default = "SearchSpec::default_grid")]
+    pub grid_points: usize,
+}
+
+impl SearchSpec {
+    fn default_draws() -> usize {
+        32
+    }
+    fn default_verify_draws() -> usize {
+        400
+    }
+    fn default_seed() -> u64 {
+        1
+    }
+    fn default_top() -> usize {
+        5
+    }
+    fn default_grid() -> usize {
+        13
+    }
+}
+
+impl Default for SearchSpec {
+    fn default() -> Self {
+        SearchSpec {
+            draws: Self::default_draws(),
+            verify_draws: Self::default_verify_draws(),
+            seed: Self::default_seed(),
+            top: Self::default_top(),
+            grid_points: Self::default_grid(),
+        }
+    }
+}
+
+/// A plan file as written.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct PlanFile {
+    /// `[rig]`.
+    pub rig: PlanRigSpec,
+    /// `[friction]`.
+    pub friction: FrictionSpec,
+    /// `[camera]`.
+    pub camera: CameraSpec,
+    /// `[release]`.
+    pub release: ReleaseSpec,
+    /// `[goal]`.
+    pub goal: GoalSpec,
+    /// `[search]`.
+    #[serde(default)]
+    pub search: SearchSpec,
+}
+
+/// An uncertain friction coefficient.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Uncertain {
+    /// Normal draws (clamped at 0).
+    Normal {
+        /// Mean.
+        mean: f64,
+        /// Standard deviation.
+        sd: f64,
+    },
+    /// Uniform draws over a range.
+    Uniform {
+        /// Lower end.
+        lo: f64,
+        /// Upper end.
+        hi: f64,
+    },
+}
+
+impl Uncertain {
+    /// The value for a standard draw `z`: a standard normal for [`Uncertain::Normal`], mapped
+    /// through the normal CDF onto the range for [`Uncertain::Uniform`], so one set of draws
+    /// serves both kinds.
+    pub fn at(&self, z: f64) -> f64 {
+        match *self {
+            Uncertain::Normal { mean, sd } => (mean + sd * z).max(0.0),
+            Uncertain::Uniform { lo, hi } => lo + (hi - lo) * normal_cdf(z),
+        }
+    }
+
+    /// A plausible span: mean +- 2 sd, or the range.
+    pub fn span(&self) -> [f64; 2] {
+        match *self {
+            Uncertain::Normal { mean, sd } => [(mean - 2.0 * sd).max(0.0), mean + 2.0 * sd],
+            Uncertain::Uniform { lo, hi } => [lo, hi],
+        }
+    }
+}
+
+impl fmt::Display for Uncertain {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match *self {
+            Uncertain::Normal { mean, sd } => write!(f, "{mean} +- {sd} (sd)"),
+            Uncertain::Uniform { lo, hi } => write!(f, "[{lo}, {hi}]"),
+        }
+    }
+}
+
+/// Standard normal CDF (Abramowitz-Stegun 7.1.26 erf, 1.5e-7): enough to map draws.
+fn normal_cdf(z: f64) -> f64 {
+    let x = z.abs() / std::f64::consts::SQRT_2;
+    let t = 1.0 / (1.0 + 0.327_591_1 * x);
+    let poly = t
+        * (0.254_829_592
+            + t * (-0.284_496_736
+                + t * (1.421_413_741 + t * (-1.453_152_027 + t * 1.061_405_429))));
+    let erf = 1.0 - poly * (-x * x).exp();
+    if z >= 0.0 {
+        0.5 * (1.0 + erf)
+    } else {
+        0.5 * (1.0 - erf)
+    }
+}
+
+/// The camera, validated.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera {
+    /// Frame rate (Hz).
+    pub frame_rate: f64,
+    /// m per pixel.
+    pub metres_per_pixel: f64,
+    /// Marker noise (m).
+    pub noise_m: f64,
+    /// Duration (s).
+    pub duration: f64,
+    /// Field of view along the rail (m).
+    pub field_of_view: [f64; 2],
+}
+
+impl Camera {
+    /// Frame times 0, 1/rate, ... up to the duration.
+    pub fn frame_times(&self) -> Vec<f64> {
+        let n = (self.duration * self.frame_rate + 1e-9).floor() as usize;
+        (0..=n).map(|k| k as f64 / self.frame_rate).collect()
+    }
+}
+
+/// The release mechanism, validated, angles in radians.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Release {
+    /// Initial slider position (m).
+    pub x: f64,
+    /// Range of theta (rad).
+    pub theta: [f64; 2],
+    /// Range of theta' (rad/s).
+    pub theta_dot: [f64; 2],
+    /// Range of x' (m/s).
+    pub x_dot: [f64; 2],
+    /// Usable rail (m).
+    pub rail: [f64; 2],
+    /// Execution errors (+-, uniform) of (theta rad, theta' rad/s, x' m/s).
+    pub error: [f64; 3],
+}
+
+/// What observable means, validated.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Goal {
+    /// Targets (all in one recording).
+    pub targets: Vec<Target>,
+    /// Least slider travel next to a transition (pixels).
+    pub min_slide_px: f64,
+    /// Least duration of each side of a transition (frames).
+    pub min_frames: f64,
+    /// Frames excluded at each end of the window.
+    pub edge_frames: f64,
+    /// Least fraction of draws showing every target.
+    pub min_robustness: f64,
+}
+
+/// A validated plan: what [`crate::plan::plan`] takes.
+#[derive(Debug, Clone, PartialEq)]
+pub struct PlanSpec {
+    /// The rig at the nominal friction.
+    pub rig: Rig<f64>,
+    /// mu_kinetic and its uncertainty.
+    pub mu_kinetic: Uncertain,
+    /// mu_static and its uncertainty; `None`: equal to mu_kinetic in every draw.
+    pub mu_static: Option<Uncertain>,
+    /// The camera.
+    pub camera: Camera,
+    /// The release mechanism.
+    pub release: Release,
+    /// What to film and how well.
+    pub goal: Goal,
+    /// Search settings.
+    pub search: SearchSpec,
+}
+
+fn invalid(path: &Path, key: &str, expected: &str, value: impl fmt::Debug) -> SceneError {
+    SceneError::Invalid {
+        path: path.to_owned(),
+        message: format!("{key} must be {expected}, got {value:?}"),
+    }
+}
+
+fn uncertain(
+    path: &Path,
+    key: &str,
+    mean: f64,
+    sd: Option<f64>,
+    range: Option<[f64; 2]>,
+) -> Result<Uncertain, SceneError> {
+    if !(mean.is_finite() && mean >= 0.0) {
+        return Err(invalid(path, key, "a finite number >= 0", mean));
+    }
+    match (sd, range) {
+        (Some(_), Some(_)) => Err(SceneError::Invalid {
+            path: path.to_owned(),
+            message: format!("give friction.{key}_sd or friction.{key}_range, not both"),
+        }),
+        (Some(sd), None) if !(sd.is_finite() && sd >= 0.0) => Err(invalid(
+            path,
+            &format!("friction.{key}_sd"),
+            "a finite number >= 0",
+            sd,
+        )),
+        (Some(sd), None) => Ok(Uncertain::Normal { mean, sd }),
+        (None, Some([lo, hi])) if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi) => {
+            Err(invalid(
+                path,
+                &format!("friction.{key}_range"),
+                "[lo, hi] with 0 <= lo <= hi",
+                [lo, hi],
+            ))
+        }
+        (None, Some([lo, hi])) if !(lo <= mean && mean <= hi) => Err(invalid(
+            path,
+            &format!("friction.{key}_range"),
+            &format!("a range containing friction.{key} = {mean}"),
+            [lo, hi],
+        )),
+        (None, Some([lo, hi])) => Ok(Uncertain::Uniform { lo, hi }),
+        (None, None) => Ok(Uncertain::Normal { mean, sd: 0.0 }),
+    }
+}
+
+fn range(path: &Path, key: &str, r: [f64; 2]) -> Result<[f64; 2], SceneError> {
+    if r[0].is_finite() && r[1].is_finite() && r[0] <= r[1] {
+        Ok(r)
+    } else {
+        Err(invalid(path, key, "[lo, hi] with finite lo <= hi", r))
+    }
+}
+
+fn positive(path: &Path, key: &str, v: f64) -> Result<f64, SceneError> {
+    if v.is_finite() && v > 0.0 {
+        Ok(v)
+    } else {
+        Err(invalid(path, key, "a finite number > 0", v))
+    }
+}
+
+fn non_negative(path: &Path, key: &str, v: f64) -> Result<f64, SceneError> {
+    if v.is_finite() && v >= 0.0 {
+        Ok(v)
+    } else {
+        Err(invalid(path, key, "a finite number >= 0", v))
+    }
+}
+
+impl PlanSpec {
+    /// Read and validate a plan file; errors name the file and the key.
+    pub fn from_path(path: &Path) -> Result<Self, SceneError> {
+        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        Self::from_toml(&text, path)
+    }
+
+    /// Parse and validate plan text; `path` only labels errors.
+    pub fn from_toml(text: &str, path: &Path) -> Result<Self, SceneError> {
+        let file: PlanFile = toml::from_str(text).map_err(|e| SceneError::Parse {
+            path: path.to_owned(),
+            message: e.to_string().trim_end().to_owned(),
+        })?;
+        file.validate(path)
+    }
+}
+
+impl PlanFile {
+    /// Check every value, naming the first bad key.
+    pub fn validate(&self, path: &Path) -> Result<PlanSpec, SceneError> {
+        let f = &self.friction;
+        let mu_kinetic = uncertain(
+            path,
+            "mu_kinetic",
+            f.mu_kinetic,
+            f.mu_kinetic_sd,
+            f.mu_kinetic_range,
+        )?;
+        let mu_static = match f.mu_static {
+            Some(m) => Some(uncertain(
+                path,
+                "mu_static",
+                m,
+                f.mu_static_sd,
+                f.mu_static_range,
+            )?),
+            None if f.mu_static_sd.is_some() || f.mu_static_range.is_some() => {
+                return Err(SceneError::Invalid {
+                    path: path.to_owned(),
+                    message: "friction.mu_static is missing (its uncertainty is given)".into(),
+                })
+            }
+            None => None,
+        };
+        let r = &self.rig;
+        let rig = Rig::new(
+            r.slider_mass,
+            r.bob_mass,
+            r.rod_length,
+            r.gravity,
+            f.mu_kinetic,
+            f.mu_static,
+        )
+        .map_err(|e| SceneError::Invalid {
+            path: path.to_owned(),
+            message: e.to_string().replace("rig.mu_", "friction.mu_"),
+        })?;
+        let c = &self.camera;
+        let camera = Camera {
+            frame_rate: positive(path, "camera.frame_rate", c.frame_rate)?,
+            metres_per_pixel: positive(path, "camera.metres_per_pixel", c.metres_per_pixel)?,
+            noise_m: positive(path, "camera.noise_px", c.noise_px)? * c.metres_per_pixel,
+            duration: positive(path, "camera.duration", c.duration)?,
+            field_of_view: range(path, "camera.field_of_view", c.field_of_view)?,
+        };
+        if camera.duration * camera.frame_rate > 1e6 {
+            return Err(invalid(
+                path,
+                "camera.duration",
+                "at most 10^6 frames long",
+                c.duration,
+            ));
+        }
+        let rl = &self.release;
+        let theta = range(path, "release.theta_deg", rl.theta_deg)?;
+        if theta[0] < -360.0 || theta[1] > 360.0 {
+            return Err(invalid(
+                path,
+                "release.theta_deg",
+                "within -360..360 degrees",
+                theta,
+            ));
+        }
+        let rail = range(path, "release.rail", rl.rail)?;
+        if !(rail[0] <= rl.x && rl.x <= rail[1] && rl.x.is_finite()) {
+            return Err(invalid(
+                path,
+                "release.x",
+                &format!("on the rail [{}, {}]", rail[0], rail[1]),
+                rl.x,
+            ));
+        }
+        let release = Release {
+            x: rl.x,
+            theta: theta.map(f64::to_radians),
+            theta_dot: range(path, "release.theta_dot", rl.theta_dot)?,
+            x_dot: range(path, "release.x_dot", rl.x_dot)?,
+            rail,
+            error: [
+                non_negative(path, "release.theta_error_deg", rl.theta_error_deg)?.to_radians(),
+                non_negative(path, "release.theta_dot_error", rl.theta_dot_error)?,
+                non_negative(path, "release.x_dot_error", rl.x_dot_error)?,
+            ],
+        };
+        let g = &self.goal;
+        if g.targets.is_empty() {
+            return Err(invalid(path, "goal.targets", "a non-empty list", "[]"));
+        }
+        if g.targets.contains(&Target::StickSlipCycles(0)) {
+            return Err(invalid(
+                path,
+                "goal.targets.stick_slip_cycles",
+                "at least 1",
+                0,
+            ));
+        }
+        let goal = Goal {
+            targets: g.targets.clone(),
+            min_slide_px: non_negative(path, "goal.min_slide_px", g.min_slide_px)?,
+            min_frames: non_negative(path, "goal.min_frames", g.min_frames)?,
+            edge_frames: non_negative(path, "goal.edge_frames", g.edge_frames)?,
+            min_robustness: if (0.0..=1.0).contains(&g.min_robustness) {
+                g.min_robustness
+            } else {
+                return Err(invalid(
+                    path,
+                    "goal.min_robustness",
+                    "in [0, 1]",
+                    g.min_robustness,
+                ));
+            },
+        };
+        if 2.0 * goal.edge_frames >= camera.duration * camera.frame_rate {
+            return Err(invalid(
+                path,
+                "goal.edge_frames",
+                "less than half the recording's frames",
+                goal.edge_frames,
+            ));
+        }
+        let s = &self.search;
+        for (key, v, lo) in [
+            ("search.draws", s.draws, 1),
+            ("search.verify_draws", s.verify_draws, 1),
+            ("search.top", s.top, 1),
+            ("search.grid_points", s.grid_points, 2),
+        ] {
+            if v < lo || v > 100_000 {
+                return Err(invalid(path, key, &format!("in {lo}..=100000"), v));
+            }
+        }
+        Ok(PlanSpec {
+            rig,
+            mu_kinetic,
+            mu_static,
+            camera,
+            release,
+            goal,
+            search: self.search,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GOOD: &str = r#"
+[rig]
+slider_mass = 0.1
+bob_mass = 0.1
+rod_length = 0.3
+gravity = 9.81
+[friction]
+mu_kinetic = 0.35
+mu_kinetic_sd = 0.05
+[camera]
+frame_rate = 500.0
+metres_per_pixel = 2e-4
+noise_px = 0.3
+duration = 2.0
+field_of_view = [-0.6, 0.6]
+[release]
+theta_deg = [0.0, 60.0]
+rail = [-0.25, 0.25]
+[goal]
+targets = ["stick_to_slide", { stick_slip_cycles = 2 }]
+"#;
+
+    #[test]
+    fn parses_targets_and_defaults() {
+        let p = PlanSpec::from_toml(GOOD, Path::new("p.toml")).unwrap();
+        assert_eq!(
+            p.goal.targets,
+            vec![Target::StickToSlide, Target::StickSlipCycles(2)]
+        );
+        assert_eq!(p.search, SearchSpec::default());
+        assert!((p.camera.noise_m - 6e-5).abs() < 1e-15);
+    }
+
+    #[test]
+    fn errors_name_file_and_key() {
+        let bad = GOOD.replace("noise_px = 0.3", "noise_px = -1");
+        let e = PlanSpec::from_toml(&bad, Path::new("p.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("p.toml") && e.contains("camera.noise_px"), "{e}");
+        let bad = GOOD.replace("rail = ", "rial = ");
+        let e = PlanSpec::from_toml(&bad, Path::new("p.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("rial"), "{e}");
+        let bad = GOOD.replace("mu_kinetic_sd = 0.05", "mu_kinetic_range = [0.4, 0.5]");
+        let e = PlanSpec::from_toml(&bad, Path::new("p.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("friction.mu_kinetic_range"), "{e}");
+    }
+
+    #[test]
+    fn uniform_draws_stay_in_range() {
+        let u = Uncertain::Uniform { lo: 0.3, hi: 0.4 };
+        for z in [-6.0, -1.0, 0.0, 1.0, 6.0] {
+            let v = u.at(z);
+            assert!((0.3..=0.4).contains(&v));
+        }
+        assert!((u.at(0.0) - 0.35).abs() < 1e-6);
+    }
+}

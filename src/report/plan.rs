@@ -1,0 +1,239 @@
+//! Output of `appell plan`: the ranked table, the JSON object, and the phase-plane figure of
+//! the proposals over the stick region (drawn by the region figure of `appell regions`).
+
+use super::plot::{Figure, PlotError};
+use super::regions::{RegionFigure, Trajectory};
+use crate::model::regions::{PlaneWindow, RegionMap};
+use crate::plan::{PlanReport, Proposal};
+use crate::sim::{Event, EventKind, Outcome};
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use serde_json::{json, Value};
+use std::fmt::Write as _;
+
+fn kind_name(k: EventKind) -> String {
+    serde_json::to_value(k)
+        .ok()
+        .and_then(|v| v.as_str().map(str::to_owned))
+        .unwrap_or_else(|| format!("{k:?}"))
+}
+
+fn event_json(e: &Event) -> Value {
+    let mut v = json!({
+        "t": e.t,
+        "from": e.from.name(),
+        "to": e.to.name(),
+        "kind": kind_name(e.kind),
+        "state": {"x": e.state[0], "theta": e.state[1], "x_dot": e.state[2], "theta_dot": e.state[3]},
+    });
+    if let Outcome::Indeterminate(alts) = &e.to {
+        v["alternatives"] = json!(alts.iter().map(|m| m.name()).collect::<Vec<_>>());
+    }
+    v
+}
+
+/// The targets as one label, e.g. `stick_to_slide + slide_to_stick`.
+pub fn target_label(report: &PlanReport) -> String {
+    report
+        .targets
+        .iter()
+        .map(|t| t.to_string())
+        .collect::<Vec<_>>()
+        .join(" + ")
+}
+
+fn finite(v: f64) -> Value {
+    if v.is_finite() {
+        json!(v)
+    } else {
+        Value::Null
+    }
+}
+
+fn proposal_json(report: &PlanReport, rank: usize, p: &Proposal) -> Value {
+    let y = p.initial;
+    json!({
+        "rank": rank,
+        "initial": {"x": y[0], "theta": y[1], "x_dot": y[2], "theta_dot": y[3]},
+        "theta_deg": y[1].to_degrees(),
+        "target": target_label(report),
+        "robustness": p.robustness,
+        "robustness_observed": p.robustness_observed,
+        "draws": p.draws,
+        "predicted_mu_stderr": finite(p.predicted_mu_stderr),
+        "events": p.events.iter().map(event_json).collect::<Vec<_>>(),
+        "margins": {
+            "transitions": p.nominal.hits,
+            "rail_margin_m": p.nominal.rail_margin_m,
+            "fov_margin_m": p.nominal.fov_margin_m,
+            "slider_range_m": p.nominal.slider_range,
+        },
+    })
+}
+
+/// The plan as one JSON object: `feasible`, `targets`, `proposals` (best first), `nearest`
+/// (null when feasible), `notes`, `evaluated`.
+pub fn plan_json(report: &PlanReport) -> Value {
+    json!({
+        "feasible": report.feasible,
+        "targets": report.targets.iter().map(|t| t.to_string()).collect::<Vec<_>>(),
+        "proposals": report
+            .proposals
+            .iter()
+            .enumerate()
+            .map(|(i, p)| proposal_json(report, i + 1, p))
+            .collect::<Vec<_>>(),
+        "nearest": report.nearest.as_ref().map(|n| json!({
+            "message": n.message,
+            "release": n.release.map(|y| json!({"x": y[0], "theta": y[1], "x_dot": y[2], "theta_dot": y[3]})),
+            "robustness": n.robustness,
+        })),
+        "notes": report.notes,
+        "evaluated": report.evaluated,
+    })
+}
+
+/// The plan as a readable table: one row per proposal, then each proposal's timeline and
+/// margins.
+pub fn plan_table(report: &PlanReport) -> String {
+    let mut s = String::new();
+    let _ = writeln!(s, "targets: {}", target_label(report));
+    for n in &report.notes {
+        let _ = writeln!(s, "note: {n}");
+    }
+    if let Some(n) = &report.nearest {
+        let _ = writeln!(
+            s,
+            "{}: {}",
+            if report.feasible {
+                "note"
+            } else {
+                "NOT FEASIBLE"
+            },
+            n.message
+        );
+    }
+    if report.proposals.is_empty() {
+        let _ = writeln!(
+            s,
+            "no proposals ({} releases tried at the nominal friction)",
+            report.evaluated
+        );
+        return s;
+    }
+    let _ = writeln!(
+        s,
+        "{:>4} {:>11} {:>13} {:>10} {:>11} {:>14} {:>10} {:>10}",
+        "rank",
+        "theta [deg]",
+        "theta' [r/s]",
+        "x' [m/s]",
+        "robustness",
+        "stderr(mu)",
+        "rail [mm]",
+        "events"
+    );
+    for (i, p) in report.proposals.iter().enumerate() {
+        let y = p.initial;
+        let _ = writeln!(
+            s,
+            "{:>4} {:>11.2} {:>13.3} {:>10.4} {:>11} {:>14} {:>10.1} {:>10}",
+            i + 1,
+            y[1].to_degrees(),
+            y[3],
+            y[2],
+            format!("{:.3}", p.robustness),
+            format!("{:.3e}", p.predicted_mu_stderr),
+            1e3 * p.nominal.rail_margin_m,
+            p.events.len()
+        );
+    }
+    for (i, p) in report.proposals.iter().enumerate() {
+        let _ = writeln!(
+            s,
+            "\n#{} robustness {:.3} (one-sided 95% bound; observed {:.3} of {} draws), predicted stderr(mu) {:.3e}",
+            i + 1,
+            p.robustness,
+            p.robustness_observed,
+            p.draws,
+            p.predicted_mu_stderr
+        );
+        for h in p.nominal.hits.iter().flatten() {
+            let _ = writeln!(
+                s,
+                "   {:<22} t = {:.4} s  window margin {:.0} frames, slide {:.0} px, {:.0} frames before, {:.0} after",
+                h.target.to_string(),
+                h.t,
+                h.window_margin_frames,
+                h.travel_px,
+                h.frames_before,
+                h.frames_after
+            );
+        }
+        let _ = writeln!(
+            s,
+            "   slider {:+.4}..{:+.4} m (rail margin {:.1} mm, view margin {:.1} mm)",
+            p.nominal.slider_range[0],
+            p.nominal.slider_range[1],
+            1e3 * p.nominal.rail_margin_m,
+            1e3 * p.nominal.fov_margin_m
+        );
+        for e in &p.events {
+            let _ = writeln!(
+                s,
+                "   {:>9.4} s  {:<7} -> {:<13} {:<12} theta {:>8.2} deg  x {:+.4} m",
+                e.t,
+                e.from.name(),
+                e.to.to_string(),
+                kind_name(e.kind),
+                e.state[1].to_degrees(),
+                e.state[0]
+            );
+        }
+    }
+    s
+}
+
+/// The proposals' nominal runs over the regions of `appell regions` (stick region and its
+/// boundary |c| = mu_s |b|, both slide directions), coloured by mode.
+pub struct PlanFigure<'a> {
+    /// The plan.
+    pub report: &'a PlanReport,
+}
+
+impl PlanFigure<'_> {
+    fn trajectories(&self) -> Vec<Trajectory> {
+        self.report
+            .proposals
+            .iter()
+            .map(|p| Trajectory {
+                initial: p.initial,
+                samples: p.samples.clone(),
+                stopped_at_paradox: p
+                    .events
+                    .last()
+                    .is_some_and(|e| e.kind == EventKind::Paradox),
+                error: None,
+            })
+            .collect()
+    }
+}
+
+impl Figure for PlanFigure<'_> {
+    fn size(&self) -> (u32, u32) {
+        (1200, 1100)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
+        let rig = &self.report.rig;
+        let window = PlaneWindow::for_rig(rig);
+        let map = RegionMap::new(rig, &window);
+        let trajectories = self.trajectories();
+        RegionFigure {
+            rig,
+            map: &map,
+            trajectories: &trajectories,
+        }
+        .draw(root)
+    }
+}
