@@ -36,9 +36,7 @@ impl<T: Scalar> Shorthands<T> {
         let a = m2 * sin * cos;
         let b = -(m1 * g + m2 * sin * (g * sin + lw2));
         let c = m2 * cos * (g * sin + lw2);
-        // Q = a c + b D simplifies to -m1 ((m1 + m2) g + m2 l w^2 sin(theta)); the closed
-        // form avoids cancellation near Q = 0, where the normal force changes sign.
-        let q = -m1 * ((m1 + m2) * g + m2 * lw2 * sin);
+        let q = rig.normal_numerator_sin(sin, w);
         Shorthands {
             d,
             a,
@@ -100,6 +98,21 @@ impl SlideBranches {
 }
 
 impl<T: Scalar> Rig<T> {
+    /// Q = a c + b D, the numerator of the normal force while sliding. It simplifies to
+    /// -m1 ((m1 + m2) g + m2 l w^2 sin(theta)); the closed form avoids cancellation near Q = 0,
+    /// where the normal force changes sign, and needs only sin(theta) (the guard on N's sign
+    /// evaluates it every step).
+    #[inline]
+    pub fn normal_numerator(&self, theta: T, w: T) -> T {
+        self.normal_numerator_sin(theta.sin(), w)
+    }
+
+    #[inline]
+    fn normal_numerator_sin(&self, sin: T, w: T) -> T {
+        let (m1, m2) = (self.slider_mass, self.bob_mass);
+        -m1 * ((m1 + m2) * self.gravity + m2 * self.rod_length * w * w * sin)
+    }
+
     /// Angular acceleration of the pendulum model: theta'' = (g / l) cos(theta).
     #[inline]
     pub fn stick_theta_ddot(&self, sh: &Shorthands<T>) -> T {
