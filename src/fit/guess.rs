@@ -112,7 +112,8 @@ pub fn mu_from_sliding(obs: &Observations, rig: &Rig<f64>, half_window: usize) -
     let h = half_window;
     let mut est = Vec::new();
     let mut speeds = Vec::new();
-    for i in h..ts.len() - h {
+    // Every few frames is enough for a median, and the window is wide.
+    for i in (h..ts.len() - h).step_by((h / 4).max(1)) {
         let Some(x) = quadratic_at(&ts[i - h..=i + h], &xs[i - h..=i + h], ts[i]) else {
             continue;
         };
@@ -161,36 +162,34 @@ pub fn mu_static_from_onsets(
     if ts.len() < 2 * h + 1 || ta.len() != ts.len() {
         return None;
     }
-    let fits: Vec<([f64; 3], f64, [f64; 3])> = (h..ts.len() - h)
+    // Rates every few frames are enough to find the stuck stretches; the onset time itself is
+    // refined on the raw track below.
+    let stride = (h / 4).max(1);
+    let fits: Vec<(usize, f64, f64)> = (h..ts.len() - h)
+        .step_by(stride)
         .filter_map(|i| {
             let (x, se) = quadratic_fit(&ts[i - h..=i + h], &xs[i - h..=i + h], ts[i])?;
-            let a = quadratic_at(&ta[i - h..=i + h], &th[i - h..=i + h], ts[i])?;
-            Some((x, se, a))
+            Some((i, x[1], se))
         })
         .collect();
-    let vmax = fits.iter().map(|f| f.0[1].abs()).fold(0.0, f64::max);
-    let still = |f: &([f64; 3], f64, [f64; 3])| f.0[1].abs() < (3.0 * f.1).max(0.02 * vmax);
+    let vmax = fits.iter().map(|f| f.1.abs()).fold(0.0, f64::max);
     let mut ratios = Vec::new();
     let mut run = 0;
-    for (k, fit) in fits.iter().enumerate() {
-        if still(fit) {
-            run += 1;
+    for &(first_moving, v, se) in &fits {
+        if v.abs() < (3.0 * se).max(0.02 * vmax) {
+            run += stride;
             continue;
         }
         // An onset: a stuck stretch of at least a window, then motion. The smoothed rate
         // crosses its threshold late; the onset time itself comes from a hinge fit of the raw
-        // track (at rest, then x0 + c (t - t*)^2), and the needed ratio is read there.
-        if run >= h && k > 0 {
-            let first_moving = k + h;
+        // track (at rest, then a quadratic-and-cubic start), and the needed ratio is read there.
+        if run >= h {
             let lo = first_moving.saturating_sub(4 * h);
             let hi = (first_moving + 2 * h).min(ts.len() - 1);
-            let onset = (lo + 1..hi).min_by(|&a, &b| {
-                hinge_sse(&ts[lo..=hi], &xs[lo..=hi], ts[a]).total_cmp(&hinge_sse(
-                    &ts[lo..=hi],
-                    &xs[lo..=hi],
-                    ts[b],
-                ))
-            });
+            let onset = (lo + 1..hi)
+                .map(|j| (j, hinge_sse(&ts[lo..=hi], &xs[lo..=hi], ts[j])))
+                .min_by(|a, b| a.1.total_cmp(&b.1))
+                .map(|(j, _)| j);
             if let Some(j) = onset {
                 let (a0, a1) = (j.saturating_sub(h), (j + h).min(ta.len() - 1));
                 if let Some(a) = quadratic_at(&ta[a0..=a1], &th[a0..=a1], ts[j]) {

@@ -93,9 +93,8 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
             .take_jacobian()
             .ok_or_else(|| Error::msg("no Jacobian"))?;
         let cost = state.get_cost();
-        let jt = j.transpose();
-        let a = &jt * &j;
-        let g = &jt * &r;
+        let a = j.tr_mul(&j);
+        let g = j.tr_mul(&r);
         // Marquardt scaling: damp each parameter by its own curvature, floored so a parameter
         // the data do not constrain still gets a finite step.
         let max_diag = a.diagonal().max().max(1e-300);
@@ -117,9 +116,18 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
                 Ok(())
             })?;
             let actual_step = &trial - &p;
+            // A step the bounds cut to nothing: the optimum sits on a bound to working accuracy.
+            if actual_step.norm() <= self.xtol * (p.norm() + self.xtol) {
+                break;
+            }
             let predicted = -(actual_step.dot(&g) + 0.5 * actual_step.dot(&(&a * &actual_step)));
-            let trial_r = problem.problem("operator_count", |o| Ok(o.residuals(&trial).ok()))?;
-            let Some(trial_r) = trial_r.filter(|r| r.iter().all(|v| v.is_finite())) else {
+            // Residuals and Jacobian together: near the optimum almost every trial is accepted,
+            // and the dual-number run gives both for about the price of the Jacobian alone.
+            let trial_rj =
+                problem.problem("jacobian_count", |o| Ok(o.residuals_jacobian(&trial).ok()))?;
+            let Some((trial_r, trial_j)) =
+                trial_rj.filter(|(r, _)| r.iter().all(|v| v.is_finite()))
+            else {
                 self.lambda *= self.nu;
                 self.nu *= 2.0;
                 continue;
@@ -135,10 +143,14 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
                 self.nu = 2.0;
                 self.last_rel_decrease = (cost - trial_cost) / cost.max(f64::MIN_POSITIVE);
                 self.last_step = actual_step.norm() / (p.norm() + self.xtol);
-                let (r1, j1) =
-                    problem.problem("jacobian_count", |o| o.residuals_jacobian(&trial))?;
-                let c1 = half_sq(&r1);
-                return Ok((state.param(trial).residuals(r1).jacobian(j1).cost(c1), None));
+                return Ok((
+                    state
+                        .param(trial)
+                        .residuals(trial_r)
+                        .jacobian(trial_j)
+                        .cost(trial_cost),
+                    None,
+                ));
             }
             self.lambda *= self.nu;
             self.nu *= 2.0;

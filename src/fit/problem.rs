@@ -85,6 +85,8 @@ pub struct TrajectoryProblem {
     pub row_weights: Vec<f64>,
     rows: Vec<Row>,
     times: Vec<f64>,
+    /// Samples at the frame times, nothing else: built once, not per evaluation.
+    request: Request,
 }
 
 impl TrajectoryProblem {
@@ -128,6 +130,10 @@ impl TrajectoryProblem {
             sigma: [1.0, 1.0],
             row_weights: vec![1.0; n],
             rows,
+            request: Request {
+                sample_times: frames.clone(),
+                friction_work: false,
+            },
             times: frames,
         }
     }
@@ -193,16 +199,44 @@ impl TrajectoryProblem {
         (rig, y0)
     }
 
-    /// Simulate with parameters `p` and return the predicted marker positions per frame with
-    /// data (`[slider_x, slider_y, bob_x, bob_y]`), or why the model cannot predict them.
+    /// Simulate with parameters `p` and hand every residual row (predicted - observed, in
+    /// metres, with its marker) to `each`, without collecting intermediate vectors: the
+    /// Jacobian path runs this tens of times per fit on thousands of frames.
+    fn for_each_residual<T: Scalar + 'static>(
+        &self,
+        p: &[T],
+        mut each: impl FnMut(usize, &Row, T),
+    ) -> Result<(), SimError> {
+        let (rig, y0) = self.apply(p);
+        let t_end = self.times.last().copied().unwrap_or(0.0);
+        let sol = simulate(&rig, &y0, t_end, &self.options, &self.request)?;
+        if sol.samples.len() < self.times.len() {
+            return Err(SimError::InvalidInput(format!(
+                "the model stops at t = {} s (Painleve paradox) before the recording ends",
+                sol.final_time
+            )));
+        }
+        let mut cached: Option<(usize, [T; 4])> = None;
+        for (i, r) in self.rows.iter().enumerate() {
+            let m = match cached {
+                Some((f, m)) if f == r.frame => m,
+                _ => {
+                    let m = markers(&rig, &sol.samples[r.frame].state);
+                    cached = Some((r.frame, m));
+                    m
+                }
+            };
+            each(i, r, m[2 * r.marker + r.coord] - r.observed);
+        }
+        Ok(())
+    }
+
+    /// Predicted marker positions per frame with data (`[slider_x, slider_y, bob_x, bob_y]`),
+    /// or why the model cannot predict them.
     pub fn predict<T: Scalar + 'static>(&self, p: &[T]) -> Result<Vec<[T; 4]>, SimError> {
         let (rig, y0) = self.apply(p);
         let t_end = self.times.last().copied().unwrap_or(0.0);
-        let request = Request {
-            sample_times: self.times.clone(),
-            friction_work: false,
-        };
-        let sol = simulate(&rig, &y0, t_end, &self.options, &request)?;
+        let sol = simulate(&rig, &y0, t_end, &self.options, &self.request)?;
         if sol.samples.len() < self.times.len() {
             return Err(SimError::InvalidInput(format!(
                 "the model stops at t = {} s (Painleve paradox) before the recording ends",
@@ -218,25 +252,18 @@ impl TrajectoryProblem {
 
     /// Weighted residuals (predicted - observed) / sigma for parameters `p`.
     pub fn weighted<T: Scalar + 'static>(&self, p: &[T]) -> Result<Vec<T>, SimError> {
-        let pred = self.predict(p)?;
-        Ok(self
-            .rows
-            .iter()
-            .zip(&self.row_weights)
-            .map(|(r, w)| {
-                (pred[r.frame][2 * r.marker + r.coord] - r.observed) * (w / self.sigma[r.marker])
-            })
-            .collect())
+        let mut out = Vec::with_capacity(self.rows.len());
+        self.for_each_residual(p, |i, r, d| {
+            out.push(d * (self.row_weights[i] / self.sigma[r.marker]))
+        })?;
+        Ok(out)
     }
 
     /// Unweighted residuals in metres, with each row's marker.
     pub fn raw_residuals(&self, p: &DVector<f64>) -> Result<Vec<(usize, f64)>, SimError> {
-        let pred = self.predict(p.as_slice())?;
-        Ok(self
-            .rows
-            .iter()
-            .map(|r| (r.marker, pred[r.frame][2 * r.marker + r.coord] - r.observed))
-            .collect())
+        let mut out = Vec::with_capacity(self.rows.len());
+        self.for_each_residual(p.as_slice(), |_, r, d| out.push((r.marker, d)))?;
+        Ok(out)
     }
 
     /// Frame times with data.
@@ -256,15 +283,17 @@ impl TrajectoryProblem {
                 )
             })
             .collect();
-        let r = self.weighted(&seeded)?;
-        let mut jac = DMatrix::zeros(r.len(), N);
-        let res = DVector::from_iterator(r.len(), r.iter().map(|v| v.re));
-        for (row, v) in r.iter().enumerate() {
-            let d = v.eps.unwrap_generic(nalgebra::Const::<N>, U1);
+        let n = self.rows.len();
+        let mut jac = DMatrix::zeros(n, N);
+        let mut res = DVector::zeros(n);
+        self.for_each_residual(&seeded, |row, r, d| {
+            let v = d * (self.row_weights[row] / self.sigma[r.marker]);
+            res[row] = v.re;
+            let e = v.eps.unwrap_generic(nalgebra::Const::<N>, U1);
             for k in 0..N {
-                jac[(row, k)] = d[k];
+                jac[(row, k)] = e[k];
             }
-        }
+        })?;
         Ok((res, jac))
     }
 }
