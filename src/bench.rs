@@ -4,6 +4,7 @@
 pub mod exact;
 pub mod fit;
 pub mod plot;
+pub mod skips;
 pub mod work_precision;
 
 use crate::scene::Scene;

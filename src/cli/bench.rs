@@ -34,6 +34,10 @@ pub struct Args {
     /// ladder of integration tolerances (run time against mu error).
     #[arg(long, conflicts_with_all = ["work_precision", "scene"])]
     fit: bool,
+    /// Time what skipping unrequested work saves (slip monitoring on proven stick phases,
+    /// dense samples, friction work, sensitivities).
+    #[arg(long, conflicts_with_all = ["work_precision", "scene", "fit"])]
+    skips: bool,
     /// Work-precision: draw run time against error (log axes) to this SVG or PNG.
     #[arg(long, value_name = "FILE.svg", requires = "work_precision")]
     plot: Option<PathBuf>,
@@ -217,7 +221,35 @@ fn run_fit(args: &Args) -> Result<(), Failure> {
     Ok(())
 }
 
+/// `appell bench --skips`: each skip, timed with and without it.
+fn run_skips(args: &Args) -> Result<(), Failure> {
+    let cases = appell::bench::skips::skip_benchmark(args.batches.unwrap_or(7));
+    if args.json {
+        outln!("{}", serde_json::json!({"skips": cases}));
+        return Ok(());
+    }
+    outln!(
+        "{:>12} {:>12} {:>7}  skipped work",
+        "with skip",
+        "without",
+        "saved"
+    );
+    for c in cases {
+        outln!(
+            "{:>9.1} us {:>9.1} us {:>6.0}%  {}",
+            c.with_skip_s * 1e6,
+            c.without_skip_s * 1e6,
+            100.0 * (1.0 - c.with_skip_s / c.without_skip_s),
+            c.case
+        );
+    }
+    Ok(())
+}
+
 pub fn run(args: Args) -> Result<(), Failure> {
+    if args.skips {
+        return run_skips(&args);
+    }
     if args.fit {
         return run_fit(&args);
     }

@@ -481,6 +481,45 @@ impl RegionMap {
     }
 }
 
+/// Whether a stuck pendulum at (theta, w) can never slip: along its whole energy level
+/// (w^2 = E + 2 (g/l) sin(theta), every angle it can reach) the needed friction ratio |c|/|b|
+/// stays below mu_s. Then the stick phase lasts for ever and the simulator need not watch for
+/// slip. A dense scan of the level and a golden-section refinement of its largest ratio, with
+/// a relative margin of 1e-6: a level that comes closer than that is not proven.
+pub fn stick_holds_forever(rig: &Rig<f64>, theta: f64, w: f64) -> bool {
+    let (g, l) = (rig.gravity, rig.rod_length);
+    let energy = w * w - 2.0 * g / l * theta.sin();
+    let ratio = |th: f64| {
+        let w2 = energy + 2.0 * g / l * th.sin();
+        if w2 < 0.0 {
+            return 0.0; // not reachable on this level
+        }
+        let sh = Shorthands::new(rig, th, w2.sqrt());
+        sh.c.abs() / sh.b.abs()
+    };
+    let n = 2048;
+    let step = std::f64::consts::TAU / n as f64;
+    let (k_max, r_max) = (0..n)
+        .map(|k| (k, ratio(k as f64 * step)))
+        .fold((0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
+    if r_max.is_nan() || r_max >= rig.mu_static {
+        return false;
+    }
+    // Refine the largest ratio between its grid neighbours.
+    let (mut a, mut b) = ((k_max as f64 - 1.0) * step, (k_max as f64 + 1.0) * step);
+    let gr = (5f64.sqrt() - 1.0) / 2.0;
+    for _ in 0..60 {
+        let (c, d) = (b - gr * (b - a), a + gr * (b - a));
+        if ratio(c) > ratio(d) {
+            b = d;
+        } else {
+            a = c;
+        }
+    }
+    let peak = ratio(0.5 * (a + b)).max(r_max);
+    peak.is_finite() && peak * (1.0 + 1e-6) < rig.mu_static
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

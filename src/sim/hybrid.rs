@@ -701,7 +701,17 @@ where
             &mut out.stats,
         );
         h = if h.is_nan() { h_start } else { h.min(h_start) };
-        let guards = ctx.guards(mode);
+        // A stick phase whose energy level never reaches the friction cone cannot end: no
+        // guard to watch (the pendulum then runs at the cost of its right-hand side alone).
+        let y_re = re_state(&y);
+        let guards = if mode == Mode::Stick
+            && options.prove_stick
+            && regions::stick_holds_forever(&rig_re, y_re[1], y_re[3])
+        {
+            &[]
+        } else {
+            ctx.guards(mode)
+        };
         let mut ln_err_prev = 1e-4_f64.ln();
         let mut gs: Vec<GuardState> = {
             let (yr, fr) = (re_vec(&y), re_vec(stepper.f_start()));

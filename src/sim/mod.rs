@@ -56,6 +56,9 @@ pub struct Options {
     /// fraction of m1 + m2 is ended by an impulsive stop (the convergence test
     /// `sudden_stop_converges_as_threshold_tightens` shows why 1e-9 is tight enough).
     pub stop_threshold: f64,
+    /// Skip slip monitoring in a stick phase whose energy level provably never reaches the
+    /// friction cone (`model::regions::stick_holds_forever`). Off only to measure what it saves.
+    pub prove_stick: bool,
 }
 
 /// The rule that picks one motion at rest when the Painleve paradox leaves several consistent
@@ -104,6 +107,7 @@ impl Default for Options {
             max_events: 10_000,
             rest_rule: RestRule::PreferStick,
             stop_threshold: 1e-9,
+            prove_stick: true,
         }
     }
 }

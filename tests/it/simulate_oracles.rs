@@ -371,3 +371,51 @@ fn step_limit_is_an_error_with_state() {
     assert_eq!(max, 10);
     assert!(t > 0.0 && t < 2.0 && state[1] > 0.0);
 }
+
+/// A stick phase proven never to slip (its whole energy level stays inside the friction cone)
+/// runs without slip monitoring; the proof is checked against runs that do monitor: no slip
+/// where it holds, a slip where friction is a hair below the level's largest needed ratio,
+/// and the same final state with and without the skip.
+#[test]
+fn proven_stick_skips_monitoring_without_changing_the_answer() {
+    let y0 = [0.0, 0.4, 0.0, 0.0];
+    // Largest needed ratio on this level, by brute force on the energy integral.
+    let base = Rig::paper(0.5);
+    let (g, l) = (base.gravity, base.rod_length);
+    let peak = (0..200_000)
+        .map(|k| 0.4 + (PI - 0.8) * k as f64 / 200_000.0)
+        .map(|th: f64| {
+            let w = (2.0 * g / l * (th.sin() - 0.4f64.sin())).max(0.0).sqrt();
+            let sh = Shorthands::new(&base, th, w);
+            sh.c.abs() / sh.b.abs()
+        })
+        .fold(0.0, f64::max);
+    for (mu, holds) in [(peak * 1.001, true), (peak * 0.999, false)] {
+        let rig = Rig::paper(mu);
+        assert_eq!(
+            regions::stick_holds_forever(&rig, y0[1], y0[3]),
+            holds,
+            "mu {mu}"
+        );
+        let monitored = simulate(
+            &rig,
+            &y0,
+            3.0,
+            &Options {
+                prove_stick: false,
+                ..Options::default()
+            },
+            &Request::default(),
+        )
+        .unwrap();
+        assert_eq!(
+            monitored.events.is_empty(),
+            holds,
+            "mu {mu}: {:?}",
+            monitored.events
+        );
+        let skipped = simulate(&rig, &y0, 3.0, &Options::default(), &Request::default()).unwrap();
+        assert_eq!(skipped.events.len(), monitored.events.len());
+        assert_eq!(skipped.final_state, monitored.final_state);
+    }
+}
