@@ -3,6 +3,7 @@
 
 pub mod exact;
 pub mod fit;
+pub mod plan;
 pub mod plot;
 pub mod skips;
 pub mod work_precision;

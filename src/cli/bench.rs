@@ -38,6 +38,10 @@ pub struct Args {
     /// dense samples, friction work, sensitivities).
     #[arg(long, conflicts_with_all = ["work_precision", "scene", "fit"])]
     skips: bool,
+    /// Time the planner against its robustness estimate (the example plan with growing Monte
+    /// Carlo draws).
+    #[arg(long, conflicts_with_all = ["work_precision", "scene", "fit", "skips"])]
+    plan: bool,
     /// Work-precision: draw run time against error (log axes) to this SVG or PNG.
     #[arg(long, value_name = "FILE.svg", requires = "work_precision")]
     plot: Option<PathBuf>,
@@ -246,7 +250,43 @@ fn run_skips(args: &Args) -> Result<(), Failure> {
     Ok(())
 }
 
+/// `appell bench --plan`: run time against robustness.
+fn run_plan(args: &Args) -> Result<(), Failure> {
+    let ladder = [(8, 50), (16, 100), (32, 400), (64, 1600)];
+    let points =
+        appell::bench::plan::plan_benchmark(&ladder).map_err(|e| Failure::Run(anyhow!(e)))?;
+    if args.json {
+        outln!("{}", serde_json::json!({"plan": points}));
+        return Ok(());
+    }
+    outln!("example plan (configs/plan_example.toml), top proposal:");
+    outln!(
+        "{:>6} {:>8} {:>9} {:>11} {:>9} {:>14}",
+        "draws",
+        "verify",
+        "seconds",
+        "robustness",
+        "observed",
+        "pred. stderr"
+    );
+    for p in points {
+        outln!(
+            "{:>6} {:>8} {:>9.3} {:>11.4} {:>9.4} {:>14.3e}",
+            p.draws,
+            p.verify_draws,
+            p.seconds,
+            p.robustness,
+            p.robustness_observed,
+            p.predicted_mu_stderr
+        );
+    }
+    Ok(())
+}
+
 pub fn run(args: Args) -> Result<(), Failure> {
+    if args.plan {
+        return run_plan(&args);
+    }
     if args.skips {
         return run_skips(&args);
     }
