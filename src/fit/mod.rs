@@ -429,7 +429,7 @@ pub fn fit(
         simulate(
             &problem.rig,
             &problem.initial,
-            *obs.times.last().unwrap(),
+            obs.times[obs.times.len() - 1],
             &settings.options,
             &Request {
                 sample_times: problem.frame_times().to_vec(),
@@ -475,8 +475,7 @@ pub fn fit(
     let mut mu_static_free = false;
     if !slides {
         // handled above: the stuck pendulum has no friction parameter left
-    } else if idx(&problem, Param::MuStatic).is_some() {
-        let i = idx(&problem, Param::MuStatic).unwrap();
+    } else if let Some(i) = idx(&problem, Param::MuStatic) {
         if p[i] - p[0] <= 1e-9 * p[0].max(1e-9) {
             problem.free.remove(i);
             problem.tie_static = true;
@@ -547,8 +546,8 @@ pub fn fit(
         }
     }
     let mu_kinetic = identifiable.then(|| params[0].1);
-    let mu_static = if mu_static_free {
-        let i = idx(&problem, Param::MuStatic).unwrap();
+    let static_index = idx(&problem, Param::MuStatic).filter(|_| mu_static_free);
+    let mu_static = if let Some(i) = static_index {
         if settings.profile {
             match profile_interval(&problem, &p, i, se[i], s2, settings, p[0]) {
                 Some(ci) => params[i].1.ci95 = ci,
