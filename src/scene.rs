@@ -173,23 +173,35 @@ fn check(path: &Path, ok: bool, key: &str, expected: &str, value: f64) -> Result
     }
 }
 
+/// Read a file into a string, the error naming the file: shared by scene, rig and plan files.
+pub fn read_text(path: &Path) -> Result<String, SceneError> {
+    std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        path: path.to_owned(),
+        source,
+    })
+}
+
+/// Parse TOML into `F`; the error names the file, and the parser's message the key and line
+/// (unknown keys included, with `deny_unknown_fields`).
+pub fn parse_toml<F: serde::de::DeserializeOwned>(
+    text: &str,
+    path: &Path,
+) -> Result<F, SceneError> {
+    toml::from_str(text).map_err(|e| SceneError::Parse {
+        path: path.to_owned(),
+        message: e.to_string().trim_end().to_owned(),
+    })
+}
+
 impl Scene {
     /// Read and validate a scene file.
     pub fn from_path(path: &Path) -> Result<Self, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        Self::from_toml(&text, path)
+        Self::from_toml(&read_text(path)?, path)
     }
 
     /// Parse and validate scene text; `path` only labels errors.
     pub fn from_toml(text: &str, path: &Path) -> Result<Self, SceneError> {
-        let file: SceneFile = toml::from_str(text).map_err(|e| SceneError::Parse {
-            path: path.to_owned(),
-            message: e.to_string().trim_end().to_owned(),
-        })?;
-        file.validate(path)
+        parse_toml::<SceneFile>(text, path)?.validate(path)
     }
 }
 
@@ -293,24 +305,13 @@ pub struct RigFile {
 impl RigFile {
     /// Read and validate a rig file; errors name the file and the key at fault.
     pub fn load(path: &Path) -> Result<Rig<f64>, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        Self::parse(&text, path)
+        Self::parse(&read_text(path)?, path)
     }
 
     /// Read a rig file for fitting: mu values are optional starting guesses (`mu_guess` when
     /// left out).
     pub fn load_for_fit(path: &Path, mu_guess: f64) -> Result<Rig<f64>, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        let file: RigFile = toml::from_str(&text).map_err(|e| SceneError::Parse {
-            path: path.to_owned(),
-            message: e.to_string().trim_end().to_owned(),
-        })?;
+        let file: RigFile = parse_toml(&read_text(path)?, path)?;
         file.rig
             .rig_or_guess(mu_guess)
             .map_err(|e| SceneError::Invalid {
@@ -321,10 +322,7 @@ impl RigFile {
 
     /// Parse and validate rig-file text; `path` only labels errors.
     pub fn parse(text: &str, path: &Path) -> Result<Rig<f64>, SceneError> {
-        let file: RigFile = toml::from_str(text).map_err(|e| SceneError::Parse {
-            path: path.to_owned(),
-            message: e.to_string().trim_end().to_owned(),
-        })?;
+        let file: RigFile = parse_toml(text, path)?;
         file.rig.rig().map_err(|e| SceneError::Invalid {
             path: path.to_owned(),
             message: e.to_string(),

@@ -231,25 +231,6 @@ impl TrajectoryProblem {
         Ok(())
     }
 
-    /// Predicted marker positions per frame with data (`[slider_x, slider_y, bob_x, bob_y]`),
-    /// or why the model cannot predict them.
-    pub fn predict<T: Scalar + 'static>(&self, p: &[T]) -> Result<Vec<[T; 4]>, SimError> {
-        let (rig, y0) = self.apply(p);
-        let t_end = self.times.last().copied().unwrap_or(0.0);
-        let sol = simulate(&rig, &y0, t_end, &self.options, &self.request)?;
-        if sol.samples.len() < self.times.len() {
-            return Err(SimError::InvalidInput(format!(
-                "the model stops at t = {} s (Painleve paradox) before the recording ends",
-                sol.final_time
-            )));
-        }
-        Ok(sol
-            .samples
-            .iter()
-            .map(|s| markers(&rig, &s.state))
-            .collect())
-    }
-
     /// Weighted residuals (predicted - observed) / sigma for parameters `p`.
     pub fn weighted<T: Scalar + 'static>(&self, p: &[T]) -> Result<Vec<T>, SimError> {
         let mut out = Vec::with_capacity(self.rows.len());

@@ -434,20 +434,12 @@ fn non_negative(path: &Path, key: &str, v: f64) -> Result<f64, SceneError> {
 impl PlanSpec {
     /// Read and validate a plan file; errors name the file and the key.
     pub fn from_path(path: &Path) -> Result<Self, SceneError> {
-        let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
-        Self::from_toml(&text, path)
+        Self::from_toml(&crate::scene::read_text(path)?, path)
     }
 
     /// Parse and validate plan text; `path` only labels errors.
     pub fn from_toml(text: &str, path: &Path) -> Result<Self, SceneError> {
-        let file: PlanFile = toml::from_str(text).map_err(|e| SceneError::Parse {
-            path: path.to_owned(),
-            message: e.to_string().trim_end().to_owned(),
-        })?;
-        file.validate(path)
+        crate::scene::parse_toml::<PlanFile>(text, path)?.validate(path)
     }
 }
 
