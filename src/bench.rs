@@ -1,7 +1,7 @@
 //! Benchmarks a user can run on their own machine: run time of a scene (median of repeats),
 //! and the work-precision diagram (run time against error for each integrator).
 
-pub mod exact;
+pub use crate::model::pendulum as exact;
 pub mod fit;
 pub mod plan;
 pub mod plot;

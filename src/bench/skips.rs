@@ -44,7 +44,8 @@ pub fn skip_benchmark(batches: usize) -> Vec<SkipCase> {
     };
     vec![
         SkipCase {
-            case: "slip monitoring on a stick phase proven never to slip (10 s stuck pendulum)",
+            case:
+                "monitoring and integrating a stick phase proven never to slip (closed form; 10 s)",
             with_skip_s: time(&stuck, &swing, 10.0, &opts, &Request::default()),
             without_skip_s: time(
                 &stuck,

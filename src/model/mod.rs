@@ -5,6 +5,7 @@
 mod forces;
 mod markers;
 mod mode;
+pub mod pendulum;
 pub mod regions;
 mod rig;
 mod transition;

@@ -712,6 +712,18 @@ where
         } else {
             ctx.guards(mode)
         };
+        // And when nothing is sampled from here on and no derivatives are carried, the rest
+        // of that phase is the pendulum's closed form: nothing to integrate.
+        if guards.is_empty() && mode == Mode::Stick && is_f64 && out.next_sample >= times.len() {
+            if let Some((theta, w)) =
+                crate::model::pendulum::stuck_state(&rig_re, y_re[1], y_re[3], t_end - t)
+            {
+                y[1] = T::from(theta);
+                y[3] = T::from(w);
+                out.stats.rhs_evals += stepper.rhs_evals();
+                return Ok(finish(out, t_end, &y, mode));
+            }
+        }
         let mut ln_err_prev = 1e-4_f64.ln();
         let mut gs: Vec<GuardState> = {
             let (yr, fr) = (re_vec(&y), re_vec(stepper.f_start()));
