@@ -1,19 +1,27 @@
 //! MCAP recordings: a streaming linear reader (no summary or index needed, bounded memory)
-//! decoding JSON and ROS 2 CDR marker messages, and a writer of JSON marker frames.
+//! decoding JSON, ROS 2 CDR and protobuf (Foxglove) marker messages, and a writer of JSON
+//! marker frames.
 
 use super::{DataError, Parsed, Plane, ReadOptions, Recording, Series};
 use ::mcap::records::{MessageHeader, Metadata, Record};
 use ::mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader};
 use ::mcap::McapError;
+use prost_reflect::{DescriptorPool, DynamicMessage, MessageDescriptor, ReflectMessage, Value};
 use serde::{Deserialize, Serialize};
 use std::collections::{BTreeMap, HashMap};
+use std::fmt;
 use std::io::{Read, Write};
 use std::path::Path;
 
 /// Message encodings the reader decodes (channel encoding / schema).
 pub const SUPPORTED: &str = "json (markers array per frame, or one point per topic), \
 cdr with ros2msg schemas geometry_msgs/msg/PointStamped, PoseStamped, TransformStamped, \
-tf2_msgs/msg/TFMessage; chunks uncompressed, zstd or lz4";
+tf2_msgs/msg/TFMessage, protobuf (schema a FileDescriptorSet) foxglove.FrameTransform, \
+foxglove.PointsAnnotation; chunks uncompressed, zstd or lz4";
+
+/// Marker names given to the points of a `foxglove.PointsAnnotation`, which carries no names:
+/// identity is the index (point 0 the slider, point 1 the bob, further points `point2`, ...).
+pub const POINTS_NAMES: [&str; 2] = ["slider", "bob"];
 
 /// Read an MCAP file linearly (summary and index are not needed).
 pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {
@@ -131,14 +139,40 @@ struct TfMessage {
     transforms: Vec<TransformStamped>,
 }
 
-/// How a channel's messages are decoded.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// How a channel's messages are decoded. The protobuf ones carry the message descriptor built
+/// from the channel's schema (the file's own definition, not one compiled in).
+#[derive(Clone)]
 enum Decoder {
     Json,
     PointStamped,
     PoseStamped,
     TransformStamped,
     TfMessage,
+    FrameTransform(MessageDescriptor),
+    PointsAnnotation(MessageDescriptor),
+}
+
+// By hand so channel lists show the type name, not the whole descriptor.
+impl fmt::Debug for Decoder {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Decoder::Json => "Json",
+            Decoder::PointStamped => "PointStamped",
+            Decoder::PoseStamped => "PoseStamped",
+            Decoder::TransformStamped => "TransformStamped",
+            Decoder::TfMessage => "TfMessage",
+            Decoder::FrameTransform(_) => "protobuf FrameTransform",
+            Decoder::PointsAnnotation(_) => "protobuf PointsAnnotation",
+        })
+    }
+}
+
+/// Why a channel gets no decoder.
+enum Reject {
+    /// An encoding or type this reader does not decode.
+    Unsupported(String),
+    /// A supported type whose schema is unusable.
+    Invalid(String),
 }
 
 #[derive(Debug)]
@@ -193,28 +227,114 @@ fn decoder_for(
     encoding: &str,
     schema_name: &str,
     schema_encoding: &str,
-) -> Result<Decoder, String> {
+    schema_data: &[u8],
+) -> Result<Decoder, Reject> {
     match encoding {
         "json" => Ok(Decoder::Json),
         "cdr" => {
             if schema_encoding != "ros2msg" && schema_encoding != "ros2idl" {
-                return Err(format!("cdr with schema encoding {schema_encoding:?}"));
+                return Err(Reject::Unsupported(format!(
+                    "cdr with schema encoding {schema_encoding:?}"
+                )));
             }
             match schema_name {
                 "geometry_msgs/msg/PointStamped" => Ok(Decoder::PointStamped),
                 "geometry_msgs/msg/PoseStamped" => Ok(Decoder::PoseStamped),
                 "geometry_msgs/msg/TransformStamped" => Ok(Decoder::TransformStamped),
                 "tf2_msgs/msg/TFMessage" => Ok(Decoder::TfMessage),
-                other => Err(format!("cdr schema {other:?}")),
+                other => Err(Reject::Unsupported(format!("cdr schema {other:?}"))),
             }
         }
-        other => Err(format!("message encoding {other:?}")),
+        "protobuf" => {
+            if schema_encoding != "protobuf" {
+                return Err(Reject::Unsupported(format!(
+                    "protobuf with schema encoding {schema_encoding:?}"
+                )));
+            }
+            let wrap: fn(MessageDescriptor) -> Decoder = match schema_name {
+                "foxglove.FrameTransform" => Decoder::FrameTransform,
+                "foxglove.PointsAnnotation" => Decoder::PointsAnnotation,
+                other => return Err(Reject::Unsupported(format!("protobuf schema {other:?}"))),
+            };
+            // The schema data is the FileDescriptorSet the writer compiled against; decoding with
+            // it (rather than a built-in copy) follows the file if Foxglove's types grow fields.
+            let pool = DescriptorPool::decode(schema_data).map_err(|e| {
+                Reject::Invalid(format!(
+                    "its schema {schema_name} is not a valid binary FileDescriptorSet ({e})"
+                ))
+            })?;
+            let desc = pool.get_message_by_name(schema_name).ok_or_else(|| {
+                Reject::Invalid(format!(
+                    "its schema's FileDescriptorSet does not define {schema_name}"
+                ))
+            })?;
+            Ok(wrap(desc))
+        }
+        other => Err(Reject::Unsupported(format!("message encoding {other:?}"))),
     }
+}
+
+/// Field `name` of a protobuf message, or what was expected.
+fn pb_field<'a>(m: &'a DynamicMessage, name: &str) -> Result<std::borrow::Cow<'a, Value>, String> {
+    m.get_field_by_name(name).ok_or_else(|| {
+        format!(
+            "a field {name:?} in {} (the schema lacks it)",
+            m.descriptor().full_name()
+        )
+    })
+}
+
+/// Field `name` as f64 (foxglove vectors and points are doubles).
+fn pb_f64(m: &DynamicMessage, name: &str) -> Result<f64, String> {
+    let v = pb_field(m, name)?;
+    match *v {
+        Value::F64(x) => Ok(x),
+        Value::F32(x) => Ok(x as f64),
+        ref other => Err(format!(
+            "a number in {}.{name}, found {other:?}",
+            m.descriptor().full_name()
+        )),
+    }
+}
+
+/// Field `name` as an integer of any protobuf width.
+fn pb_int(m: &DynamicMessage, name: &str) -> Result<i64, String> {
+    let v = pb_field(m, name)?;
+    match *v {
+        Value::I64(x) => Ok(x),
+        Value::I32(x) => Ok(x as i64),
+        Value::U32(x) => Ok(x as i64),
+        Value::U64(x) => i64::try_from(x).map_err(|_| format!("{name} {x} out of range")),
+        ref other => Err(format!(
+            "an integer in {}.{name}, found {other:?}",
+            m.descriptor().full_name()
+        )),
+    }
+}
+
+/// The message's `timestamp` (google.protobuf.Timestamp) in ns, `None` when it is not set.
+fn pb_stamp(m: &DynamicMessage) -> Result<Option<i64>, String> {
+    if !m.has_field_by_name("timestamp") {
+        return Ok(None);
+    }
+    let v = pb_field(m, "timestamp")?;
+    let ts = v
+        .as_message()
+        .ok_or("a google.protobuf.Timestamp message in timestamp")?;
+    Ok(Some(
+        pb_int(ts, "seconds")? * 1_000_000_000 + pb_int(ts, "nanos")?,
+    ))
+}
+
+/// Decode a protobuf message against its descriptor.
+fn pb_decode(desc: &MessageDescriptor, data: &[u8]) -> Result<DynamicMessage, String> {
+    DynamicMessage::decode(desc.clone(), data)
+        .map_err(|e| format!("protobuf {}: {e}", desc.full_name()))
 }
 
 /// Decode one message into samples; `Err` is a message for the caller to locate.
 fn decode(
-    dec: Decoder,
+    dec: &Decoder,
     topic: &str,
     data: &[u8],
     log_time: i64,
@@ -290,6 +410,50 @@ fn decode(
             }
             Ok(n)
         }
+        Decoder::FrameTransform(desc) => {
+            let m = pb_decode(desc, data)?;
+            let stamp = pb_stamp(&m)?.unwrap_or(log_time);
+            let name = pb_field(&m, "child_frame_id")?;
+            let name = name.as_str().unwrap_or_default();
+            if name.is_empty() {
+                return Err("a FrameTransform whose child_frame_id names the marker".into());
+            }
+            // An unset translation is a marker the tracker lost in this frame, not the origin.
+            let p = if m.has_field_by_name("translation") {
+                let v = pb_field(&m, "translation")?;
+                let t = v.as_message().ok_or("a foxglove.Vector3 in translation")?;
+                xy(
+                    Some(pb_f64(t, "x")?),
+                    Some(pb_f64(t, "y")?),
+                    Some(pb_f64(t, "z")?),
+                    plane,
+                )
+            } else {
+                None
+            };
+            acc.push(name, stamp, p);
+            Ok(1)
+        }
+        Decoder::PointsAnnotation(desc) => {
+            let m = pb_decode(desc, data)?;
+            let stamp = pb_stamp(&m)?.unwrap_or(log_time);
+            let v = pb_field(&m, "points")?;
+            let points = v.as_list().ok_or("a repeated foxglove.Point2 in points")?;
+            let mut xys = Vec::with_capacity(points.len());
+            for p in points {
+                let p = p.as_message().ok_or("foxglove.Point2 messages in points")?;
+                xys.push([pb_f64(p, "x")?, pb_f64(p, "y")?]);
+            }
+            // Identity by index; the two roles get a sample every frame so a short list reads
+            // as missing markers rather than shifting the others.
+            for (k, name) in POINTS_NAMES.iter().enumerate() {
+                acc.push(name, stamp, xys.get(k).copied());
+            }
+            for (k, p) in xys.iter().enumerate().skip(POINTS_NAMES.len()) {
+                acc.push(&format!("point{k}"), stamp, Some(*p));
+            }
+            Ok(xys.len())
+        }
     }
 }
 
@@ -300,7 +464,7 @@ pub(crate) fn read_from(
     opts: &ReadOptions,
 ) -> Result<Parsed, DataError> {
     let mut reader = LinearReader::new();
-    let mut schemas: HashMap<u16, (String, String)> = HashMap::new();
+    let mut schemas: HashMap<u16, (String, String, Vec<u8>)> = HashMap::new();
     let mut channels: HashMap<u16, Channel> = HashMap::new();
     let mut acc = Acc::default();
     let mut parsed = Parsed::default();
@@ -337,14 +501,26 @@ pub(crate) fn read_from(
                     }
                 };
                 match record {
-                    Record::Schema { header, .. } => {
-                        schemas.insert(header.id, (header.name, header.encoding));
+                    Record::Schema { header, data } => {
+                        // Only protobuf needs the schema's bytes; keep memory bounded otherwise.
+                        let data = if header.encoding == "protobuf" {
+                            data.into_owned()
+                        } else {
+                            Vec::new()
+                        };
+                        schemas.insert(header.id, (header.name, header.encoding, data));
                     }
                     Record::Channel(c) => {
-                        let (sname, senc) = schemas.get(&c.schema_id).cloned().unwrap_or_default();
-                        let state = match decoder_for(&c.message_encoding, &sname, &senc) {
+                        let (sname, senc, sdata) = schemas
+                            .get(&c.schema_id)
+                            .map(|(n, e, d)| (n.as_str(), e.as_str(), d.as_slice()))
+                            .unwrap_or_default();
+                        let state = match decoder_for(&c.message_encoding, sname, senc, sdata) {
                             Ok(d) => ChannelState::Markers(d),
-                            Err(why) => ChannelState::Ignored(format!("{why} is not supported")),
+                            Err(Reject::Unsupported(why)) => {
+                                ChannelState::Ignored(format!("{why} is not supported"))
+                            }
+                            Err(Reject::Invalid(why)) => ChannelState::Ignored(why),
                         };
                         channels.entry(c.id).or_insert(Channel {
                             topic: c.topic,
@@ -363,7 +539,7 @@ pub(crate) fn read_from(
                                 header.channel_id.to_string(),
                             ));
                         };
-                        let ChannelState::Markers(dec) = ch.state else {
+                        let ChannelState::Markers(dec) = &ch.state else {
                             continue;
                         };
                         match decode(

@@ -69,6 +69,64 @@ fn example_ros2_cdr_mcap_reads_to_the_reference_csv() {
 }
 
 #[test]
+fn example_protobuf_frame_transform_mcap_reads_to_the_reference_csv() {
+    // One foxglove.FrameTransform per marker per frame; log_time carries jitter, so matching
+    // the reference also shows the in-message timestamp is the one used.
+    let rec = read1(&data("markers_foxglove_frametransform.mcap")).unwrap();
+    assert_eq!(rec.provenance.format, Some(Format::Mcap));
+    assert_eq!(rec.provenance.slider_name, "slider");
+    assert_eq!(rec.provenance.bob_name, "bob");
+    assert_matches_reference(&rec);
+}
+
+#[test]
+fn example_protobuf_points_annotation_mcap_reads_to_the_reference_csv() {
+    // foxglove.PointsAnnotation: point 0 is the slider, point 1 the bob.
+    let rec = read1(&data("markers_foxglove_points.mcap")).unwrap();
+    assert_eq!(rec.provenance.slider_name, "slider");
+    assert_eq!(rec.provenance.bob_name, "bob");
+    assert_matches_reference(&rec);
+    // The flags can still swap the roles.
+    let swapped = read(
+        &[data("markers_foxglove_points.mcap")],
+        &ReadOptions {
+            slider: Some("bob".into()),
+            bob: Some("slider".into()),
+            ..ReadOptions::default()
+        },
+    )
+    .unwrap();
+    assert_eq!(swapped.slider, rec.bob);
+}
+
+#[test]
+fn cli_converts_the_protobuf_examples() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in [
+        "markers_foxglove_frametransform.mcap",
+        "markers_foxglove_points.mcap",
+    ] {
+        let out = dir.path().join(format!("{name}.csv"));
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_appell"))
+            .arg("convert")
+            .arg(data(name))
+            .arg(&out)
+            .output()
+            .unwrap();
+        assert_eq!(
+            run.status.code(),
+            Some(0),
+            "{name}: {}",
+            String::from_utf8_lossy(&run.stderr)
+        );
+        let back = read1(&out).unwrap();
+        let reference = reference();
+        assert_eq!(back.len(), reference.len(), "{name}");
+        assert_eq!(back.slider[17], Some(reference[17].1), "{name}");
+    }
+}
+
+#[test]
 fn reference_csv_reads_as_wide_csv_with_the_known_rod_length() {
     let rec = read1(&data("markers_reference.csv")).unwrap();
     assert_eq!(rec.provenance.format, Some(Format::Wide));
@@ -569,6 +627,106 @@ fn mcap_without_a_marker_channel_or_with_an_unknown_encoding_is_explained() {
         }
         other => panic!("{other}"),
     }
+}
+
+#[test]
+fn protobuf_channels_of_other_types_or_with_a_broken_schema_are_explained() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = write_bytes(
+        dir.path(),
+        "log.mcap",
+        &mcap_with("protobuf", ("foxglove.Log", "protobuf"), b"\x08\x01"),
+    );
+    match read1(&p).unwrap_err() {
+        DataError::Unsupported {
+            found, supported, ..
+        } => {
+            assert!(found.contains("foxglove.Log"), "{found}");
+            assert!(
+                supported.contains("foxglove.FrameTransform")
+                    && supported.contains("foxglove.PointsAnnotation"),
+                "{supported}"
+            );
+        }
+        other => panic!("{other}"),
+    }
+    // The CLI reports it with exit code 2, naming the file.
+    let out = dir.path().join("log.csv");
+    let run = std::process::Command::new(env!("CARGO_BIN_EXE_appell"))
+        .arg("convert")
+        .arg(&p)
+        .arg(&out)
+        .output()
+        .unwrap();
+    assert_eq!(run.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&run.stderr);
+    assert!(
+        err.contains("log.mcap") && err.contains("foxglove.Log"),
+        "{err}"
+    );
+    assert!(!out.exists());
+    // A supported type whose schema data is not a FileDescriptorSet: the channel is listed
+    // with the reason.
+    let p = write_bytes(
+        dir.path(),
+        "badschema.mcap",
+        &mcap_with(
+            "protobuf",
+            ("foxglove.FrameTransform", "protobuf"),
+            b"\x08\x01",
+        ),
+    );
+    let e = read1(&p).unwrap_err();
+    assert!(
+        matches!(&e, DataError::NoMarkerChannel { channels, .. } if channels.contains("FileDescriptorSet")),
+        "{e}"
+    );
+}
+
+#[test]
+fn a_damaged_protobuf_message_after_good_ones_names_the_message() {
+    // The example's own schema (a FileDescriptorSet), two good messages, then garbage.
+    let bytes = std::fs::read(data("markers_foxglove_frametransform.mcap")).unwrap();
+    let good: Vec<_> = mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .take(2)
+        .map(|m| m.unwrap())
+        .collect();
+    let schema = good[0].channel.schema.clone().unwrap();
+    assert_eq!(schema.name, "foxglove.FrameTransform");
+    let mut buf = std::io::Cursor::new(Vec::new());
+    {
+        let mut w = mcap::WriteOptions::new().create(&mut buf).unwrap();
+        let s = w
+            .add_schema(&schema.name, &schema.encoding, &schema.data)
+            .unwrap();
+        let c = w
+            .add_channel(s, "/tf", "protobuf", &std::collections::BTreeMap::new())
+            .unwrap();
+        let payloads = [&good[0].data[..], &good[1].data[..], b"\x0a\xff\x01"];
+        for (i, d) in payloads.into_iter().enumerate() {
+            w.write_to_known_channel(
+                &mcap::records::MessageHeader {
+                    channel_id: c,
+                    sequence: i as u32,
+                    log_time: i as u64,
+                    publish_time: i as u64,
+                },
+                d,
+            )
+            .unwrap();
+        }
+        w.finish().unwrap();
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let p = write_bytes(dir.path(), "damaged_tf.mcap", &buf.into_inner());
+    let e = read1(&p).unwrap_err();
+    let text = e.to_string();
+    assert!(matches!(e, DataError::Parse { .. }), "{text}");
+    assert!(
+        text.contains("damaged_tf.mcap") && text.contains("message 3") && text.contains("/tf"),
+        "{text}"
+    );
 }
 
 #[test]
