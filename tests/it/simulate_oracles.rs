@@ -423,10 +423,16 @@ fn proven_stick_skips_monitoring_without_changing_the_answer() {
         );
         let skipped = simulate(&rig, &y0, 3.0, &Options::default(), &Request::default()).unwrap();
         assert_eq!(skipped.events.len(), monitored.events.len());
-        // Where it holds, the skip ends in the pendulum's closed form: no steps at all, and
-        // the integrated answer agrees with it to the integration tolerance.
+        // Where it holds, the skip ends in the pendulum's closed form once the phase has
+        // lasted long enough to try the proof (far fewer steps than integrating 3 s), and the
+        // integrated answer agrees with it to the integration tolerance.
         if holds {
-            assert_eq!(skipped.stats.steps, 0);
+            assert!(
+                skipped.stats.steps * 2 < monitored.stats.steps,
+                "{:?} vs {:?}",
+                skipped.stats,
+                monitored.stats
+            );
         }
         for i in 0..4 {
             assert!(
