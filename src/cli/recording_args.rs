@@ -43,6 +43,12 @@ pub struct RecordingArgs {
     /// Drop frames whose slider-bob distance is far from the rod length.
     #[arg(long)]
     pub drop_outliers: bool,
+    /// Keep frames from this time on (s from the first frame; times are re-zeroed).
+    #[arg(long, value_name = "S")]
+    pub t_start: Option<f64>,
+    /// Keep frames up to this time (s from the first frame); MCAP is not decoded past it.
+    #[arg(long, value_name = "S")]
+    pub t_end: Option<f64>,
 }
 
 impl RecordingArgs {
@@ -78,6 +84,18 @@ impl RecordingArgs {
             rod_length: positive("--rod-length", self.rod_length)?,
             min_likelihood: self.min_likelihood,
             drop_outliers: self.drop_outliers,
+            time_window: match (self.t_start, self.t_end) {
+                (None, None) => None,
+                (s, e) => {
+                    let (s, e) = (s.unwrap_or(0.0), e.unwrap_or(f64::INFINITY));
+                    if !(s >= 0.0 && e > s) {
+                        return Err(format!(
+                            "--t-start {s} and --t-end {e} must satisfy 0 <= start < end"
+                        ));
+                    }
+                    Some((s, e))
+                }
+            },
         })
     }
 }

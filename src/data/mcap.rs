@@ -472,7 +472,12 @@ pub(crate) fn read_from(
     let mut messages = 0u64;
     let mut bytes = 0u64;
     let mut damage: Option<McapError> = None;
-    while let Some(event) = reader.next_event() {
+    // With a time window, reading stops once marker messages are past its end (by log_time,
+    // with a second of margin for stamps that differ from it): the rest is never decoded.
+    let window_end = opts.time_window.map(|(_, end)| end + 1.0);
+    let mut first_log_time: Option<u64> = None;
+    let mut stopped_at: Option<f64> = None;
+    'records: while let Some(event) = reader.next_event() {
         let event = match event {
             Ok(e) => e,
             Err(e) => {
@@ -542,6 +547,14 @@ pub(crate) fn read_from(
                         let ChannelState::Markers(dec) = &ch.state else {
                             continue;
                         };
+                        if let Some(end) = window_end {
+                            let first = *first_log_time.get_or_insert(header.log_time);
+                            let since = header.log_time.saturating_sub(first) as f64 * 1e-9;
+                            if since > end {
+                                stopped_at = Some(since);
+                                break 'records;
+                            }
+                        }
                         match decode(
                             dec,
                             &ch.topic,
@@ -595,6 +608,11 @@ pub(crate) fn read_from(
             format!("channels {}", v.join("; "))
         }
     };
+    if let Some(t) = stopped_at {
+        parsed.notes.push(format!(
+            "stopped reading at {t:.3} s: past the time window, the rest of the file is not decoded"
+        ));
+    }
     if let Some(err) = damage {
         if let McapError::UnsupportedCompression(c) = &err {
             return Err(DataError::Unsupported {

@@ -87,6 +87,9 @@ pub struct ReadOptions {
     pub min_likelihood: f64,
     /// Remove outlier frames (set both markers missing) instead of only flagging them.
     pub drop_outliers: bool,
+    /// Keep only frames with start <= t <= end (seconds from the first frame), re-zeroed to
+    /// start at 0; MCAP files are not decoded past the window.
+    pub time_window: Option<(f64, f64)>,
 }
 
 impl Default for ReadOptions {
@@ -103,6 +106,7 @@ impl Default for ReadOptions {
             rod_length: None,
             min_likelihood: 0.6,
             drop_outliers: false,
+            time_window: None,
         }
     }
 }
@@ -198,7 +202,36 @@ pub fn read_recording(paths: &[PathBuf], opts: &ReadOptions) -> Result<Recording
     }
     let parsed = parsed.expect("at least one path");
     let format = format.expect("format set with the first path");
-    assemble(paths, format, detected, parsed, opts)
+    let mut rec = assemble(paths, format, detected, parsed, opts)?;
+    if let Some((start, end)) = opts.time_window {
+        crop(&mut rec, start, end, &paths_label(paths))?;
+    }
+    Ok(rec)
+}
+
+/// Keep the frames inside [start, end] (seconds from the first frame) and re-zero the times.
+fn crop(rec: &mut Recording, start: f64, end: f64, label: &Path) -> Result<(), DataError> {
+    let keep: Vec<usize> = (0..rec.times.len())
+        .filter(|&i| rec.times[i] >= start && rec.times[i] <= end)
+        .collect();
+    let (Some(&first), Some(_)) = (keep.first(), keep.last()) else {
+        return Err(DataError::Options {
+            path: label.to_owned(),
+            message: format!(
+                "no frame inside the time window {start}..{end} s (the recording spans 0..{} s)",
+                rec.times.last().copied().unwrap_or(0.0)
+            ),
+        });
+    };
+    let t0 = rec.times[first];
+    rec.times = keep.iter().map(|&i| rec.times[i] - t0).collect();
+    rec.slider = keep.iter().map(|&i| rec.slider[i]).collect();
+    rec.bob = keep.iter().map(|&i| rec.bob[i]).collect();
+    rec.provenance.notes.push(format!(
+        "time window {start}..{end} s: {} frames kept, times re-zeroed at {t0} s",
+        keep.len()
+    ));
+    Ok(())
 }
 
 /// Pick the slider and bob series, align them, calibrate.

@@ -929,3 +929,48 @@ fn shipped_tracker_and_dlc_examples_read_back_to_the_simulated_markers() {
         }
     }
 }
+
+/// A time window keeps exactly the reference frames inside it (times re-zeroed), and an MCAP
+/// file is not decoded past it.
+#[test]
+fn time_window_keeps_the_frames_inside_and_stops_reading_mcap_after_it() {
+    let reference = reference();
+    for file in ["markers_json_zstd.mcap", "markers_reference.csv"] {
+        let opts = ReadOptions {
+            time_window: Some((0.2, 0.5)),
+            ..ReadOptions::default()
+        };
+        let rec = read(&[data(file)], &opts).unwrap();
+        let inside: Vec<_> = reference
+            .iter()
+            .filter(|r| r.0 >= 0.2 - 1e-9 && r.0 <= 0.5 + 1e-9)
+            .collect();
+        assert_eq!(rec.times.len(), inside.len(), "{file}");
+        for (i, r) in inside.iter().enumerate() {
+            assert!(
+                (rec.times[i] - (r.0 - inside[0].0)).abs() < 1e-9,
+                "{file} frame {i}"
+            );
+            assert_eq!(rec.slider[i].unwrap(), r.1, "{file} frame {i}");
+            assert_eq!(rec.bob[i].unwrap(), r.2, "{file} frame {i}");
+        }
+        if file.ends_with(".mcap") {
+            assert!(
+                rec.provenance
+                    .notes
+                    .iter()
+                    .any(|n| n.contains("stopped reading")),
+                "{:?}",
+                rec.provenance.notes
+            );
+        }
+    }
+    let empty = ReadOptions {
+        time_window: Some((5.0, 6.0)),
+        ..ReadOptions::default()
+    };
+    assert!(matches!(
+        read(&[data("markers_reference.csv")], &empty),
+        Err(DataError::Options { .. })
+    ));
+}
