@@ -82,7 +82,7 @@ pub fn fit_text(rep: &FitReport) -> String {
     let mut s = String::new();
     let _ = writeln!(
         s,
-        "fitted parameters (value +- standard error, 95% interval; mu from its profile):"
+        "fitted parameters (value +- standard error, 95% interval: for mu from its profile, unless --no-profile):"
     );
     for (p, e) in &rep.params {
         let unit = match p {
