@@ -438,6 +438,8 @@ pub fn fit(
         )
     };
     let sol = motion(&problem).map_err(|e| FitError::NoStart(e.to_string()))?;
+    // Whether the parameters change below (the fitted motion is then simulated again).
+    let mut moved = false;
     // A slide shorter than the slider's noise is not seen by the camera: the data then only
     // say the slider held, so refit the stuck pendulum (mu at 0.999 mu*, where it never slips
     // and no paradox arises) and report a lower bound for mu_static.
@@ -465,6 +467,7 @@ pub fn fit(
             p = q;
             problem.set_values(&p);
         }
+        moved = true;
         warnings.push("the slider never slides in the recording: mu_kinetic is not identifiable from it; mu_static is only bounded from below".into());
     }
     // mu_static is freed when the motion shows a stick-to-slide onset. If it ends on its bound
@@ -486,7 +489,6 @@ pub fn fit(
         }
     } else if settings.mu_static == StaticMode::Auto
         && onset
-        && slides
         && !tried_static
         && static_evidence != Some(false)
     {
@@ -502,10 +504,15 @@ pub fn fit(
                 p = q;
                 problem.set_values(&p);
                 mu_static_free = true;
+                moved = true;
             }
         }
     }
-    let sol = motion(&problem).map_err(|e| FitError::NoStart(e.to_string()))?;
+    let sol = if moved {
+        motion(&problem).map_err(|e| FitError::NoStart(e.to_string()))?
+    } else {
+        sol
+    };
 
     // Uncertainty from the exact Jacobian at the optimum.
     let (r, j) = problem
@@ -596,12 +603,9 @@ pub fn fit(
     };
 
     // Goodness of fit.
-    let raw = problem
-        .raw_residuals(&p)
-        .map_err(|e| FitError::NoStart(e.to_string()))?;
+    let raw = problem.unweighted(r.as_slice());
     let (rms_per_marker_m, rms_residual_m) = marker_rms(&raw, p.len());
-    let rw: Vec<f64> = r.iter().copied().collect();
-    let rho = lag1(&problem, &rw);
+    let rho = lag1(&problem, r.as_slice());
     if rho.abs() * (n_res as f64).sqrt() > 8.0 && rho.abs() > 0.3 {
         warnings.push(format!("residuals show structure (lag-1 autocorrelation {rho:.2}): the model may not describe this recording (rod length, rail tilt, time offset, a marker mix-up)"));
     }

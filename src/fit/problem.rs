@@ -240,6 +240,17 @@ impl TrajectoryProblem {
         Ok(out)
     }
 
+    /// Weighted residuals (as the solver sees them) back in metres, with each row's marker:
+    /// saves simulating again when the weighted ones are at hand.
+    pub fn unweighted(&self, weighted: &[f64]) -> Vec<(usize, f64)> {
+        self.rows
+            .iter()
+            .zip(weighted)
+            .zip(&self.row_weights)
+            .map(|((r, v), w)| (r.marker, v * self.sigma[r.marker] / w))
+            .collect()
+    }
+
     /// Unweighted residuals in metres, with each row's marker.
     pub fn raw_residuals(&self, p: &DVector<f64>) -> Result<Vec<(usize, f64)>, SimError> {
         let mut out = Vec::with_capacity(self.rows.len());

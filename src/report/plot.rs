@@ -82,6 +82,23 @@ impl<E: std::error::Error + Send + Sync> From<DrawingAreaErrorKind<E>> for PlotE
     }
 }
 
+/// Draw a chart's series labels the way every figure of the project does: a white, framed box
+/// at `position`, sans-serif at `font_size`.
+pub fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTranslate>(
+    chart: &mut ChartContext<'a, DB, CT>,
+    position: SeriesLabelPosition,
+    font_size: u32,
+) -> Result<(), PlotError> {
+    chart
+        .configure_series_labels()
+        .position(position)
+        .background_style(WHITE.mix(0.85))
+        .border_style(BLACK)
+        .label_font(("sans-serif", font_size))
+        .draw()?;
+    Ok(())
+}
+
 /// Something that draws itself on a plotters drawing area of any backend.
 pub trait Figure {
     /// Size in pixels (width, height).
@@ -241,12 +258,7 @@ impl Figure for LinePlot {
             }
         }
         if labelled {
-            chart
-                .configure_series_labels()
-                .background_style(WHITE.mix(0.85))
-                .border_style(BLACK)
-                .label_font(("sans-serif", 14))
-                .draw()?;
+            draw_legend(&mut chart, SeriesLabelPosition::MiddleRight, 14)?;
         }
         Ok(())
     }
