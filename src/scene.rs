@@ -1,7 +1,7 @@
 //! Scenes: a TOML file with a rig, an initial state, a run and what the run should produce.
 //! Key names are fixed (scripts use them); unknown keys are errors so typos never pass.
 
-use crate::model::{Rig, RigError, State};
+use crate::model::{FrictionLaw, Rig, RigError, State};
 use crate::sim::{Method, Options, Request, RestRule};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -24,6 +24,16 @@ pub struct RigSpec {
     pub mu_kinetic: Option<f64>,
     /// Static friction coefficient (defaults to `mu_kinetic`).
     pub mu_static: Option<f64>,
+    /// Rail tilt in degrees, +x downhill for positive values (default 0).
+    pub rail_tilt_deg: Option<f64>,
+    /// Viscous torque at the pivot, N m s (default 0).
+    pub pivot_damping: Option<f64>,
+    /// `coulomb` (default) or `stribeck`.
+    pub friction_law: Option<FrictionLaw>,
+    /// Stribeck speed v_s in m/s (required with `friction_law = "stribeck"`, refused otherwise).
+    pub stribeck_velocity: Option<f64>,
+    /// Viscous rail friction, N s/m, added to either law (default 0).
+    pub viscous_friction: Option<f64>,
 }
 
 impl RigSpec {
@@ -32,14 +42,35 @@ impl RigSpec {
         let mu_kinetic = self
             .mu_kinetic
             .ok_or(RigError::Missing { key: "mu_kinetic" })?;
-        Rig::new(
+        let mut rig = Rig::new(
             self.slider_mass,
             self.bob_mass,
             self.rod_length,
             self.gravity,
             mu_kinetic,
             self.mu_static,
-        )
+        )?;
+        rig.rail_tilt = self.rail_tilt_deg.unwrap_or(0.0).to_radians();
+        rig.pivot_damping = self.pivot_damping.unwrap_or(0.0);
+        rig.viscous_friction = self.viscous_friction.unwrap_or(0.0);
+        rig.friction_law = self.friction_law.unwrap_or_default();
+        match (rig.friction_law, self.stribeck_velocity) {
+            (FrictionLaw::Stribeck, Some(v)) => rig.stribeck_velocity = v,
+            (FrictionLaw::Stribeck, None) => {
+                return Err(RigError::Missing {
+                    key: "stribeck_velocity",
+                })
+            }
+            (FrictionLaw::Coulomb, Some(_)) => return Err(RigError::StribeckWithoutLaw),
+            (FrictionLaw::Coulomb, None) => {}
+        }
+        if let Some(deg) = self.rail_tilt_deg {
+            if !(deg.is_finite() && deg.abs() < 90.0) {
+                return Err(RigError::Tilt { value: deg });
+            }
+        }
+        rig.validate()?;
+        Ok(rig)
     }
 
     /// The validated rig, with `mu_guess` where mu_kinetic is left out (rig files for fitting:

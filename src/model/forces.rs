@@ -3,22 +3,27 @@
 //! All functions are generic over [`Scalar`] so that the same formulas serve the simulator in
 //! `f64` and the fit in dual numbers.
 
-use super::{sign, Rig, Scalar, State, THETA, THETA_DOT, X_DOT};
+use super::{sign, Rig, Scalar, State, THETA, THETA_DOT, X, X_DOT};
 
-/// The shorthands D, a, b, c, Q of PHYSICS.md at one (theta, theta'), with sin and cos kept
-/// because every acceleration needs them again.
+/// The shorthands D, a, b, c, Q and A of PHYSICS.md at one (theta, theta'), with sin and cos
+/// kept because every acceleration needs them again. With tilt and pivot damping they are the
+/// generalised forms of "Real rigs"; on the ideal rig they reduce to the paper's.
 #[derive(Debug, Clone, Copy)]
 pub struct Shorthands<T> {
     /// D = m1 + m2 cos^2(theta) > 0.
     pub d: T,
     /// a = m2 sin(theta) cos(theta).
     pub a: T,
-    /// b = -(m1 g + m2 g sin^2(theta) + m2 l w^2 sin(theta)): the normal force while stuck.
+    /// b = m2 cos(theta) A - m2 l w^2 sin(theta) - (m1 + m2) g_y: the normal force while stuck.
     pub b: T,
-    /// c = m2 cos(theta) (g sin(theta) + l w^2): minus the friction needed to stay stuck.
+    /// c = m2 sin(theta) A + m2 l w^2 cos(theta) + (m1 + m2) g_x: minus the friction needed to
+    /// stay stuck.
     pub c: T,
-    /// Q = a c + b D: the numerator of the normal force while sliding.
+    /// Q = a c + b D: the normal force times the denominator while sliding (without the
+    /// viscous rail term, which depends on x').
     pub q: T,
+    /// A = g_y cos(theta) - g_x sin(theta) - c_p w / (m2 l): l theta'' while stuck.
+    pub pend: T,
     /// sin(theta).
     pub sin: T,
     /// cos(theta).
@@ -30,19 +35,32 @@ impl<T: Scalar> Shorthands<T> {
     #[inline]
     pub fn new(rig: &Rig<T>, theta: T, w: T) -> Self {
         let (sin, cos) = theta.sin_cos();
-        let (m1, m2, l, g) = (rig.slider_mass, rig.bob_mass, rig.rod_length, rig.gravity);
+        let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);
+        let (gx, gy) = rig.gravity_components();
         let lw2 = l * w * w;
         let d = m1 + m2 * cos * cos;
         let a = m2 * sin * cos;
-        let b = -(m1 * g + m2 * sin * (g * sin + lw2));
-        let c = m2 * cos * (g * sin + lw2);
-        let q = rig.normal_numerator_sin(sin, w);
+        // The ideal rig's forms, which keep full precision for a light slider (b never
+        // subtracts (m1 + m2) g from m2 g cos^2), plus the drive of tilt and damping.
+        let mut b = -(m1 * gy + m2 * sin * (gy * sin + lw2));
+        let mut c = m2 * cos * (gy * sin + lw2);
+        let extra = rig.extra_drive(sin, w);
+        let pend = match extra {
+            Some(e) => {
+                b += m2 * cos * e;
+                c += m2 * sin * e + (m1 + m2) * gx;
+                gy * cos + e
+            }
+            None => gy * cos,
+        };
+        let q = rig.normal_numerator_sc(sin, cos, w);
         Shorthands {
             d,
             a,
             b,
             c,
             q,
+            pend,
             sin,
             cos,
         }
@@ -79,6 +97,8 @@ pub struct SlideDynamics<T> {
     pub normal: T,
     /// Denominator D + mu s sigma a of the branch.
     pub delta: T,
+    /// The friction coefficient mu(|x'|) the slide meets at this speed.
+    pub mu: T,
 }
 
 /// Which normal-force signs sigma give a self-consistent sliding motion.
@@ -98,53 +118,114 @@ impl SlideBranches {
 }
 
 impl<T: Scalar> Rig<T> {
-    /// Q = a c + b D, the numerator of the normal force while sliding. It simplifies to
-    /// -m1 ((m1 + m2) g + m2 l w^2 sin(theta)); the closed form avoids cancellation near Q = 0,
-    /// where the normal force changes sign, and needs only sin(theta) (the guard on N's sign
-    /// evaluates it every step).
+    /// The numerator of the normal force while sliding, N (D + mu s sigma a) = Q - a c_v x',
+    /// at state `y`. Q = a c + b D simplifies to
+    /// -m1 ((m1 + m2) g_y + m2 l w^2 sin(theta)) - (m1 + m2) c_p w cos(theta) / l; the closed
+    /// form avoids cancellation near Q = 0, where the normal force changes sign (the guard on
+    /// N's sign evaluates it every step).
     #[inline]
-    pub fn normal_numerator(&self, theta: T, w: T) -> T {
-        self.normal_numerator_sin(theta.sin(), w)
-    }
-
-    #[inline]
-    fn normal_numerator_sin(&self, sin: T, w: T) -> T {
-        let (m1, m2) = (self.slider_mass, self.bob_mass);
-        -m1 * ((m1 + m2) * self.gravity + m2 * self.rod_length * w * w * sin)
-    }
-
-    /// Angular acceleration of the pendulum model: theta'' = (g / l) cos(theta).
-    #[inline]
-    pub fn stick_theta_ddot(&self, sh: &Shorthands<T>) -> T {
-        self.gravity * sh.cos / self.rod_length
-    }
-
-    /// The sliding-rod model on the branch sigma = sign(N), sliding in direction `s`
-    /// (both +1 or -1): x'' = (c - mu s sigma b) / (D + mu s sigma a), N = Q / (same).
-    #[inline]
-    pub fn slide(&self, sh: &Shorthands<T>, s: f64, sigma: f64) -> SlideDynamics<T> {
-        let ms = self.mu_kinetic * (s * sigma);
-        let delta = sh.d + ms * sh.a;
-        let l_delta = self.rod_length * delta;
-        // One division for both accelerations: x'' = num / delta, theta'' = (...) / l.
-        let num = sh.c - ms * sh.b;
-        let inv = l_delta.recip();
-        let x_ddot = num * self.rod_length * inv;
-        let theta_ddot = (self.gravity * sh.cos * delta + sh.sin * num) * inv;
-        SlideDynamics {
-            x_ddot,
-            theta_ddot,
-            normal: sh.q * self.rod_length * inv,
-            delta,
+    pub fn normal_numerator(&self, y: &[T]) -> T {
+        let (theta, w) = (y[THETA], y[THETA_DOT]);
+        if self.pivot_damping.is_zero() && self.viscous_friction.is_zero() {
+            // Only sin(theta) is needed: half the trigonometry.
+            return self.normal_numerator_sc(theta.sin(), T::zero(), w);
+        }
+        let (sin, cos) = theta.sin_cos();
+        let q = self.normal_numerator_sc(sin, cos, w);
+        if self.viscous_friction.is_zero() {
+            q
+        } else {
+            q - self.bob_mass * sin * cos * self.viscous_friction * y[X_DOT]
         }
     }
 
-    /// The self-consistent branches of the sliding equation in direction `s`: a branch is
-    /// consistent when the N it produces has the sign sigma it assumed. Outside the paradox
-    /// band exactly sigma = sign(Q) is; inside it two or none are.
-    pub fn slide_branches(&self, sh: &Shorthands<T>, s: f64) -> SlideBranches {
+    /// Q from sin and cos of theta (cos is unused on a rig without pivot damping).
+    #[inline]
+    fn normal_numerator_sc(&self, sin: T, cos: T, w: T) -> T {
+        let (m1, m2) = (self.slider_mass, self.bob_mass);
+        let (_, gy) = self.gravity_components();
+        let q = -m1 * ((m1 + m2) * gy + m2 * self.rod_length * w * w * sin);
+        if self.pivot_damping.is_zero() {
+            q
+        } else {
+            q - (m1 + m2) * self.pivot_damping * w * cos / self.rod_length
+        }
+    }
+
+    /// The part of A = g_y cos(theta) - g_x sin(theta) - c_p w / (m2 l) that a level, undamped
+    /// rail lacks: -g_x sin(theta) - c_p w / (m2 l); `None` on such a rail.
+    #[inline]
+    fn extra_drive(&self, sin: T, w: T) -> Option<T> {
+        let tilt = !self.rail_tilt.is_zero();
+        let damped = !self.pivot_damping.is_zero();
+        if !(tilt || damped) {
+            return None;
+        }
+        let mut e = T::zero();
+        if tilt {
+            e -= self.gravity_components().0 * sin;
+        }
+        if damped {
+            e -= self.pivot_damping * w / (self.bob_mass * self.rod_length);
+        }
+        Some(e)
+    }
+
+    /// Angular acceleration of the pendulum model at (theta, w), theta'' = A / l, without the
+    /// other shorthands (the stick phase's right-hand side needs nothing else).
+    #[inline]
+    pub fn stick_angular_acceleration(&self, theta: T, w: T) -> T {
+        if self.rail_tilt.is_zero() && self.pivot_damping.is_zero() {
+            return self.gravity * theta.cos() / self.rod_length;
+        }
+        let (sin, cos) = theta.sin_cos();
+        let (_, gy) = self.gravity_components();
+        let extra = self.extra_drive(sin, w).unwrap_or_else(T::zero);
+        (gy * cos + extra) / self.rod_length
+    }
+
+    /// Angular acceleration of the pendulum model: theta'' = A / l.
+    #[inline]
+    pub fn stick_theta_ddot(&self, sh: &Shorthands<T>) -> T {
+        sh.pend / self.rod_length
+    }
+
+    /// The sliding-rod model on the branch sigma = sign(N), sliding in direction `s`
+    /// (both +1 or -1) at velocity `x_dot`: with mu = mu(|x'|),
+    /// x'' = (c - mu s sigma b - c_v x') / (D + mu s sigma a), N = b + a x''
+    /// = (Q - a c_v x') / (same), l theta'' = A + sin(theta) x''.
+    #[inline]
+    pub fn slide(&self, sh: &Shorthands<T>, s: f64, sigma: f64, x_dot: T) -> SlideDynamics<T> {
+        let mu = self.friction_mu(x_dot * s);
+        let ms = mu * (s * sigma);
+        let delta = sh.d + ms * sh.a;
+        let l_delta = self.rod_length * delta;
+        // One division for both accelerations: x'' = num / delta, theta'' = (...) / l.
+        let mut num = sh.c - ms * sh.b;
+        let mut q = sh.q;
+        if !self.viscous_friction.is_zero() {
+            let drag = self.viscous_friction * x_dot;
+            num -= drag;
+            q -= sh.a * drag;
+        }
+        let inv = l_delta.recip();
+        let x_ddot = num * self.rod_length * inv;
+        let theta_ddot = (sh.pend * delta + sh.sin * num) * inv;
+        SlideDynamics {
+            x_ddot,
+            theta_ddot,
+            normal: q * self.rod_length * inv,
+            delta,
+            mu,
+        }
+    }
+
+    /// The self-consistent branches of the sliding equation in direction `s` at velocity
+    /// `x_dot`: a branch is consistent when the N it produces has the sign sigma it assumed.
+    /// Outside the paradox band exactly sigma = sign(Q) is; inside it two or none are.
+    pub fn slide_branches(&self, sh: &Shorthands<T>, s: f64, x_dot: T) -> SlideBranches {
         let consistent = |sigma: f64| {
-            let dynamics = self.slide(sh, s, sigma);
+            let dynamics = self.slide(sh, s, sigma, x_dot);
             let n = dynamics.normal.re();
             // Q = 0 gives N = 0, consistent with either sign: keep only the branch with a
             // positive denominator so the count stays one there.
@@ -162,9 +243,9 @@ impl<T: Scalar> Rig<T> {
 
     /// The branch sigma used while sliding in direction `s`: the consistent one with a
     /// positive denominator (the only one below mu*), or `None` when no branch is consistent.
-    pub fn slide_sigma(&self, sh: &Shorthands<T>, s: f64) -> Option<f64> {
-        let branches = self.slide_branches(sh, s);
-        let positive = |sigma: f64| self.slide(sh, s, sigma).delta.re() > 0.0;
+    pub fn slide_sigma(&self, sh: &Shorthands<T>, s: f64, x_dot: T) -> Option<f64> {
+        let branches = self.slide_branches(sh, s, x_dot);
+        let positive = |sigma: f64| self.slide(sh, s, sigma, x_dot).delta.re() > 0.0;
         match (branches.plus, branches.minus) {
             (true, true) => Some(if positive(1.0) { 1.0 } else { -1.0 }),
             (true, false) => Some(1.0),
@@ -173,22 +254,40 @@ impl<T: Scalar> Rig<T> {
         }
     }
 
-    /// Power of friction F x' while sliding on branch sigma: F = -mu_k s |N|.
+    /// Power of friction F x' while sliding on branch sigma: F = -mu s |N| - c_v x'.
     #[inline]
     pub fn friction_power(&self, dynamics: &SlideDynamics<T>, x_dot: T, s: f64, sigma: f64) -> T {
-        -(self.mu_kinetic * dynamics.normal * x_dot) * (s * sigma)
+        let coulomb = -(dynamics.mu * dynamics.normal * x_dot) * (s * sigma);
+        if self.viscous_friction.is_zero() {
+            coulomb
+        } else {
+            coulomb - self.viscous_friction * x_dot * x_dot
+        }
+    }
+
+    /// Power of the pivot's damping torque, -c_p w^2 (zero on an undamped rig).
+    #[inline]
+    pub fn damping_power(&self, w: T) -> T {
+        -(self.pivot_damping * w * w)
     }
 }
 
-/// Mechanical energy E = 1/2 (m1 + m2) x'^2 - m2 l x' w sin(theta) + 1/2 m2 l^2 w^2
-/// - m2 g l sin(theta) (zero at rest with the rod horizontal).
+/// Mechanical energy with the tilted potential:
+/// E = 1/2 (m1 + m2) x'^2 - m2 l x' w sin(theta) + 1/2 m2 l^2 w^2
+/// - (m1 + m2) g_x x - m2 g_x l cos(theta) - m2 g_y l sin(theta)
+/// (zero at rest at x = 0 with the rod horizontal). dE/dt = F x' - c_p w^2.
 pub fn energy<T: Scalar>(rig: &Rig<T>, y: &State<T>) -> T {
-    let (m1, m2, l, g) = (rig.slider_mass, rig.bob_mass, rig.rod_length, rig.gravity);
-    let (xd, w, sin) = (y[X_DOT], y[THETA_DOT], y[THETA].sin());
-    (m1 + m2) * xd * xd * 0.5 - m2 * l * xd * w * sin + m2 * l * l * w * w * 0.5 - m2 * g * l * sin
+    let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);
+    let (gx, gy) = rig.gravity_components();
+    let (xd, w) = (y[X_DOT], y[THETA_DOT]);
+    let (sin, cos) = y[THETA].sin_cos();
+    (m1 + m2) * xd * xd * 0.5 - m2 * l * xd * w * sin + m2 * l * l * w * w * 0.5
+        - m2 * gy * l * sin
+        - gx * ((m1 + m2) * y[X] + m2 * l * cos)
 }
 
-/// Horizontal momentum (m1 + m2) x' - m2 l w sin(theta): conserved when mu = 0.
+/// Horizontal momentum (m1 + m2) x' - m2 l w sin(theta): conserved when mu = 0 on a level rail
+/// without rail friction.
 pub fn momentum<T: Scalar>(rig: &Rig<T>, y: &State<T>) -> T {
     (rig.slider_mass + rig.bob_mass) * y[X_DOT]
         - rig.bob_mass * rig.rod_length * y[THETA_DOT] * y[THETA].sin()

@@ -2,9 +2,11 @@
 //! the sliding equation has two solutions or none (PHYSICS.md, "The Painleve paradox"), and the
 //! regions of both models in the (theta, theta') plane.
 //!
-//! At fixed theta the shorthands b, c and Q are affine in w^2, so every boundary in the plane is
-//! a closed form w^2 = u(theta): the stick boundary |c| = mu_s |b| (two branches), the curve
-//! Q = 0, and the band edges (lines of constant theta where mu_k |a| = D).
+//! At fixed theta the shorthands b, c and Q are quadratic in w (affine in w^2 without pivot
+//! damping), so every boundary in the plane is a closed form: the roots of the stick boundary
+//! |c| = mu_s |b| (two branches), of the curve Q = 0, and the band edges (lines of constant
+//! theta where mu |a| = D). With tilt, the slide directions and the two sides of the plane
+//! differ.
 
 use super::{sign, Rig, Shorthands};
 use serde::Serialize;
@@ -46,9 +48,10 @@ pub fn max_mass_ratio_for_paradox(mu: f64) -> f64 {
 const EDGE_TOL: f64 = 1e-12;
 
 /// The paradox band of `rig` within 0..180 degrees, as `[lo, hi]` pairs in degrees: the band
-/// of the first quadrant and its mirror in the second. Empty when mu_k <= mu*.
+/// of the first quadrant and its mirror in the second, for the largest mu the friction law
+/// reaches (mu_s under Stribeck). Empty when that mu <= mu*.
 pub fn paradox_band_deg(rig: &Rig<f64>) -> Vec<[f64; 2]> {
-    paradox_band_intervals(rig.mass_ratio(), rig.mu_kinetic, 0.0, PI)
+    paradox_band_intervals(rig.mass_ratio(), rig.mu_slide_max(), 0.0, PI)
         .into_iter()
         .map(|(lo, hi)| [lo.to_degrees(), hi.to_degrees()])
         .collect()
@@ -94,62 +97,94 @@ pub fn band_edges(mass_ratio: f64, mu: f64, theta_min: f64, theta_max: f64) -> V
     edges
 }
 
-/// The shorthands that depend on w, b, c and Q, as affine functions v0 + v1 W of W = w^2 at a
-/// fixed theta. Built from two evaluations of [`Shorthands`] (w = 0 and w = 1), so the
-/// formulas stay in one place; each is exactly affine in W.
+/// The shorthands that depend on w, b, c and Q, as quadratics v0 + v1 w + v2 w^2 at a fixed
+/// theta (v1 is zero without pivot damping: then they are affine in w^2). Built from three
+/// evaluations of [`Shorthands`] (w = 0, 1, -1), so the formulas stay in one place; each is
+/// exactly quadratic in w.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct AffineInW2 {
-    /// (b0, b1): b = b0 + b1 W, the normal force while stuck.
-    pub b: (f64, f64),
-    /// (c0, c1): c = c0 + c1 W, minus the friction needed to stay stuck.
-    pub c: (f64, f64),
-    /// (Q0, Q1): Q = Q0 + Q1 W, the numerator of N while sliding.
-    pub q: (f64, f64),
+pub struct QuadraticInW {
+    /// (b0, b1, b2): the normal force while stuck.
+    pub b: [f64; 3],
+    /// (c0, c1, c2): minus the friction needed to stay stuck.
+    pub c: [f64; 3],
+    /// (Q0, Q1, Q2): the numerator of N while sliding (at x' = 0).
+    pub q: [f64; 3],
 }
 
-impl AffineInW2 {
-    /// The affine forms at angle `theta`.
+impl QuadraticInW {
+    /// The quadratic forms at angle `theta`.
     pub fn new(rig: &Rig<f64>, theta: f64) -> Self {
         let s0 = Shorthands::new(rig, theta, 0.0);
-        let s1 = Shorthands::new(rig, theta, 1.0);
-        AffineInW2 {
-            b: (s0.b, s1.b - s0.b),
-            c: (s0.c, s1.c - s0.c),
-            q: (s0.q, s1.q - s0.q),
+        let sp = Shorthands::new(rig, theta, 1.0);
+        let sm = Shorthands::new(rig, theta, -1.0);
+        let fit = |f0: f64, fp: f64, fm: f64| [f0, 0.5 * (fp - fm), 0.5 * (fp + fm) - f0];
+        QuadraticInW {
+            b: fit(s0.b, sp.b, sm.b),
+            c: fit(s0.c, sp.c, sm.c),
+            q: fit(s0.q, sp.q, sm.q),
         }
     }
 }
 
-/// The root W >= 0 of v0 + v1 W, if it is finite.
-fn nonneg_root(v0: f64, v1: f64) -> Option<f64> {
-    let w2 = -v0 / v1;
-    (w2.is_finite() && w2 >= 0.0).then_some(w2)
+/// Evaluate v0 + v1 w + v2 w^2.
+fn eval(v: [f64; 3], w: f64) -> f64 {
+    v[0] + w * (v[1] + w * v[2])
 }
 
-/// One branch of the stick boundary |c| = mu_s |b| at angle `theta`: the w^2 where
-/// c = `branch` * mu_s * b (`branch` = +1 or -1), i.e. w^2 = u(theta) =
-/// (branch mu_s b0 - c0) / (c1 - branch mu_s b1); `None` where that w^2 is negative or
-/// infinite (the branch does not cross this theta).
+/// The real roots of v0 + v1 w + v2 w^2, ascending (none, one or two; a degenerate quadratic
+/// is solved as a line). The stable form of the quadratic formula: no cancellation.
+fn real_roots(v: [f64; 3]) -> Vec<f64> {
+    let [v0, v1, v2] = v;
+    let mut roots = if v2 == 0.0 {
+        if v1 == 0.0 {
+            Vec::new()
+        } else {
+            vec![-v0 / v1]
+        }
+    } else {
+        let disc = v1 * v1 - 4.0 * v2 * v0;
+        if disc < 0.0 {
+            Vec::new()
+        } else {
+            let q = -0.5 * (v1 + sign(v1) * disc.sqrt());
+            if q == 0.0 {
+                vec![0.0]
+            } else {
+                vec![q / v2, v0 / q]
+            }
+        }
+    };
+    roots.retain(|r| r.is_finite());
+    roots.sort_by(f64::total_cmp);
+    roots
+}
+
+/// The stick boundary branch c = `branch` * mu_s * b (`branch` = +1 or -1) at angle `theta`:
+/// the values of w on it, ascending (the two roots of a quadratic in w; +-sqrt(u(theta)) on an
+/// undamped rig). Empty where the branch does not cross this theta.
 ///
 /// ```
-/// use appell::model::{regions::stick_boundary_w2, Rig, Shorthands};
+/// use appell::model::{regions::stick_boundary_w, Rig, Shorthands};
 /// let rig = Rig::paper(0.35);
 /// let theta = 50f64.to_radians();
-/// let w2 = stick_boundary_w2(&rig, theta, -1.0).unwrap();
-/// let sh = Shorthands::new(&rig, theta, w2.sqrt());
+/// let w = stick_boundary_w(&rig, theta, -1.0);
+/// assert_eq!(w.len(), 2);
+/// let sh = Shorthands::new(&rig, theta, w[1]);
 /// assert!((sh.c.abs() - 0.35 * sh.b.abs()).abs() < 1e-12);
 /// ```
-pub fn stick_boundary_w2(rig: &Rig<f64>, theta: f64, branch: f64) -> Option<f64> {
-    let f = AffineInW2::new(rig, theta);
+pub fn stick_boundary_w(rig: &Rig<f64>, theta: f64, branch: f64) -> Vec<f64> {
+    let f = QuadraticInW::new(rig, theta);
     let mu = branch * rig.mu_static;
-    nonneg_root(f.c.0 - mu * f.b.0, f.c.1 - mu * f.b.1)
+    real_roots(std::array::from_fn(|i| f.c[i] - mu * f.b[i]))
 }
 
-/// The curve Q = 0 at angle `theta`: w^2 = -(m1 + m2) g / (m2 l sin(theta)), where the rail
-/// reaction of a slide changes sign; `None` with the bob below the rail (sin(theta) >= 0).
-pub fn q_zero_w2(rig: &Rig<f64>, theta: f64) -> Option<f64> {
-    let f = AffineInW2::new(rig, theta);
-    nonneg_root(f.q.0, f.q.1).filter(|&w2| w2 > 0.0)
+/// The curve Q = 0 at angle `theta`: the w where the rail reaction of a slide changes sign
+/// (w^2 = -(m1 + m2) g_y / (m2 l sin(theta)) without damping); none with the bob below the
+/// rail on an undamped rig.
+pub fn q_zero_w(rig: &Rig<f64>, theta: f64) -> Vec<f64> {
+    let mut roots = real_roots(QuadraticInW::new(rig, theta).q);
+    roots.retain(|&w| w != 0.0);
+    roots
 }
 
 /// Whether the pendulum (stick) model holds at (theta, w): |c| <= mu_s |b|.
@@ -157,17 +192,19 @@ pub fn in_stick_region(rig: &Rig<f64>, theta: f64, w: f64) -> bool {
     Shorthands::new(rig, theta, w).stick_margin(rig.mu_static) >= 0.0
 }
 
-/// Whether (theta, w) lies strictly inside the paradox band, mu_k |a| > D.
+/// Whether (theta, w) lies strictly inside the paradox band, mu |a| > D, with the largest mu
+/// the friction law reaches.
 pub fn in_paradox_band(rig: &Rig<f64>, theta: f64) -> bool {
     let sh = Shorthands::new(rig, theta, 0.0);
-    sh.band_margin(rig.mu_kinetic) < -EDGE_TOL * sh.d
+    sh.band_margin(rig.mu_slide_max()) < -EDGE_TOL * sh.d
 }
 
 /// Number of solutions (0, 1 or 2) of the sliding equation at (theta, w) sliding in
-/// direction `s` (+1 or -1), by the sign rule of PHYSICS.md: one outside the paradox band;
-/// inside it two when sign(Q) = sign(s a) and none when the signs are opposite. On the curves
-/// themselves (band edge, Q = 0) the count is the limit from the side where the margin is
-/// positive (band edge: one) or where Q > 0 (Q = 0, with [`super::sign`]'s zero-is-plus).
+/// direction `s` (+1 or -1) as x' -> 0 (friction mu(0)), by the sign rule of PHYSICS.md: one
+/// outside the paradox band; inside it two when sign(Q) = sign(s a) and none when the signs
+/// are opposite. On the curves themselves (band edge, Q = 0) the count is the limit from the
+/// side where the margin is positive (band edge: one) or where Q > 0 (Q = 0, with
+/// [`super::sign`]'s zero-is-plus).
 ///
 /// ```
 /// use appell::model::{regions::slide_solution_count, Rig};
@@ -182,7 +219,7 @@ pub fn in_paradox_band(rig: &Rig<f64>, theta: f64) -> bool {
 /// ```
 pub fn slide_solution_count(rig: &Rig<f64>, theta: f64, w: f64, s: f64) -> usize {
     let sh = Shorthands::new(rig, theta, w);
-    if sh.band_margin(rig.mu_kinetic) >= -EDGE_TOL * sh.d {
+    if sh.band_margin(rig.friction_mu(0.0)) >= -EDGE_TOL * sh.d {
         1
     } else if sign(sh.q) == sign(s * sh.a) {
         2
@@ -191,21 +228,19 @@ pub fn slide_solution_count(rig: &Rig<f64>, theta: f64, w: f64, s: f64) -> usize
     }
 }
 
-/// Split [0, w_max^2] at the given breakpoints and return the W pieces with the value of
+/// Split [-w_max, w_max] at the given breakpoints and return the pieces with the value of
 /// `classify` at each piece's midpoint, merging neighbours of equal value.
-fn pieces_in_w2<V: PartialEq + Copy>(
+fn pieces_in_w<V: PartialEq + Copy>(
     w_max: f64,
-    breaks: impl IntoIterator<Item = Option<f64>>,
+    breaks: impl IntoIterator<Item = f64>,
     classify: impl Fn(f64) -> V,
 ) -> Vec<(f64, f64, V)> {
-    let top = w_max * w_max;
     let mut cuts: Vec<f64> = breaks
         .into_iter()
-        .flatten()
-        .filter(|&w2| w2 > 0.0 && w2 < top)
+        .filter(|&w| w > -w_max && w < w_max)
         .collect();
-    cuts.push(0.0);
-    cuts.push(top);
+    cuts.push(-w_max);
+    cuts.push(w_max);
     cuts.sort_by(f64::total_cmp);
     cuts.dedup();
     let mut out: Vec<(f64, f64, V)> = Vec::new();
@@ -219,39 +254,20 @@ fn pieces_in_w2<V: PartialEq + Copy>(
     out
 }
 
-/// Map W = w^2 pieces to w pieces over [-w_max, w_max], ascending and merged across w = 0.
-fn pieces_in_w<V: PartialEq + Copy>(pieces: &[(f64, f64, V)]) -> Vec<(f64, f64, V)> {
-    let mut out: Vec<(f64, f64, V)> = Vec::new();
-    let neg = pieces
-        .iter()
-        .rev()
-        .map(|&(lo, hi, v)| (-hi.sqrt(), -lo.sqrt(), v));
-    let pos = pieces.iter().map(|&(lo, hi, v)| (lo.sqrt(), hi.sqrt(), v));
-    for (lo, hi, v) in neg.chain(pos) {
-        match out.last_mut() {
-            Some(last) if last.2 == v => last.1 = hi,
-            _ => out.push((lo, hi, v)),
-        }
-    }
-    out
-}
-
 /// The intervals of w in [-w_max, w_max] where the pendulum model holds at angle `theta`
-/// (|c| <= mu_s |b|), exact: the margin is piecewise linear in w^2 with kinks where b or c
+/// (|c| <= mu_s |b|), exact: the margin is piecewise quadratic in w with kinks where b or c
 /// vanish and zeros on the two boundary branches.
 pub fn stick_intervals(rig: &Rig<f64>, theta: f64, w_max: f64) -> Vec<(f64, f64)> {
-    let f = AffineInW2::new(rig, theta);
-    let breaks = [
-        stick_boundary_w2(rig, theta, 1.0),
-        stick_boundary_w2(rig, theta, -1.0),
-        nonneg_root(f.b.0, f.b.1),
-        nonneg_root(f.c.0, f.c.1),
-    ];
+    let f = QuadraticInW::new(rig, theta);
+    let mut breaks = stick_boundary_w(rig, theta, 1.0);
+    breaks.extend(stick_boundary_w(rig, theta, -1.0));
+    breaks.extend(real_roots(f.b));
+    breaks.extend(real_roots(f.c));
     let mu = rig.mu_static;
-    let pieces = pieces_in_w2(w_max, breaks, |w2| {
-        mu * (f.b.0 + f.b.1 * w2).abs() >= (f.c.0 + f.c.1 * w2).abs()
+    let pieces = pieces_in_w(w_max, breaks, |w| {
+        mu * eval(f.b, w).abs() >= eval(f.c, w).abs()
     });
-    pieces_in_w(&pieces)
+    pieces
         .into_iter()
         .filter(|p| p.2)
         .map(|(lo, hi, _)| (lo, hi))
@@ -267,10 +283,9 @@ pub fn slide_count_intervals(
     s: f64,
     w_max: f64,
 ) -> Vec<(f64, f64, usize)> {
-    let pieces = pieces_in_w2(w_max, [q_zero_w2(rig, theta)], |w2| {
-        slide_solution_count(rig, theta, w2.sqrt(), s)
-    });
-    pieces_in_w(&pieces)
+    pieces_in_w(w_max, q_zero_w(rig, theta), |w| {
+        slide_solution_count(rig, theta, w, s)
+    })
 }
 
 /// A window of the (theta, theta') plane for region maps: theta range (rad), |theta'| up to
@@ -322,17 +337,10 @@ pub struct Curve {
     pub points: Vec<[f64; 2]>,
 }
 
-/// Trace w = `side` sqrt(w2(theta)) over the window, split into pieces where w2 exists and
+/// Trace w = `w_of(theta)` over the window, split into pieces where it exists and
 /// |w| <= w_max; each piece's ends are refined by bisection onto the edge where it stops.
-fn trace(
-    window: &PlaneWindow,
-    label: &str,
-    side: f64,
-    w2: impl Fn(f64) -> Option<f64>,
-) -> Vec<Curve> {
-    let top = window.w_max * window.w_max;
-    let valid = |t: f64| w2(t).filter(|&v| v <= top);
-    let point = |t: f64, v: f64| [t, side * v.sqrt()];
+fn trace(window: &PlaneWindow, label: &str, w_of: impl Fn(f64) -> Option<f64>) -> Vec<Curve> {
+    let valid = |t: f64| w_of(t).filter(|&v| v.abs() <= window.w_max);
     // The last valid theta between a valid `good` and an invalid `bad`.
     let edge = |mut good: f64, mut bad: f64| {
         for _ in 0..60 {
@@ -353,11 +361,11 @@ fn trace(
         match (prev, v) {
             (Some((tp, false)), Some(_)) => {
                 let te = edge(t, tp);
-                current.push(point(te, valid(te).unwrap_or(0.0)));
+                current.push([te, valid(te).unwrap_or(0.0)]);
             }
             (Some((tp, true)), None) => {
                 let te = edge(tp, t);
-                current.push(point(te, valid(te).unwrap_or(0.0)));
+                current.push([te, valid(te).unwrap_or(0.0)]);
                 curves.push(Curve {
                     label: label.to_owned(),
                     points: std::mem::take(&mut current),
@@ -366,7 +374,7 @@ fn trace(
             _ => {}
         }
         if let Some(v) = v {
-            current.push(point(t, v));
+            current.push([t, v]);
         }
         prev = Some((t, v.is_some()));
     }
@@ -380,28 +388,39 @@ fn trace(
     curves
 }
 
+/// The larger (`upper`) or smaller root of a quadratic's roots, where it has two (a single
+/// root of a degenerate one counts as either).
+fn pick(roots: &[f64], upper: bool) -> Option<f64> {
+    if upper {
+        roots.last().copied()
+    } else {
+        roots.first().copied()
+    }
+}
+
 /// The boundary |c| = mu_s |b| of the pendulum model's region within the window: both
-/// branches c = +mu_s b and c = -mu_s b, each for w > 0 and w < 0, as continuous pieces.
+/// branches c = +mu_s b and c = -mu_s b, each with its upper root (w > 0 on an undamped rig)
+/// and its lower root (w < 0), as continuous pieces.
 pub fn stick_boundary(rig: &Rig<f64>, window: &PlaneWindow) -> Vec<Curve> {
     let mut out = Vec::new();
     for (branch, name) in [(1.0, "+"), (-1.0, "-")] {
-        for (side, wname) in [(1.0, "w > 0"), (-1.0, "w < 0")] {
+        for (upper, wname) in [(true, "w > 0"), (false, "w < 0")] {
             let label = format!("c = {name}mu_s b, {wname}");
-            out.extend(trace(window, &label, side, |t| {
-                stick_boundary_w2(rig, t, branch)
+            out.extend(trace(window, &label, |t| {
+                pick(&stick_boundary_w(rig, t, branch), upper)
             }));
         }
     }
     out
 }
 
-/// The curve Q = 0 (m2 l w^2 sin(theta) = -(m1 + m2) g) within the window, for w > 0 and
-/// w < 0: where the rail reaction of a slide changes sign.
+/// The curve Q = 0 (m2 l w^2 sin(theta) = -(m1 + m2) g on a level undamped rig) within the
+/// window, upper and lower root: where the rail reaction of a slide changes sign.
 pub fn q_zero_curve(rig: &Rig<f64>, window: &PlaneWindow) -> Vec<Curve> {
     let mut out = Vec::new();
-    for (side, wname) in [(1.0, "w > 0"), (-1.0, "w < 0")] {
-        out.extend(trace(window, &format!("Q = 0, {wname}"), side, |t| {
-            q_zero_w2(rig, t)
+    for (upper, wname) in [(true, "w > 0"), (false, "w < 0")] {
+        out.extend(trace(window, &format!("Q = 0, {wname}"), |t| {
+            pick(&q_zero_w(rig, t), upper)
         }));
     }
     out
@@ -437,7 +456,7 @@ impl RegionSummary {
             mu_critical: mu_critical(r),
             theta_critical_deg: theta_critical(r).to_degrees(),
             paradox_band_deg: paradox_band_deg(rig),
-            max_mass_ratio_for_paradox: max_mass_ratio_for_paradox(rig.mu_kinetic),
+            max_mass_ratio_for_paradox: max_mass_ratio_for_paradox(rig.mu_slide_max()),
         }
     }
 
@@ -473,7 +492,7 @@ impl RegionMap {
             q_zero: q_zero_curve(rig, window),
             band_edges: band_edges(
                 rig.mass_ratio(),
-                rig.mu_kinetic,
+                rig.mu_slide_max(),
                 window.theta_min,
                 window.theta_max,
             ),
@@ -487,6 +506,11 @@ impl RegionMap {
 /// slip. A dense scan of the level and a golden-section refinement of its largest ratio, with
 /// a relative margin of 1e-6: a level that comes closer than that is not proven.
 pub fn stick_holds_forever(rig: &Rig<f64>, theta: f64, w: f64) -> bool {
+    // The energy level below is the conservative, level pendulum's: nothing is proven for a
+    // tilted or damped rig.
+    if !rig.is_ideal() {
+        return false;
+    }
     let (g, l) = (rig.gravity, rig.rod_length);
     let energy = w * w - 2.0 * g / l * theta.sin();
     let ratio = |th: f64| {

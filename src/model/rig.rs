@@ -19,6 +19,28 @@ pub struct Rig<T> {
     pub mu_kinetic: T,
     /// Static friction coefficient mu_s >= mu_k (the threshold for leaving stick).
     pub mu_static: T,
+    /// Rail tilt alpha (rad); +x runs downhill for alpha > 0 (PHYSICS.md, "Real rigs").
+    pub rail_tilt: T,
+    /// Viscous torque coefficient c_p at the pivot (N m s): a torque -c_p theta' on the rod.
+    pub pivot_damping: T,
+    /// Viscous rail friction c_v (N s/m): a force -c_v x' on the slider while it slides, with
+    /// either friction law.
+    pub viscous_friction: T,
+    /// How the sliding friction coefficient depends on speed.
+    pub friction_law: FrictionLaw,
+    /// Stribeck speed v_s (m/s) of [`FrictionLaw::Stribeck`]; unused by Coulomb's law.
+    pub stribeck_velocity: T,
+}
+
+/// How the friction coefficient of a slide depends on the slider's speed v = |x'|.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum FrictionLaw {
+    /// mu(v) = mu_k at every speed.
+    #[default]
+    Coulomb,
+    /// mu(v) = mu_k + (mu_s - mu_k) exp(-(v / v_s)^2): friction falls from mu_s at rest to mu_k.
+    Stribeck,
 }
 
 /// A rig parameter outside its physical range, named by its scene key.
@@ -46,6 +68,15 @@ pub enum RigError {
         /// Scene key of the parameter.
         key: &'static str,
     },
+    /// A rail tilt of 90 degrees or more (the rail would not be below the rig).
+    #[error("rig.rail_tilt_deg must be a finite angle strictly between -90 and 90, got {value}")]
+    Tilt {
+        /// The tilt given (degrees).
+        value: f64,
+    },
+    /// A Stribeck speed given for Coulomb's law, where it would be silently ignored.
+    #[error("rig.stribeck_velocity is only used with rig.friction_law = \"stribeck\"")]
+    StribeckWithoutLaw,
     /// Static friction below kinetic friction.
     #[error("rig.mu_static ({mu_static}) must be >= rig.mu_kinetic ({mu_kinetic})")]
     StaticBelowKinetic {
@@ -73,6 +104,7 @@ impl Rig<f64> {
             gravity,
             mu_kinetic,
             mu_static: mu_static.unwrap_or(mu_kinetic),
+            ..Rig::paper(0.0)
         };
         rig.validate()?;
         Ok(rig)
@@ -87,6 +119,44 @@ impl Rig<f64> {
             gravity: 9.81,
             mu_kinetic: mu,
             mu_static: mu,
+            rail_tilt: 0.0,
+            pivot_damping: 0.0,
+            viscous_friction: 0.0,
+            friction_law: FrictionLaw::Coulomb,
+            stribeck_velocity: 1.0,
+        }
+    }
+
+    /// The same rig on a rail tilted by `alpha` (rad, +x downhill for alpha > 0).
+    pub fn with_rail_tilt(self, alpha: f64) -> Self {
+        Rig {
+            rail_tilt: alpha,
+            ..self
+        }
+    }
+
+    /// The same rig with viscous damping `c_p` (N m s) at the pivot.
+    pub fn with_pivot_damping(self, c_p: f64) -> Self {
+        Rig {
+            pivot_damping: c_p,
+            ..self
+        }
+    }
+
+    /// The same rig with viscous rail friction `c_v` (N s/m) added to its friction law.
+    pub fn with_viscous_friction(self, c_v: f64) -> Self {
+        Rig {
+            viscous_friction: c_v,
+            ..self
+        }
+    }
+
+    /// The same rig with Stribeck friction of speed `v_s` (m/s) between its mu_s and mu_k.
+    pub fn with_stribeck(self, v_s: f64) -> Self {
+        Rig {
+            friction_law: FrictionLaw::Stribeck,
+            stribeck_velocity: v_s,
+            ..self
         }
     }
 
@@ -110,6 +180,27 @@ impl Rig<f64> {
                 return Err(RigError::Negative { key, value });
             }
         }
+        for (key, value) in [
+            ("pivot_damping", self.pivot_damping),
+            ("viscous_friction", self.viscous_friction),
+        ] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(RigError::Negative { key, value });
+            }
+        }
+        if !(self.rail_tilt.is_finite() && self.rail_tilt.abs() < std::f64::consts::FRAC_PI_2) {
+            return Err(RigError::Tilt {
+                value: self.rail_tilt.to_degrees(),
+            });
+        }
+        if self.friction_law == FrictionLaw::Stribeck
+            && !(self.stribeck_velocity.is_finite() && self.stribeck_velocity > 0.0)
+        {
+            return Err(RigError::NotPositive {
+                key: "stribeck_velocity",
+                value: self.stribeck_velocity,
+            });
+        }
         if self.mu_static < self.mu_kinetic {
             return Err(RigError::StaticBelowKinetic {
                 mu_static: self.mu_static,
@@ -128,6 +219,11 @@ impl Rig<f64> {
             gravity: T::from(self.gravity),
             mu_kinetic: T::from(self.mu_kinetic),
             mu_static: T::from(self.mu_static),
+            rail_tilt: T::from(self.rail_tilt),
+            pivot_damping: T::from(self.pivot_damping),
+            viscous_friction: T::from(self.viscous_friction),
+            friction_law: self.friction_law,
+            stribeck_velocity: T::from(self.stribeck_velocity),
         }
     }
 }
@@ -142,6 +238,54 @@ impl<T: Scalar> Rig<T> {
             gravity: self.gravity.re(),
             mu_kinetic: self.mu_kinetic.re(),
             mu_static: self.mu_static.re(),
+            rail_tilt: self.rail_tilt.re(),
+            pivot_damping: self.pivot_damping.re(),
+            viscous_friction: self.viscous_friction.re(),
+            friction_law: self.friction_law,
+            stribeck_velocity: self.stribeck_velocity.re(),
+        }
+    }
+
+    /// Whether the rig is the ideal one of the paper (level rail, no damping, Coulomb friction
+    /// with no speed dependence): the closed forms that assume it (the conservative pendulum,
+    /// mirror symmetry) hold only then.
+    pub fn is_ideal(&self) -> bool {
+        self.rail_tilt.is_zero()
+            && self.pivot_damping.is_zero()
+            && self.viscous_friction.is_zero()
+            && (self.friction_law == FrictionLaw::Coulomb || self.mu_static == self.mu_kinetic)
+    }
+
+    /// Gravity's components (g_x, g_y) in the rail frame: (g sin alpha, g cos alpha). A level
+    /// rail skips the trigonometry (and keeps its results bit for bit).
+    #[inline]
+    pub fn gravity_components(&self) -> (T, T) {
+        if self.rail_tilt.is_zero() {
+            (T::zero(), self.gravity)
+        } else {
+            let (s, c) = self.rail_tilt.sin_cos();
+            (self.gravity * s, self.gravity * c)
+        }
+    }
+
+    /// The sliding friction coefficient at speed `speed` = |x'| under the rig's law.
+    #[inline]
+    pub fn friction_mu(&self, speed: T) -> T {
+        match self.friction_law {
+            FrictionLaw::Coulomb => self.mu_kinetic,
+            FrictionLaw::Stribeck => {
+                let u = speed / self.stribeck_velocity;
+                self.mu_kinetic + (self.mu_static - self.mu_kinetic) * (-(u * u)).exp()
+            }
+        }
+    }
+
+    /// The largest coefficient a slide can meet (mu_s for Stribeck, reached as v -> 0): it
+    /// decides whether the Painleve paradox is possible.
+    pub fn mu_slide_max(&self) -> T {
+        match self.friction_law {
+            FrictionLaw::Coulomb => self.mu_kinetic,
+            FrictionLaw::Stribeck => self.mu_static,
         }
     }
 

@@ -24,14 +24,19 @@ pub enum RestChoice {
 pub fn choose_at_rest(rig: &Rig<f64>, y: &State<f64>) -> RestChoice {
     let sh = Shorthands::at(rig, y);
     let stick_ok = sh.stick_margin(rig.mu_static) >= 0.0;
+    // A slide from rest meets mu(0): mu_k under Coulomb, mu_s under Stribeck.
+    let mu_rest = rig.friction_mu(0.0);
+    let paradox_possible = sh.band_margin(mu_rest) < 0.0;
+    // Below mu* a slide that leaves at zero acceleration is still the motion (Stribeck
+    // friction meets mu_s at v = 0, so the onset starts from x'' = 0 exactly).
     let slide_ok = |dir: Direction| {
         let s = dir.sign();
-        let b = rig.slide_branches(&sh, s);
-        [(b.plus, 1.0), (b.minus, -1.0)]
-            .iter()
-            .any(|&(ok, sigma)| ok && s * rig.slide(&sh, s, sigma).x_ddot > 0.0)
+        let b = rig.slide_branches(&sh, s, 0.0);
+        [(b.plus, 1.0), (b.minus, -1.0)].iter().any(|&(ok, sigma)| {
+            let acc = s * rig.slide(&sh, s, sigma, 0.0).x_ddot;
+            ok && (acc > 0.0 || (!paradox_possible && acc == 0.0))
+        })
     };
-    let paradox_possible = sh.band_margin(rig.mu_kinetic) < 0.0;
     if !paradox_possible {
         if stick_ok {
             return RestChoice::Unique(Mode::Stick);

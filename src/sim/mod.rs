@@ -117,7 +117,8 @@ impl Default for Options {
 pub struct Request {
     /// Times (s, ascending, within the run) at which to sample the state.
     pub sample_times: Vec<f64>,
-    /// Integrate the friction work alongside the state (for energy balances).
+    /// Integrate the friction work and the pivot's damping work alongside the state (for
+    /// energy balances).
     pub friction_work: bool,
 }
 
@@ -270,8 +271,12 @@ pub struct Sample<T> {
     pub state: State<T>,
     /// Mode at that time.
     pub mode: Mode,
-    /// Friction work done up to this time (J, <= 0), when requested.
+    /// Friction work done up to this time (J, <= 0; rail friction, Coulomb and viscous), when
+    /// requested.
     pub friction_work: Option<T>,
+    /// Work done by the pivot's damping torque up to this time (J, <= 0), when the friction
+    /// work is requested: E(t) - E(0) = friction work + damping work - impulsive losses.
+    pub damping_work: Option<T>,
 }
 
 /// The result of a run.
@@ -290,6 +295,9 @@ pub struct Solution<T> {
     pub final_mode: Mode,
     /// Friction work over the run (J), when requested.
     pub friction_work: Option<T>,
+    /// Work of the pivot's damping torque over the run (J, <= 0), when the friction work is
+    /// requested.
+    pub damping_work: Option<T>,
     /// Work counters.
     pub stats: Stats,
 }

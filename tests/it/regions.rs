@@ -244,7 +244,7 @@ fn sign_rule_counts_match_brute_force_root_counting() {
             let got = slide_solution_count(rig, theta, w, s);
             assert_eq!(got, expected, "theta {theta}, w {w}, s {s}, rig {rig:?}");
             // The simulator's own branch test must agree too.
-            let branches = rig.slide_branches(&Shorthands::new(rig, theta, w), s);
+            let branches = rig.slide_branches(&Shorthands::new(rig, theta, w), s, 0.0);
             assert_eq!(
                 branches.count(),
                 expected,
