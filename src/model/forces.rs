@@ -272,10 +272,10 @@ impl<T: Scalar> Rig<T> {
     }
 }
 
-/// Mechanical energy with the tilted potential:
-/// E = 1/2 (m1 + m2) x'^2 - m2 l x' w sin(theta) + 1/2 m2 l^2 w^2
-/// - (m1 + m2) g_x x - m2 g_x l cos(theta) - m2 g_y l sin(theta)
-/// (zero at rest at x = 0 with the rod horizontal). dE/dt = F x' - c_p w^2.
+/// Mechanical energy with the tilted potential,
+/// E = 1/2 (m1 + m2) x'^2 - m2 l x' w sin(theta) + 1/2 m2 l^2 w^2 - (m1 + m2) g_x x
+/// − m2 g_x l cos(theta) − m2 g_y l sin(theta), zero at rest at x = 0 with the rod
+/// horizontal on a level rail; dE/dt = F x' - c_p w^2.
 pub fn energy<T: Scalar>(rig: &Rig<T>, y: &State<T>) -> T {
     let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);
     let (gx, gy) = rig.gravity_components();

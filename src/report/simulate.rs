@@ -117,7 +117,8 @@ pub fn simulation_json(scene: &Scene, sol: &Solution<f64>) -> Value {
         out["friction_work"] = json!(w);
         out["energy_change"] =
             json!(energy(&scene.rig, &sol.final_state) - energy(&scene.rig, &scene.initial));
-        // Closes the balance: energy_change = friction_work - impulsive_losses.
+        out["damping_work"] = json!(sol.damping_work.unwrap_or(0.0));
+        // Closes the balance: energy_change = friction_work + damping_work - impulsive_losses.
         out["impulsive_losses"] = json!(sol.impulsive_losses());
     }
     out
@@ -136,7 +137,7 @@ pub fn write_trajectory_csv(
         header.extend(["slider_x", "slider_y", "bob_x", "bob_y"]);
     }
     if scene.output.energy {
-        header.extend(["energy", "friction_work"]);
+        header.extend(["energy", "friction_work", "damping_work"]);
     }
     wr.write_record(&header)?;
     for s in &sol.samples {
@@ -148,6 +149,7 @@ pub fn write_trajectory_csv(
         if scene.output.energy {
             row.push(format!("{:.15e}", energy(rig, &s.state)));
             row.push(format!("{:.15e}", s.friction_work.unwrap_or(f64::NAN)));
+            row.push(format!("{:.15e}", s.damping_work.unwrap_or(f64::NAN)));
         }
         wr.write_record(&row)?;
     }

@@ -86,6 +86,9 @@ fn trajectory_csv_has_markers_at_rod_length() {
     assert_eq!(rows, 201);
 }
 
+/// The `[rig]` line the real-rig cases append their keys after.
+const R: &str = "mu_static = 0.35";
+
 #[test]
 fn bad_scenes_name_the_key_and_exit_2() {
     let cases = [
@@ -95,6 +98,40 @@ fn bad_scenes_name_the_key_and_exit_2() {
         ("theta = 0.0", "theta = 0.0\nphi = 1.0", "phi"),
         ("x_dot = 0.0", "x_dot = nan", "x_dot"),
         ("rtol = 1e-10", "rtol = \"tight\"", "rtol"),
+        // The real-rig keys get the same checks.
+        (
+            R,
+            "mu_static = 0.35\npivot_damping = -1e-3",
+            "pivot_damping",
+        ),
+        (
+            R,
+            "mu_static = 0.35\nviscous_friction = inf",
+            "viscous_friction",
+        ),
+        (R, "mu_static = 0.35\nrail_tilt_deg = nan", "rail_tilt_deg"),
+        (R, "mu_static = 0.35\nrail_tilt_deg = 90.0", "rail_tilt_deg"),
+        (R, "mu_static = 0.35\nrail_tilt = 1.0", "rail_tilt"),
+        (
+            R,
+            "mu_static = 0.35\nfriction_law = \"dahl\"",
+            "friction_law",
+        ),
+        (
+            R,
+            "mu_static = 0.35\nfriction_law = \"stribeck\"",
+            "stribeck_velocity",
+        ),
+        (
+            R,
+            "mu_static = 0.35\nstribeck_velocity = 0.1",
+            "stribeck_velocity",
+        ),
+        (
+            R,
+            "mu_static = 0.35\nfriction_law = \"stribeck\"\nstribeck_velocity = 0.0",
+            "stribeck_velocity",
+        ),
     ];
     for (from, to, key) in cases {
         let path = scene_with(from, to);
@@ -152,4 +189,36 @@ fn paradox_scene_json_reports_sudden_stop() {
         + v["impulsive_losses"].as_f64().unwrap();
     assert!(balance.abs() < 1e-8, "{balance}");
     assert_eq!(v["completed"], true);
+}
+
+/// A scene with every real-rig term runs from the command line, and its trajectory CSV closes
+/// the energy balance with the damping work column.
+#[test]
+fn real_rig_scene_writes_energy_friction_and_damping_work() {
+    let scene = scene_with(
+        "mu_static = 0.35",
+        "mu_static = 0.45\nrail_tilt_deg = 1.5\npivot_damping = 1e-3\nfriction_law = \"stribeck\"\nstribeck_velocity = 0.05\nviscous_friction = 0.02\n\n[output]\nframe_rate = 50.0\nenergy = true",
+    );
+    let out_csv = scene.with_extension("real.csv");
+    let out = appell(&[
+        "simulate",
+        scene.to_str().unwrap(),
+        "--out",
+        out_csv.to_str().unwrap(),
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let mut rd = csv::Reader::from_path(&out_csv).unwrap();
+    let headers = rd.headers().unwrap().clone();
+    let col = |name: &str| headers.iter().position(|h| h == name).unwrap();
+    let rows: Vec<csv::StringRecord> = rd.records().map(|r| r.unwrap()).collect();
+    let f = |r: &csv::StringRecord, name: &str| r[col(name)].parse::<f64>().unwrap();
+    let e0 = f(&rows[0], "energy");
+    let last = rows.last().unwrap();
+    let balance = f(last, "energy") - e0 - f(last, "friction_work") - f(last, "damping_work");
+    assert!(balance.abs() < 1e-8, "balance {balance}");
+    assert!(f(last, "damping_work") < 0.0);
 }

@@ -7,6 +7,7 @@ mod fit;
 mod helpers;
 mod paradox;
 mod plan;
+mod real_rigs;
 mod recordings;
 mod regions;
 mod simulate_oracles;
