@@ -1,7 +1,8 @@
 //! Shared fixtures and independent oracles for the integration tests.
 
-use appell::model::{Rig, State};
+use appell::model::{FrictionLaw, Rig, State};
 use appell::sim::{simulate, Method, Options, Request, Solution};
+use nalgebra::{Matrix3, Vector3};
 
 /// Run a rig with given tolerance and method, asking for `request`.
 pub fn run(
@@ -32,24 +33,34 @@ pub fn elliptic_k(k: f64) -> f64 {
     std::f64::consts::PI / (2.0 * a)
 }
 
-/// The sliding-rod model written independently of the library, from the equations of motion
-/// of PHYSICS.md as a 3x3 linear system in (x'', theta'', N) with F = -mu s sigma N,
-/// solved for each sigma and kept where sign(N) = sigma. Returns (x'', theta'').
-pub fn slide_accel_oracle(rig: &Rig<f64>, y: &[f64; 4], s: f64) -> (f64, f64) {
-    use nalgebra::{Matrix3, Vector3};
-    let (m1, m2, l, g, mu) = (
-        rig.slider_mass,
-        rig.bob_mass,
-        rig.rod_length,
-        rig.gravity,
-        rig.mu_kinetic,
+/// The sliding-rod model written independently of the library: the generalised equations of
+/// motion (PHYSICS.md, "Real rigs") as a 3x3 linear system in (x'', theta'', N), written
+/// from PHYSICS.md without the library's shorthands:
+///   (m1 + m2) x'' - m2 l (sin th th'' + cos th w^2) = F + (m1 + m2) g_x
+///   l th'' - sin th x'' = g_y cos th - g_x sin th - c_p w / (m2 l)
+///   N = m2 l (cos th th'' - sin th w^2) - (m1 + m2) g_y
+/// with F = -mu(|x'|) s sigma N - c_v x' while sliding. Returns (x'', theta'').
+pub fn slide_accel_oracle(rig: &Rig<f64>, y: &State<f64>, s: f64) -> (f64, f64) {
+    let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);
+    let m = m1 + m2;
+    let (gx, gy) = (
+        rig.gravity * rig.rail_tilt.sin(),
+        rig.gravity * rig.rail_tilt.cos(),
     );
+    let v = y[2].abs();
+    let mu = match rig.friction_law {
+        FrictionLaw::Coulomb => rig.mu_kinetic,
+        FrictionLaw::Stribeck => {
+            rig.mu_kinetic
+                + (rig.mu_static - rig.mu_kinetic) * (-(v / rig.stribeck_velocity).powi(2)).exp()
+        }
+    };
     let (th, w) = (y[1], y[3]);
     let (sn, cs) = th.sin_cos();
     let mut found = None;
     for sigma in [1.0, -1.0] {
         let a = Matrix3::new(
-            m1 + m2,
+            m,
             -m2 * l * sn,
             mu * s * sigma,
             -sn,
@@ -60,20 +71,17 @@ pub fn slide_accel_oracle(rig: &Rig<f64>, y: &[f64; 4], s: f64) -> (f64, f64) {
             1.0,
         );
         let rhs = Vector3::new(
-            m2 * l * cs * w * w,
-            g * cs,
-            -m2 * l * sn * w * w - (m1 + m2) * g,
+            m * gx + m2 * l * cs * w * w - rig.viscous_friction * y[2],
+            gy * cs - gx * sn - rig.pivot_damping * w / (m2 * l),
+            -m2 * l * sn * w * w - m * gy,
         );
         let sol = a.lu().solve(&rhs).expect("regular system");
         if sol[2] * sigma >= 0.0 {
-            assert!(
-                found.is_none(),
-                "oracle found two solutions: paradox regime"
-            );
+            assert!(found.is_none(), "two solutions: paradox regime");
             found = Some((sol[0], sol[1]));
         }
     }
-    found.expect("oracle found a consistent sliding solution")
+    found.expect("a consistent sliding solution")
 }
 
 /// Classical fixed-step RK4 on the oracle's sliding model from `y0` until x' reaches zero;

@@ -2,12 +2,9 @@
 //! friction, checked against oracles written here from the equations of motion, the energy
 //! balance with the tilted potential, closed forms and limits.
 
-use super::helpers::run;
-use appell::model::{
-    pendulum::stuck_period, Direction, FrictionLaw, Mode, Rig, Scalar, Shorthands, State,
-};
+use super::helpers::{run, slide_accel_oracle};
+use appell::model::{pendulum::stuck_period, Direction, Mode, Rig, Scalar, Shorthands, State};
 use appell::sim::{simulate, EventKind, Method, Options, Request, Solution};
-use nalgebra::{Matrix3, Vector3};
 use num_dual::Dual64;
 use std::f64::consts::{FRAC_PI_2, PI};
 
@@ -17,56 +14,6 @@ fn rigs(mu_k: f64, mu_s: f64) -> Vec<Rig<f64>> {
         .into_iter()
         .map(|(m1, m2, l)| Rig::new(m1, m2, l, 9.81, mu_k, Some(mu_s)).unwrap())
         .collect()
-}
-
-/// The generalised equations of motion as a 3x3 linear system in (x'', theta'', N), written
-/// from PHYSICS.md without the library's shorthands:
-///   (m1 + m2) x'' - m2 l (sin th th'' + cos th w^2) = F + (m1 + m2) g_x
-///   l th'' - sin th x'' = g_y cos th - g_x sin th - c_p w / (m2 l)
-///   N = m2 l (cos th th'' - sin th w^2) - (m1 + m2) g_y
-/// with F = -mu(|x'|) s sigma N - c_v x' while sliding. Returns (x'', theta'').
-fn slide_oracle(rig: &Rig<f64>, y: &State<f64>, s: f64) -> (f64, f64) {
-    let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);
-    let m = m1 + m2;
-    let (gx, gy) = (
-        rig.gravity * rig.rail_tilt.sin(),
-        rig.gravity * rig.rail_tilt.cos(),
-    );
-    let v = y[2].abs();
-    let mu = match rig.friction_law {
-        FrictionLaw::Coulomb => rig.mu_kinetic,
-        FrictionLaw::Stribeck => {
-            rig.mu_kinetic
-                + (rig.mu_static - rig.mu_kinetic) * (-(v / rig.stribeck_velocity).powi(2)).exp()
-        }
-    };
-    let (th, w) = (y[1], y[3]);
-    let (sn, cs) = th.sin_cos();
-    let mut found = None;
-    for sigma in [1.0, -1.0] {
-        let a = Matrix3::new(
-            m,
-            -m2 * l * sn,
-            mu * s * sigma,
-            -sn,
-            l,
-            0.0,
-            0.0,
-            -m2 * l * cs,
-            1.0,
-        );
-        let rhs = Vector3::new(
-            m * gx + m2 * l * cs * w * w - rig.viscous_friction * y[2],
-            gy * cs - gx * sn - rig.pivot_damping * w / (m2 * l),
-            -m2 * l * sn * w * w - m * gy,
-        );
-        let sol = a.lu().solve(&rhs).expect("regular system");
-        if sol[2] * sigma >= 0.0 {
-            assert!(found.is_none(), "two solutions: paradox regime");
-            found = Some((sol[0], sol[1]));
-        }
-    }
-    found.expect("a consistent sliding solution")
 }
 
 /// The energy of PHYSICS.md with the tilted potential, written out here.
@@ -111,7 +58,7 @@ fn accelerations_match_the_equations_of_motion_for_every_term() {
                     for &xd in &[-0.4f64, -0.02, 0.03, 0.5] {
                         let y = [0.1, th, xd, w];
                         let s = xd.signum();
-                        let (xdd, tdd) = slide_oracle(&r, &y, s);
+                        let (xdd, tdd) = slide_accel_oracle(&r, &y, s);
                         let sh = Shorthands::at(&r, &y);
                         let sigma = r.slide_sigma(&sh, s, xd).expect("one branch below mu*");
                         let d = r.slide(&sh, s, sigma, xd);
