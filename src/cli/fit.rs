@@ -44,12 +44,64 @@ pub struct Args {
     /// Extra starting values of mu_kinetic for the multi-start search.
     #[arg(long, value_delimiter = ',', value_name = "MU,...")]
     starts: Vec<f64>,
+    /// Known measurement noise per coordinate instead of the one measured from the tracks:
+    /// one value for both markers or `SLIDER,BOB`, in metres, or in pixels with a `px` suffix
+    /// (with --scale), e.g. `0.0002` or `0.5px,0.8px`.
+    #[arg(long, value_delimiter = ',', value_name = "NOISE[,NOISE]")]
+    noise: Vec<String>,
+    /// The plain model only: no physics or camera nuisances and no check of the thirds
+    /// (faster; the chi-square against the measured noise still shows a misfit).
+    #[arg(long)]
+    plain: bool,
     #[command(flatten)]
     recording: RecordingArgs,
 }
 
-fn settings(args: &Args) -> FitSettings {
-    FitSettings {
+/// Parse `--noise`: metres, or pixels (`px` suffix) times the recording's --scale.
+fn noise(args: &Args) -> Result<Option<[f64; 2]>, String> {
+    if args.noise.is_empty() {
+        return Ok(None);
+    }
+    if args.noise.len() > 2 {
+        return Err(format!(
+            "--noise takes one value or SLIDER,BOB, got {} values",
+            args.noise.len()
+        ));
+    }
+    let one = |text: &str| -> Result<f64, String> {
+        let (num, px) = match text.trim().strip_suffix("px") {
+            Some(n) => (n, true),
+            None => (text.trim().strip_suffix('m').unwrap_or(text.trim()), false),
+        };
+        let v: f64 = num
+            .trim()
+            .parse()
+            .map_err(|_| format!("--noise: expected a number of metres or pixels (e.g. 0.0002 or 0.5px), got {text:?}"))?;
+        let v = if px {
+            let scale = args
+                .recording
+                .scale
+                .ok_or_else(|| format!("--noise {text}: pixels need --scale (metres per pixel)"))?;
+            v * scale
+        } else {
+            v
+        };
+        if v.is_finite() && v > 0.0 {
+            Ok(v)
+        } else {
+            Err(format!("--noise must be positive and finite, got {text:?}"))
+        }
+    };
+    let slider = one(&args.noise[0])?;
+    let bob = match args.noise.get(1) {
+        Some(b) => one(b)?,
+        None => slider,
+    };
+    Ok(Some([slider, bob]))
+}
+
+fn settings(args: &Args) -> Result<FitSettings, String> {
+    Ok(FitSettings {
         fit_rod_length: args.fit_rod_length,
         mu_static: match args.mu_static.as_str() {
             "tied" => StaticMode::Tied,
@@ -63,8 +115,11 @@ fn settings(args: &Args) -> FitSettings {
         },
         extra_starts: args.starts.clone(),
         profile: !args.no_profile,
+        noise: noise(args)?,
+        nuisances: !args.plain,
+        windows: !args.plain,
         ..FitSettings::default()
-    }
+    })
 }
 
 /// Recordings in a directory: files with a recording extension, sorted.
@@ -117,7 +172,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         .resolve()
         .map_err(|e| Failure::Input(anyhow!(e)))?;
     let rig = RigFile::load_for_fit(&args.rig, 0.3).map_err(|e| Failure::Input(e.into()))?;
-    let settings = settings(&args);
+    let settings = settings(&args).map_err(|e| Failure::Input(anyhow!(e)))?;
     if let Some(p) = &args.plot {
         appell::report::plot::ImageFormat::from_path(p).map_err(|e| Failure::Input(e.into()))?;
     }

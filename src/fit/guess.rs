@@ -62,11 +62,14 @@ fn angles(obs: &Observations) -> (Vec<f64>, Vec<f64>) {
     (t, th)
 }
 
+/// Slider x at the frames with both markers: the same frames as [`angles`], so a gap in
+/// either marker never misaligns the two series.
 fn slider_x(obs: &Observations) -> (Vec<f64>, Vec<f64>) {
     obs.times
         .iter()
         .zip(&obs.slider)
-        .filter_map(|(t, s)| s.map(|s| (*t, s[0])))
+        .zip(&obs.bob)
+        .filter_map(|((t, s), b)| b.and(s.map(|s| (*t, s[0]))))
         .unzip()
 }
 

@@ -1,26 +1,38 @@
-//! Fit mu and the initial state to a recording by least squares on the hybrid model, with
-//! honest uncertainty: standard errors from the exact Jacobian, a profile interval for mu,
-//! identifiability checks, and goodness-of-fit diagnostics.
+//! Fit mu and the initial state to a recording by least squares on the hybrid model, and say
+//! how far to trust it. The driver [`fit`] reads as its steps: check the data; measure each
+//! marker's noise from the tracks and drop mis-tracked frames; fit the base model from starts
+//! that cannot miss; let the data choose physics and camera nuisances (forward selection by
+//! BIC); settle mu_static; then the uncertainty (Jacobian, block covariance, profile) and
+//! the adequacy checks (chi-square against the measured noise, fits of the thirds) that widen
+//! the interval when the model does not describe the recording.
 
 pub mod guess;
 pub mod lm;
+pub mod noise;
+mod outliers;
 mod problem;
+mod select;
+mod uncertainty;
 
-pub use problem::{Observations, Param, TrajectoryProblem};
+pub use noise::NoiseEstimate;
+pub use problem::{Counters, Observations, Param, TrajectoryProblem, MAX_FREE};
+pub use select::{ModelRow, Nuisance};
+pub use uncertainty::WindowFit;
 
-use crate::model::{Mode, Rig, Shorthands, State};
-use crate::sim::{simulate, Event, EventKind, Options, Request};
+use crate::model::{Camera, Mode, Rig, Shorthands, State};
+use crate::sim::{simulate, Event, EventKind, Options, Request, Solution};
 use argmin::core::{Executor, State as _};
 use lm::{LeastSquares, LevenbergMarquardt};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
+use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use thiserror::Error;
 
 /// Loss applied to the standardised residuals.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum Loss {
-    /// Plain least squares.
+    /// Plain least squares (mis-tracked frames are dropped before the fit and after it).
     #[default]
     Squares,
     /// Huber loss with threshold k (in noise standard deviations): mis-tracked frames count
@@ -33,7 +45,7 @@ pub enum Loss {
 /// Whether mu_static is estimated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
 pub enum StaticMode {
-    /// Free it when the fitted motion shows a stick-to-slide onset, else tie it to mu_kinetic.
+    /// A candidate model when the recording shows a stick-to-slide onset; the data choose.
     #[default]
     Auto,
     /// Always equal to mu_kinetic.
@@ -51,7 +63,7 @@ pub struct FitSettings {
     pub mu_static: StaticMode,
     /// Loss on standardised residuals.
     pub loss: Loss,
-    /// Extra starting values of mu_kinetic (besides the data's and the rig's guesses).
+    /// Extra starting values of mu_kinetic (besides the data's, the rig's and a low one).
     pub extra_starts: Vec<f64>,
     /// Compute the profile-likelihood interval for mu_kinetic.
     pub profile: bool,
@@ -59,6 +71,13 @@ pub struct FitSettings {
     pub options: Options,
     /// Most Levenberg-Marquardt iterations per fit.
     pub max_iters: u64,
+    /// Known noise per marker (slider, bob), m; `None`: measured from the tracks.
+    pub noise: Option<[f64; 2]>,
+    /// Let the data add physics and camera nuisances (tilt, damping, friction laws, scale,
+    /// marker offsets, lag); off: the plain model only (faster).
+    pub nuisances: bool,
+    /// Fit the recording's thirds and widen the interval when they disagree.
+    pub windows: bool,
 }
 
 impl Default for FitSettings {
@@ -75,6 +94,9 @@ impl Default for FitSettings {
                 ..Options::default()
             },
             max_iters: 60,
+            noise: None,
+            nuisances: true,
+            windows: true,
         }
     }
 }
@@ -84,11 +106,15 @@ impl Default for FitSettings {
 pub struct Estimate {
     /// Best-fit value.
     pub value: f64,
-    /// Standard error from the Jacobian at the optimum, scaled by the residual variance.
+    /// Standard error: from the Jacobian scaled by max(1, reduced chi-square), or from the
+    /// block covariance when that is larger.
     pub stderr: f64,
-    /// 95% interval: from the profile for mu (the cost is not quadratic near mode changes),
-    /// value +- 1.96 stderr otherwise.
+    /// 95% interval (how it was computed: [`Estimate::interval`]).
     pub ci95: [f64; 2],
+    /// How the interval was computed: `profile`, `wald` (value +- 1.96 stderr), with
+    /// `+block` when widened for correlated residuals and `+windows` when widened to cover
+    /// the thirds' values.
+    pub interval: &'static str,
 }
 
 /// What the recording says about mu_static.
@@ -111,8 +137,47 @@ pub struct StartOutcome {
     pub mu_start: f64,
     /// mu_kinetic where it converged.
     pub mu_end: f64,
-    /// Final cost 1/2 sum of squared standardised residuals.
+    /// Final cost: 1/2 sum of squared standardised residuals.
     pub cost: f64,
+}
+
+/// Goodness of fit against the noise measured independently of the model.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Adequacy {
+    /// Sum of squared residuals standardised by the measured noise.
+    pub chi2: f64,
+    /// Residual rows used minus free parameters.
+    pub dof: f64,
+    /// chi2 / dof.
+    pub reduced_chi2: f64,
+    /// Probability of so large a chi-square if model and noise were right (F test, since the
+    /// noise is itself measured).
+    pub p_value: f64,
+    /// Akaike's criterion chi2 + 2k.
+    pub aic: f64,
+    /// Bayesian information criterion chi2 + k ln(n).
+    pub bic: f64,
+    /// Lag-1 autocorrelation of the residuals (0 for white noise).
+    pub lag1: f64,
+    /// Block standard error of mu_kinetic over the Jacobian's.
+    pub block_se_ratio: f64,
+    /// Frames per block of the block covariance.
+    pub block_frames: usize,
+    /// p-value of the thirds' agreement (`None` with fewer than two sliding thirds).
+    pub windows_p_value: Option<f64>,
+    /// One plain sentence when the result is limited by the model; `None` when it is not.
+    pub limited_by_model: Option<String>,
+}
+
+/// The work a fit did.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct Work {
+    /// Levenberg-Marquardt iterations, every fit included.
+    pub iterations: u64,
+    /// Residual evaluations (simulations in f64).
+    pub residual_evals: u64,
+    /// Jacobian evaluations (simulations in dual numbers).
+    pub jacobian_evals: u64,
 }
 
 /// The result of a fit.
@@ -120,6 +185,10 @@ pub struct StartOutcome {
 pub struct FitReport {
     /// Every free parameter with its estimate.
     pub params: Vec<(Param, Estimate)>,
+    /// Start value of each free parameter.
+    pub start_values: Vec<(Param, f64)>,
+    /// Parameters held fixed, with their values.
+    pub fixed: Vec<(Param, f64)>,
     /// mu_kinetic, or `None` when the recording never slides (not identifiable).
     pub mu_kinetic: Option<Estimate>,
     /// mu_static.
@@ -128,18 +197,36 @@ pub struct FitReport {
     pub rig: Rig<f64>,
     /// Fitted initial state.
     pub initial: State<f64>,
+    /// Fitted camera and marker model (the ideal camera unless the data chose otherwise).
+    pub camera: Camera<f64>,
     /// Correlation matrix of the free parameters (order of `params`).
     pub correlation: DMatrix<f64>,
     /// RMS residual over all coordinates (m).
     pub rms_residual_m: f64,
     /// RMS residual per marker (slider, bob) (m).
     pub rms_per_marker_m: [f64; 2],
-    /// Noise scale per marker estimated from the residuals (m).
+    /// Noise per marker used as weights (m).
     pub noise_m: [f64; 2],
-    /// Sum of squared standardised residuals over degrees of freedom.
+    /// The noise measurement per marker (`None` where it could not be measured).
+    pub noise: [Option<NoiseEstimate>; 2],
+    /// Goodness of fit and whether the model limits the result.
+    pub adequacy: Adequacy,
+    /// Same as `adequacy.reduced_chi2` (kept for readers of earlier reports).
     pub reduced_chi2: f64,
-    /// Lag-1 autocorrelation of the residuals (0 for white noise).
+    /// Same as `adequacy.lag1`.
     pub residual_autocorrelation: f64,
+    /// Candidate models compared, the chosen one marked.
+    pub models: Vec<ModelRow>,
+    /// Nuisances in the chosen model.
+    pub nuisances: Vec<Nuisance>,
+    /// mu_kinetic fitted on each third of the recording.
+    pub windows: Vec<WindowFit>,
+    /// Mis-tracked positions dropped (slider, bob): before the fit from the tracks, and
+    /// after it from the residuals.
+    pub outliers: [usize; 2],
+    /// Sliding speeds behind mu_kinetic, m/s: the smallest and largest |x'| of the fitted
+    /// slides at frame times.
+    pub sliding_speed_range: Option<[f64; 2]>,
     /// Events of the fitted motion.
     pub events: Vec<Event>,
     /// Whether mu_kinetic is identifiable from the recording.
@@ -148,6 +235,12 @@ pub struct FitReport {
     pub starts: Vec<StartOutcome>,
     /// Residual rows used.
     pub n_residuals: usize,
+    /// Frames in the recording.
+    pub n_frames: usize,
+    /// What the fit cost.
+    pub work: Work,
+    /// Why the last solve stopped.
+    pub stop_reason: String,
     /// Notes on identifiability and warnings on the fit's quality.
     pub warnings: Vec<String>,
 }
@@ -161,47 +254,56 @@ pub enum FitError {
     /// No start produced a usable model prediction.
     #[error("no start could be fitted: {0}")]
     NoStart(String),
+    /// A setting out of range.
+    #[error("{0}")]
+    Settings(String),
 }
 
-/// The optimum and its cost, or why the solver failed.
-type Solved = Result<(DVector<f64>, f64), String>;
+/// The optimum, its cost (1/2 chi-square) and the iterations, or why the solver failed.
+type Solved = Result<(DVector<f64>, f64, u64), String>;
 
-/// Run Levenberg-Marquardt from `p0` on `problem`; returns the optimum and its cost.
-fn solve(
+/// Run Levenberg-Marquardt from `p0` on `problem`.
+fn solve(problem: &TrajectoryProblem, p0: DVector<f64>, max_iters: u64) -> Solved {
+    solve_traced(problem, p0, max_iters).map(|(p, c, i, _)| (p, c, i))
+}
+
+/// [`solve`] with the solver's termination reason.
+fn solve_traced(
     problem: &TrajectoryProblem,
     p0: DVector<f64>,
     max_iters: u64,
-) -> Result<(DVector<f64>, f64), String> {
+) -> Result<(DVector<f64>, f64, u64, String), String> {
     let res = Executor::new(problem.clone(), LevenbergMarquardt::default())
         .configure(|s| s.param(p0).max_iters(max_iters))
         .run()
         .map_err(|e| e.to_string())?;
     let cost = res.state.get_best_cost();
-    if std::env::var_os("APPELL_TRACE_FIT").is_some() {
-        eprintln!(
-            "lm: {} iterations, cost {cost:.6e}, {:?}",
-            res.state.get_iter(),
-            res.state.get_termination_reason()
-        );
-    }
+    let iters = res.state.get_iter();
+    let reason = res
+        .state
+        .get_termination_reason()
+        .map_or_else(|| "not terminated".to_owned(), |r| r.to_string());
     let p = res.state.best_param.ok_or("no parameters")?;
-    Ok((p, cost))
+    Ok((p, cost, iters, reason))
 }
 
 fn idx(problem: &TrajectoryProblem, p: Param) -> Option<usize> {
     problem.free.iter().position(|&f| f == p)
 }
 
-/// Per-marker RMS of raw residuals, with a degrees-of-freedom correction.
-fn marker_rms(raw: &[(usize, f64)], n_params: usize) -> ([f64; 2], f64) {
+/// Per-marker RMS of raw residuals (weight-zero rows left out), with a degrees-of-freedom
+/// correction, and the overall RMS.
+fn marker_rms(raw: &[(usize, f64)], weights: &[f64], n_params: usize) -> ([f64; 2], f64) {
     let mut ss = [0.0; 2];
     let mut n = [0usize; 2];
-    for &(m, r) in raw {
-        ss[m] += r * r;
-        n[m] += 1;
+    for (&(m, r), &w) in raw.iter().zip(weights) {
+        if w > 0.0 {
+            ss[m] += r * r;
+            n[m] += 1;
+        }
     }
-    let total = raw.len().max(1);
-    let dof_frac = 1.0 - n_params as f64 / total as f64;
+    let total = (n[0] + n[1]).max(1);
+    let dof_frac = (1.0 - n_params as f64 / total as f64).max(1e-3);
     let rms = [0, 1].map(|m| {
         if n[m] > 0 {
             (ss[m] / n[m] as f64 / dof_frac).sqrt()
@@ -212,12 +314,8 @@ fn marker_rms(raw: &[(usize, f64)], n_params: usize) -> ([f64; 2], f64) {
     (rms, ((ss[0] + ss[1]) / total as f64).sqrt())
 }
 
-/// Fit the free parameters to `obs` starting from `rig_guess` (its mu values are guesses).
-pub fn fit(
-    obs: Observations,
-    rig_guess: &Rig<f64>,
-    settings: &FitSettings,
-) -> Result<FitReport, FitError> {
+/// Step 1: the recording is usable: enough frames with both markers; times from zero.
+fn check_data(mut obs: Observations) -> Result<Observations, FitError> {
     let both = obs
         .slider
         .iter()
@@ -227,20 +325,86 @@ pub fn fit(
     if both < 10 {
         return Err(FitError::TooFewFrames(both));
     }
-    let mut obs = obs;
     let t0 = obs.times[0];
     obs.times.iter_mut().for_each(|t| *t -= t0);
-    let obs = Arc::new(obs);
-    let mut warnings = Vec::new();
+    Ok(obs)
+}
 
-    // Starting values from the data.
+/// The noise used as weights (m), the measurements behind it, and the positions dropped.
+type NoiseAndOutliers = ([f64; 2], [Option<NoiseEstimate>; 2], [usize; 2]);
+
+/// Step 2: each marker's noise, measured from its track (or given), and the mis-tracked
+/// positions dropped. Returns the noise used as weights, the measurements and the drops.
+fn noise_and_outliers(
+    obs: &mut Observations,
+    settings: &FitSettings,
+) -> Result<NoiseAndOutliers, FitError> {
+    if let Some(given) = settings.noise {
+        if !given.iter().all(|s| s.is_finite() && *s > 0.0) {
+            return Err(FitError::Settings(format!(
+                "noise must be finite and positive (m), got {given:?}"
+            )));
+        }
+    }
+    let measured = noise::from_tracks(obs);
+    let pick = |m: usize, est: &[Option<NoiseEstimate>; 2]| -> f64 {
+        match (settings.noise, est[m], est[1 - m]) {
+            (Some(g), _, _) => g[m],
+            (None, Some(e), _) if e.sigma > 0.0 => e.sigma,
+            (None, _, Some(o)) if o.sigma > 0.0 => o.sigma,
+            // Noiseless tracks: a floor far below any camera, so the weights stay finite.
+            _ => 1e-7,
+        }
+    };
+    let first = [pick(0, &measured), pick(1, &measured)];
+    let dropped = outliers::drop_from_tracks(obs, first);
+    // The trimmed measurement is robust already; measure again without the dropped frames.
+    let measured = if dropped.iter().any(|&d| d > 0) {
+        noise::from_tracks(obs)
+    } else {
+        measured
+    };
+    let sigma = [pick(0, &measured), pick(1, &measured)];
+    let reported = match settings.noise {
+        Some(g) => [0, 1].map(|m| {
+            Some(NoiseEstimate {
+                sigma: g[m],
+                dof: f64::INFINITY,
+                source: "given",
+            })
+        }),
+        None => measured,
+    };
+    Ok((sigma, reported, dropped))
+}
+
+/// What the base fit found, for the steps after it.
+struct Base {
+    problem: TrajectoryProblem,
+    p: DVector<f64>,
+    starts: Vec<StartOutcome>,
+    iterations: u64,
+    /// mu_static estimated from the data's stick-to-slide onsets.
+    mu_s_data: Option<f64>,
+    /// Whether the onset estimate says mu_static exceeds mu_kinetic (`None`: no onset seen).
+    static_evidence: Option<bool>,
+}
+
+/// Step 3: the base model (mu_kinetic and the initial state; released from rest or moving;
+/// mu_static when the onsets demand it) from several starts in mu, the best by AIC.
+fn base_fit(
+    obs: &Arc<Observations>,
+    rig: &Rig<f64>,
+    sigma: [f64; 2],
+    settings: &FitSettings,
+    warnings: &mut Vec<String>,
+) -> Result<Base, FitError> {
     let n = obs.times.len();
     let dt = (obs.times[n - 1] / (n - 1) as f64).max(1e-6);
     let window = ((0.012 / dt).round() as usize).clamp(5, 40);
-    let (y0, x_dot_se) = guess::initial_state(&obs, window).unwrap_or(([0.0; 4], f64::INFINITY));
+    let (y0, x_dot_se) = guess::initial_state(obs, window).unwrap_or(([0.0; 4], f64::INFINITY));
     let at_rest = y0[2].abs() < 3.0 * x_dot_se;
-    let rig = *rig_guess;
-    if let Some(l) = guess::rod_length(&obs) {
+    if let Some(l) = guess::rod_length(obs) {
         if (l - rig.rod_length).abs() > 0.05 * rig.rod_length {
             warnings.push(format!(
                 "the markers are {l:.4} m apart (median) but the rig says rod_length = {:.4} m: check the scale or the rig",
@@ -249,7 +413,7 @@ pub fn fit(
         }
     }
     // Second derivatives need a wider window than the initial slope: about 40 ms each side.
-    let mu_data = guess::mu_from_sliding(&obs, &rig, ((0.04 / dt).round() as usize).clamp(4, 200));
+    let mu_data = guess::mu_from_sliding(obs, rig, ((0.04 / dt).round() as usize).clamp(4, 200));
     let mut free = vec![
         Param::MuKinetic,
         Param::X,
@@ -260,23 +424,18 @@ pub fn fit(
     if settings.fit_rod_length {
         free.push(Param::RodLength);
     }
-    let mut problem = TrajectoryProblem::new(obs.clone(), rig, y0, free, settings.options);
+    let mut problem = TrajectoryProblem::new(obs.clone(), *rig, y0, free, settings.options);
     problem.tie_static = settings.mu_static != StaticMode::Fixed;
-
-    // Candidate models. Released from rest, x'(0) = 0 exactly: the motion may start stuck,
-    // which no small nonzero x'(0) reproduces (the mode at t = 0 jumps there). And a stuck
-    // start lasts as long as mu_static allows, which mu_static = mu_kinetic cannot reproduce
-    // when they differ: onsets seen in the data give mu_static a start of its own.
-    // The onset estimate runs about 20% high when mu_static = mu_kinetic (the slip then starts
-    // smoothly, x'' from zero); only an estimate above 1.25 times mu_kinetic counts as
-    // evidence that mu_static exceeds it.
+    problem.sigma = sigma;
     let mu_s_data = (settings.mu_static == StaticMode::Auto)
         .then(|| {
-            guess::mu_static_from_onsets(&obs, &rig, ((0.01 / dt).round() as usize).clamp(3, 50))
+            guess::mu_static_from_onsets(obs, rig, ((0.01 / dt).round() as usize).clamp(3, 50))
         })
         .flatten();
     let static_evidence =
         mu_s_data.map(|m| m > 1.25 * rig.mu_kinetic.min(mu_data.unwrap_or(f64::INFINITY)));
+    // Candidate models. Released from rest, x'(0) = 0 exactly: the motion may start stuck,
+    // which no small nonzero x'(0) reproduces.
     let free_model = problem.clone();
     let mut candidates = Vec::new();
     if at_rest {
@@ -303,16 +462,19 @@ pub fn fit(
         }
         p0
     };
-    // One parallel batch: every candidate from the data's mu, and the first candidate from
-    // the other starts over mu (the cost is only piecewise smooth in mu).
-    // The farther starts go first: they take the most iterations, and with one job per
-    // thread the batch then ends with the quick ones.
+    // Starts over mu: the data's, the rig's, a low one (a start above the truth can stall
+    // in a motion that never slides, where mu has no gradient), and the user's. The far
+    // starts go first: they take the most iterations.
     let mut jobs: Vec<(usize, f64)> = Vec::new();
-    for mu in [rig.mu_kinetic]
+    for mu in [rig.mu_kinetic, 0.4 * mu0]
         .into_iter()
         .chain(settings.extra_starts.iter().copied())
     {
-        if (mu - mu0).abs() > 1e-3 * mu0.abs().max(1e-3) {
+        if (mu - mu0).abs() > 1e-3 * mu0.abs().max(1e-3)
+            && !jobs
+                .iter()
+                .any(|j| (j.1 - mu).abs() < 1e-3 * mu.abs().max(1e-3))
+        {
             jobs.push((0, mu));
         }
     }
@@ -321,27 +483,20 @@ pub fn fit(
         .par_iter()
         .with_max_len(1)
         .map(|&(m, mu)| {
-            (
-                m,
-                mu,
-                solve(
-                    &candidates[m],
-                    start_values(&candidates[m], mu),
-                    settings.max_iters,
-                ),
-            )
+            let c = &candidates[m];
+            (m, mu, solve(c, start_values(c, mu), settings.max_iters))
         })
         .collect();
-    // Model choice by an information criterion: residual sum of squares times (1 + 2k/n),
-    // so a parameter must pay for itself (Akaike's criterion for Gaussian noise).
-    let n_rows = problem.n_rows() as f64;
-    let score = |p: &DVector<f64>, c: f64| c * (1.0 + 2.0 * p.len() as f64 / n_rows);
+    // Akaike's criterion chi2 + 2k picks among the candidates.
+    let aic = |p: &DVector<f64>, c: f64| 2.0 * c + 2.0 * p.len() as f64;
     let mut starts = Vec::new();
     let mut last_err = String::new();
+    let mut iterations = 0;
     let mut best: Option<(usize, DVector<f64>, f64)> = None;
     for (m, mu, r) in solved {
         match r {
-            Ok((p, c)) => {
+            Ok((p, c, it)) => {
+                iterations += it;
                 starts.push(StartOutcome {
                     mu_start: mu,
                     mu_end: p[0],
@@ -349,7 +504,7 @@ pub fn fit(
                 });
                 if best
                     .as_ref()
-                    .is_none_or(|(_, bp, bc)| score(&p, c) < score(bp, *bc))
+                    .is_none_or(|(_, bp, bc)| aic(&p, c) < aic(bp, *bc))
                 {
                     best = Some((m, p, c));
                 }
@@ -358,25 +513,24 @@ pub fn fit(
         }
     }
     let (choice, mut p, cost) = best.ok_or(FitError::NoStart(last_err))?;
-    let tried_static = candidates.iter().any(|m| m.free.contains(&Param::MuStatic));
     problem = candidates.swap_remove(choice);
     // A release judged "from rest" whose fit leaves structured residuals may have had a small
     // push: then the model with x'(0) free competes too.
     if at_rest {
-        let structured = problem.raw_residuals(&p).map(|raw| {
-            let r: Vec<f64> = raw.iter().map(|x| x.1).collect();
-            lag1(&problem, &r)
-        });
-        if structured.is_ok_and(|rho| rho > 0.3) {
+        let rho = problem
+            .residuals(&p)
+            .map(|r| uncertainty::lag1(&problem, r.as_slice()));
+        if rho.is_ok_and(|rho| rho > 0.3) {
             let mut p0 = free_model.values();
             p0[0] = p[0];
-            if let Ok((q, c)) = solve(&free_model, p0, settings.max_iters) {
+            if let Ok((q, c, it)) = solve(&free_model, p0, settings.max_iters) {
+                iterations += it;
                 starts.push(StartOutcome {
                     mu_start: p[0],
                     mu_end: q[0],
                     cost: c,
                 });
-                if score(&q, c) < score(&p, cost) {
+                if aic(&q, c) < aic(&p, cost) {
                     problem = free_model;
                     p = q;
                 }
@@ -384,206 +538,375 @@ pub fn fit(
         }
     }
     problem.set_values(&p);
-
-    // Noise per marker from the residuals, then refit with those weights (and robust weights).
-    let refit = |problem: &TrajectoryProblem, p: &DVector<f64>| {
-        solve(problem, p.clone(), settings.max_iters).map(|(p, _)| p)
-    };
-    let rounds = if settings.loss == Loss::Squares { 1 } else { 3 };
-    for _ in 0..rounds {
-        let Ok(raw) = problem.raw_residuals(&p) else {
-            break;
-        };
-        let (rms, _) = marker_rms(&raw, problem.free.len());
-        problem.sigma = rms.map(|s| if s.is_finite() && s > 0.0 { s } else { 1e-3 });
-        problem.row_weights = raw
-            .iter()
-            .map(|&(m, r)| {
-                let z = (r / problem.sigma[m]).abs();
-                match settings.loss {
-                    Loss::Squares => 1.0,
-                    Loss::Huber(k) => {
-                        if z <= k {
-                            1.0
-                        } else {
-                            (k / z).sqrt()
-                        }
+    // A robust loss reweights the rows by their standardised residuals, a few rounds.
+    if settings.loss != Loss::Squares {
+        for _ in 0..3 {
+            let Ok(raw) = problem.raw_residuals(&p) else {
+                break;
+            };
+            problem.row_weights = raw
+                .iter()
+                .map(|&(m, r)| {
+                    let z = (r / problem.sigma[m]).abs();
+                    match settings.loss {
+                        Loss::Squares => 1.0,
+                        Loss::Huber(k) if z > k => (k / z).sqrt(),
+                        Loss::Huber(_) => 1.0,
+                        Loss::Cauchy(k) => (1.0 / (1.0 + (z / k).powi(2))).sqrt(),
                     }
-                    Loss::Cauchy(k) => (1.0 / (1.0 + (z / k).powi(2))).sqrt(),
-                }
-            })
-            .collect();
-        // Equal noise on both markers only rescales the cost: the optimum does not move.
-        let ratio = problem.sigma[0].max(problem.sigma[1]) / problem.sigma[0].min(problem.sigma[1]);
-        if settings.loss == Loss::Squares && ratio < 1.25 {
-            break;
-        }
-        if let Ok(q) = refit(&problem, &p) {
-            p = q;
-            problem.set_values(&p);
+                })
+                .collect();
+            if let Ok((q, _, it)) = solve(&problem, p.clone(), settings.max_iters) {
+                iterations += it;
+                p = q;
+                problem.set_values(&p);
+            }
         }
     }
+    Ok(Base {
+        problem,
+        p,
+        starts,
+        iterations,
+        mu_s_data,
+        static_evidence,
+    })
+}
 
-    // The fitted motion: does it slide, does it stick, does a stick end in a slip?
-    let motion = |problem: &TrajectoryProblem| {
-        simulate(
-            &problem.rig,
-            &problem.initial,
-            obs.times[obs.times.len() - 1],
-            &settings.options,
-            &Request {
-                sample_times: problem.frame_times().to_vec(),
-                friction_work: false,
-            },
-        )
+/// Residuals this many noise deviations out are mis-tracked frames the track check missed.
+const RESIDUAL_OUTLIER: f64 = 6.0;
+
+/// Step 4: positions whose residual is beyond [`RESIDUAL_OUTLIER`] deviations get weight
+/// zero, and the fit is redone without them. Returns the drops per marker.
+fn drop_residual_outliers(
+    problem: &mut TrajectoryProblem,
+    p: &mut DVector<f64>,
+    settings: &FitSettings,
+    iterations: &mut u64,
+) -> [usize; 2] {
+    let mut dropped = [0; 2];
+    let Ok(raw) = problem.raw_residuals(p) else {
+        return dropped;
     };
-    let sol = motion(&problem).map_err(|e| FitError::NoStart(e.to_string()))?;
-    // Whether the parameters change below (the fitted motion is then simulated again).
-    let mut moved = false;
-    // A slide shorter than the slider's noise is not seen by the camera: the data then only
-    // say the slider held, so refit the stuck pendulum (mu at 0.999 mu*, where it never slips
-    // and no paradox arises) and report a lower bound for mu_static.
-    let (x_lo, x_hi) = sol
+    let frames = problem.row_frames();
+    // A position is one frame's marker: both its coordinates go together.
+    let mut bad = std::collections::HashSet::new();
+    for (i, &(m, r)) in raw.iter().enumerate() {
+        if problem.row_weights[i] > 0.0 && (r / problem.sigma[m]).abs() > RESIDUAL_OUTLIER {
+            bad.insert((frames[i], m));
+        }
+    }
+    if bad.is_empty() {
+        return dropped;
+    }
+    for (i, &(m, _)) in raw.iter().enumerate() {
+        if bad.contains(&(frames[i], m)) {
+            problem.row_weights[i] = 0.0;
+        }
+    }
+    for &(_, m) in &bad {
+        dropped[m] += 1;
+    }
+    if let Ok((q, _, it)) = solve(problem, p.clone(), settings.max_iters) {
+        *iterations += it;
+        *p = q;
+        problem.set_values(p);
+    }
+    dropped
+}
+
+/// The fitted motion at the frame times.
+fn motion(problem: &TrajectoryProblem) -> Result<Solution<f64>, FitError> {
+    simulate(
+        &problem.rig,
+        &problem.initial,
+        problem.frame_times().last().copied().unwrap_or(0.0),
+        &problem.options,
+        &Request {
+            sample_times: problem.frame_times().to_vec(),
+            friction_work: false,
+        },
+    )
+    .map_err(|e| FitError::NoStart(e.to_string()))
+}
+
+/// Whether the raw slider track moves by more than its noise can explain: its range along
+/// the rail (2nd to 98th percentile) beyond ten noise deviations.
+fn slider_moves(obs: &Observations, sigma: f64) -> Option<f64> {
+    let mut x: Vec<f64> = obs.slider.iter().flatten().map(|p| p[0]).collect();
+    if x.len() < 10 {
+        return None;
+    }
+    x.sort_by(f64::total_cmp);
+    let range = x[x.len() * 98 / 100] - x[x.len() * 2 / 100];
+    (range > 10.0 * sigma).then_some(range)
+}
+
+/// Fit the free parameters to `obs` starting from `rig_guess` (its mu values are guesses).
+pub fn fit(
+    obs: Observations,
+    rig_guess: &Rig<f64>,
+    settings: &FitSettings,
+) -> Result<FitReport, FitError> {
+    let mut obs = check_data(obs)?;
+    let n_frames = obs.times.len();
+    let (sigma, noise_measured, mut outliers) = noise_and_outliers(&mut obs, settings)?;
+    check_data(obs.clone())?;
+    let noise_dof: f64 = noise_measured
+        .iter()
+        .flatten()
+        .map(|e| e.dof)
+        .sum::<f64>()
+        .max(2.0);
+    let obs = Arc::new(obs);
+    let mut warnings = Vec::new();
+    let base = base_fit(&obs, rig_guess, sigma, settings, &mut warnings)?;
+    let (mut problem, mut p) = (base.problem, base.p);
+    let mut iterations = base.iterations;
+    let mut starts = base.starts;
+    let late = drop_residual_outliers(&mut problem, &mut p, settings, &mut iterations);
+    outliers = [outliers[0] + late[0], outliers[1] + late[1]];
+    if outliers.iter().sum::<usize>() > 0 {
+        warnings.push(format!(
+            "{} slider and {} bob positions were mis-tracked (beyond {} noise deviations) and left out",
+            outliers[0], outliers[1], RESIDUAL_OUTLIER
+        ));
+    }
+
+    // Does the fitted motion slide? A slide shorter than the slider's noise is not seen; a
+    // raw track that clearly moves while no fit slides is a failed fit, said as such.
+    let sol = motion(&problem)?;
+    let fitted_range = sol
         .samples
         .iter()
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
             (lo.min(s.state[0]), hi.max(s.state[0]))
         });
     let slides = sol.samples.iter().any(|s| matches!(s.mode, Mode::Slide(_)))
-        && x_hi - x_lo > 3.0 * problem.sigma[0];
-    let sticks = sol.samples.iter().any(|s| s.mode == Mode::Stick);
+        && fitted_range.1 - fitted_range.0 > 3.0 * problem.sigma[0];
+    let raw_moves = slider_moves(&obs, problem.sigma[0]);
     let onset = sol
         .events
         .iter()
-        .any(|e| e.kind == EventKind::Slip && e.t > 0.0);
+        .any(|e| e.kind == EventKind::Slip && e.t > 0.0)
+        || base.mu_s_data.is_some();
+
+    // Step 5: the nuisances the data ask for.
+    let mut models = Vec::new();
+    let mut nuisances = Vec::new();
+    if slides && settings.nuisances {
+        let chi2 = problem
+            .residuals(&p)
+            .map(|r| r.norm_squared())
+            .unwrap_or(f64::INFINITY);
+        let mu_k = p[0];
+        let opts = select::SelectOptions {
+            friction_candidates: settings.mu_static == StaticMode::Auto
+                && onset
+                && !problem.free.contains(&Param::MuStatic),
+            mu_static_start: base.mu_s_data.unwrap_or(1.15 * mu_k).max(1.05 * mu_k),
+            max_added: 3,
+            max_iters: settings.max_iters,
+            already: if problem.free.contains(&Param::MuStatic) {
+                vec![Nuisance::StaticFriction]
+            } else {
+                Vec::new()
+            },
+        };
+        let sel = select::forward(problem, p, chi2, &opts);
+        iterations += sel.iterations;
+        problem = sel.problem;
+        p = sel.p;
+        models = sel.rows;
+        nuisances = sel.chosen;
+    }
+    let mut moved = !nuisances.is_empty();
+
     if !slides {
+        if let Some(range) = raw_moves {
+            warnings.push(format!(
+                "the slider moves by {range:.4} m in the recording but no fit reproduces a slide: the fit failed; try --starts with other mu values"
+            ));
+        } else {
+            warnings.push("the slider never slides in the recording: mu_kinetic is not identifiable from it; mu_static is only bounded from below".into());
+        }
+        // The stuck pendulum: mu where it never slips (0.999 mu*, no paradox either).
         let mu_hold = 0.999 * crate::model::regions::mu_critical(problem.rig.mass_ratio());
         problem.rig.mu_kinetic = mu_hold;
         problem.rig.mu_static = mu_hold;
         problem.initial[2] = 0.0;
         problem.free = vec![Param::X, Param::Theta, Param::ThetaDot];
-        p = problem.values();
-        if let Ok(q) = refit(&problem, &p) {
+        if let Ok((q, _, it)) = solve(&problem, problem.values(), settings.max_iters) {
+            iterations += it;
             p = q;
             problem.set_values(&p);
+        } else {
+            p = problem.values();
         }
         moved = true;
-        warnings.push("the slider never slides in the recording: mu_kinetic is not identifiable from it; mu_static is only bounded from below".into());
     }
-    // mu_static is freed when the motion shows a stick-to-slide onset. If it ends on its bound
-    // mu_static = mu_kinetic, the onset is smooth (x'' starts at zero), its first-order
-    // sensitivity vanishes, and the errors of the others come from the tied model; mu_static
-    // then gets a one-sided profile interval.
+
+    // Step 6: mu_static. Freed at its bound mu_static = mu_kinetic it says only "up to".
     let mut static_at_bound = false;
     let mut mu_static_free = false;
-    if !slides {
-        // handled above: the stuck pendulum has no friction parameter left
-    } else if let Some(i) = idx(&problem, Param::MuStatic) {
-        if p[i] - p[0] <= 1e-9 * p[0].max(1e-9) {
-            problem.free.remove(i);
-            problem.tie_static = true;
-            p = problem.values();
-            static_at_bound = true;
-        } else {
-            mu_static_free = true;
-        }
-    } else if settings.mu_static == StaticMode::Auto
-        && onset
-        && !tried_static
-        && static_evidence != Some(false)
-    {
-        let mut free_static = problem.clone();
-        free_static.free.push(Param::MuStatic);
-        free_static.tie_static = false;
-        if let Ok(q) = refit(&free_static, &free_static.values()) {
-            let at_bound = q[q.len() - 1] - q[0] <= 1e-9 * q[0].max(1e-9);
-            if at_bound {
+    if slides {
+        if let Some(i) = idx(&problem, Param::MuStatic) {
+            if p[i] - p[0] <= 1e-6 * p[0].max(1e-9) {
+                problem.free.remove(i);
+                problem.tie_static = true;
+                p = problem.values();
                 static_at_bound = true;
-            } else {
-                problem = free_static;
-                p = q;
-                problem.set_values(&p);
-                mu_static_free = true;
                 moved = true;
+            } else {
+                mu_static_free = true;
             }
         }
     }
-    let sol = if moved {
-        motion(&problem).map_err(|e| FitError::NoStart(e.to_string()))?
-    } else {
-        sol
-    };
+    let sol = if moved { motion(&problem)? } else { sol };
+    let sticks = sol.samples.iter().any(|s| s.mode == Mode::Stick);
+    let slip_after_stick = sol
+        .events
+        .iter()
+        .any(|e| e.kind == EventKind::Slip && e.t > 0.0);
 
-    // Uncertainty from the exact Jacobian at the optimum.
-    let (r, j) = problem
-        .residuals_jacobian(&p)
-        .map_err(|e| FitError::NoStart(e.to_string()))?;
-    let n_res = r.len();
-    let dof = (n_res - p.len()).max(1) as f64;
-    let s2 = r.norm_squared() / dof;
-    let jtj = j.tr_mul(&j);
-    let cov = jtj.clone().try_inverse().unwrap_or_else(|| {
-        jtj.pseudo_inverse(1e-14)
-            .unwrap_or(DMatrix::from_element(p.len(), p.len(), f64::NAN))
-    }) * s2;
-    let se: Vec<f64> = (0..p.len()).map(|i| cov[(i, i)].max(0.0).sqrt()).collect();
-    let correlation = DMatrix::from_fn(p.len(), p.len(), |a, b| cov[(a, b)] / (se[a] * se[b]));
+    // Step 7: uncertainty.
+    let (stop_reason, p) = match solve_traced(&problem, p.clone(), settings.max_iters) {
+        Ok((q, _, it, reason)) => {
+            iterations += it;
+            problem.set_values(&q);
+            (reason, q)
+        }
+        Err(e) => (format!("final polish failed: {e}"), p),
+    };
+    let a = uncertainty::assess(&problem, &p, noise_dof).map_err(FitError::NoStart)?;
+    let k = p.len();
+    let scale = a.reduced_chi2.max(1.0);
+    let se: Vec<f64> = (0..k).map(|i| a.se[i].max(a.se_block[i])).collect();
+    let correlation =
+        DMatrix::from_fn(k, k, |i, j| a.cov[(i, j)] / (a.se[i] * a.se[j]).max(1e-300));
     let mut params: Vec<(Param, Estimate)> = problem
         .free
         .iter()
         .enumerate()
         .map(|(i, &q)| {
+            let widened = se[i] > a.se[i] * 1.0001;
             (
                 q,
                 Estimate {
                     value: p[i],
                     stderr: se[i],
                     ci95: [p[i] - 1.96 * se[i], p[i] + 1.96 * se[i]],
+                    interval: if widened { "wald+block" } else { "wald" },
                 },
             )
         })
         .collect();
-
     let identifiable = slides;
-    if settings.profile && identifiable {
-        if let Some(ci) = profile_interval(&problem, &p, 0, se[0], s2, settings, 0.0) {
-            params[0].1.ci95 = ci;
-        } else {
-            warnings.push("the profile interval for mu_kinetic did not close; the interval shown is value +- 1.96 stderr".into());
+    let mu_index = idx(&problem, Param::MuKinetic).filter(|_| identifiable);
+    if let (true, Some(i)) = (settings.profile, mu_index) {
+        match uncertainty::profile_interval(&problem, &p, i, a.se[i], scale, settings, 0.0) {
+            Some(ci) => {
+                // The profile knows the curvature, the block covariance the correlated
+                // residuals: widen the profile's half-widths by the block's excess.
+                let ratio = (se[i] / a.se[i]).max(1.0);
+                let v = p[i];
+                params[i].1.ci95 = [v - (v - ci[0]) * ratio, v + (ci[1] - v) * ratio];
+                params[i].1.interval = if ratio > 1.0001 {
+                    "profile+block"
+                } else {
+                    "profile"
+                };
+            }
+            None => warnings.push(
+                "the profile interval for mu_kinetic did not close; the interval shown is value +- 1.96 stderr"
+                    .into(),
+            ),
         }
     }
-    let mu_kinetic = identifiable.then(|| params[0].1);
-    let static_index = idx(&problem, Param::MuStatic).filter(|_| mu_static_free);
-    let mu_static = if let Some(i) = static_index {
+
+    // Step 8: adequacy. The thirds must agree; if they do not, the interval covers them.
+    let windows = if settings.windows && identifiable {
+        uncertainty::windows(&problem, 3, settings)
+    } else {
+        Vec::new()
+    };
+    let windows_p = uncertainty::window_consistency(&windows);
+    if let (Some(i), Some(pw)) = (mu_index, windows_p) {
+        if pw < 0.01 {
+            let lo = windows
+                .iter()
+                .map(|w| w.mu_kinetic)
+                .fold(f64::INFINITY, f64::min);
+            let hi = windows
+                .iter()
+                .map(|w| w.mu_kinetic)
+                .fold(f64::NEG_INFINITY, f64::max);
+            let e = &mut params[i].1;
+            e.ci95 = [e.ci95[0].min(lo), e.ci95[1].max(hi)];
+            e.stderr = e.stderr.max((e.ci95[1] - e.ci95[0]) / (2.0 * 1.96));
+            e.interval = match e.interval {
+                "profile" | "profile+block" => "profile+block+windows",
+                _ => "wald+block+windows",
+            };
+        }
+    }
+    let rho = uncertainty::lag1(&problem, a.r.as_slice());
+    let block_ratio = mu_index.map_or(1.0, |i| a.se_block[i] / a.se[i]);
+    let limited = adequacy_sentence(&a, block_ratio, windows_p, mu_index.map(|i| &params[i].1));
+
+    let mu_kinetic = mu_index.map(|i| params[i].1);
+    let mu_static = if let Some(i) = idx(&problem, Param::MuStatic).filter(|_| mu_static_free) {
         if settings.profile {
-            match profile_interval(&problem, &p, i, se[i], s2, settings, p[0]) {
-                Some(ci) => params[i].1.ci95 = ci,
+            match uncertainty::profile_interval(&problem, &p, i, a.se[i], scale, settings, p[0]) {
+                Some(ci) => {
+                    params[i].1.ci95 = ci;
+                    params[i].1.interval = "profile";
+                }
                 None => warnings.push("the profile interval for mu_static did not close".into()),
             }
         }
         StaticResult::Estimated(params[i].1)
-    } else if static_at_bound || (slides && onset && static_evidence == Some(false)) {
-        let mut upper = f64::NAN;
+    } else if slides
+        && (static_at_bound || (slip_after_stick && base.static_evidence == Some(false)))
+    {
+        let mut upper = None;
         if settings.profile {
             let mut free_static = problem.clone();
             free_static.free.push(Param::MuStatic);
             free_static.tie_static = false;
             let q = free_static.values();
-            if let Some(ci) =
-                profile_interval(&free_static, &q, q.len() - 1, f64::NAN, s2, settings, q[0])
-            {
-                upper = ci[1];
+            upper = uncertainty::profile_interval(
+                &free_static,
+                &q,
+                q.len() - 1,
+                f64::NAN,
+                scale,
+                settings,
+                q[0],
+            )
+            .map(|ci| ci[1]);
+        }
+        let mu = p[0];
+        match upper {
+            Some(u) => {
+                warnings.push(format!(
+                    "mu_static fits at its bound mu_static = mu_kinetic; the data allow up to {u:.5}"
+                ));
+                StaticResult::Estimated(Estimate {
+                    value: mu,
+                    stderr: (u - mu) / 1.96,
+                    ci95: [mu, u],
+                    interval: "profile (one-sided)",
+                })
+            }
+            None => {
+                warnings.push(
+                    "mu_static fits at its bound mu_static = mu_kinetic (no upper limit computed: profiles are off)"
+                        .into(),
+                );
+                StaticResult::NotIdentifiable
             }
         }
-        warnings.push(format!(
-            "mu_static fits at its bound mu_static = mu_kinetic; the data allow up to {upper:.5}"
-        ));
-        let mu = p[0];
-        StaticResult::Estimated(Estimate {
-            value: mu,
-            stderr: (upper - mu) / 1.96,
-            ci95: [mu, upper],
-        })
     } else if !slides {
         let bound = sol
             .samples
@@ -602,154 +925,169 @@ pub fn fit(
         StaticResult::NotIdentifiable
     };
 
-    // Goodness of fit.
-    let raw = problem.unweighted(r.as_slice());
-    let (rms_per_marker_m, rms_residual_m) = marker_rms(&raw, p.len());
-    let rho = lag1(&problem, r.as_slice());
-    if rho.abs() * (n_res as f64).sqrt() > 8.0 && rho.abs() > 0.3 {
-        warnings.push(format!("residuals show structure (lag-1 autocorrelation {rho:.2}): the model may not describe this recording (rod length, rail tilt, time offset, a marker mix-up)"));
-    }
+    // Step 9: the report.
+    let raw = problem.unweighted(a.r.as_slice());
+    let (rms_per_marker_m, rms_residual_m) = marker_rms(&raw, &problem.row_weights, k);
     // Starts that ended statistically as good as the best (cost within the 1-dof likelihood
-    // ratio, 2 / n relative) but at a different mu are a real ambiguity; a start that stalled
-    // at a worse cost is only a failed start.
+    // ratio) but at a different mu are a real ambiguity.
     let best_cost = starts.iter().map(|s| s.cost).fold(f64::INFINITY, f64::min);
     let tied: Vec<f64> = starts
         .iter()
-        .filter(|s| s.cost <= best_cost * (1.0 + 2.0 / n_rows))
+        .filter(|s| s.cost <= best_cost + 2.0 * scale)
         .map(|s| s.mu_end)
         .collect();
-    if let (Some(lo), Some(hi), true) = (
+    if let (Some(lo), Some(hi), Some(i)) = (
         tied.iter().cloned().reduce(f64::min),
         tied.iter().cloned().reduce(f64::max),
-        identifiable,
+        mu_index,
     ) {
-        if hi - lo > 3.0 * se[0].max(1e-6) {
+        if hi - lo > 3.0 * se[i].max(1e-6) {
             warnings.push(format!("starts disagree: equally good fits have mu_kinetic from {lo:.5} to {hi:.5}; the best was kept"));
         }
     }
+    starts.sort_by(|a, b| a.mu_start.total_cmp(&b.mu_start));
+    let speeds: Vec<f64> = sol
+        .samples
+        .iter()
+        .filter(|s| matches!(s.mode, Mode::Slide(_)))
+        .map(|s| s.state[2].abs())
+        .collect();
+    let sliding_speed_range = (!speeds.is_empty()).then(|| {
+        [
+            speeds.iter().cloned().fold(f64::INFINITY, f64::min),
+            speeds.iter().cloned().fold(0.0, f64::max),
+        ]
+    });
+    let all_params = [
+        Param::MuKinetic,
+        Param::MuStatic,
+        Param::X,
+        Param::Theta,
+        Param::XDot,
+        Param::ThetaDot,
+        Param::RodLength,
+        Param::RailTilt,
+        Param::PivotDamping,
+        Param::ViscousFriction,
+        Param::ScaleError,
+        Param::BobAlong,
+        Param::BobAcross,
+        Param::SliderDx,
+        Param::SliderDy,
+        Param::Lag,
+    ];
+    let fixed = all_params
+        .into_iter()
+        .filter(|q| !problem.free.contains(q))
+        .map(|q| (q, problem.get(q)))
+        .collect();
+    let start_problem = TrajectoryProblem::new(
+        obs.clone(),
+        *rig_guess,
+        problem.initial,
+        problem.free.clone(),
+        settings.options,
+    );
+    let start_values = problem
+        .free
+        .iter()
+        .map(|&q| {
+            let v = starts
+                .first()
+                .filter(|_| q == Param::MuKinetic)
+                .map_or_else(|| start_problem.get(q), |s| s.mu_start);
+            (q, v)
+        })
+        .collect();
+    let n_rows = problem.row_weights.iter().filter(|w| **w > 0.0).count();
+    let adequacy = Adequacy {
+        chi2: a.chi2,
+        dof: a.dof,
+        reduced_chi2: a.reduced_chi2,
+        p_value: a.p_value,
+        aic: a.chi2 + 2.0 * k as f64,
+        bic: a.chi2 + k as f64 * (n_rows as f64).ln(),
+        lag1: rho,
+        block_se_ratio: block_ratio,
+        block_frames: a.block_frames,
+        windows_p_value: windows_p,
+        limited_by_model: limited,
+    };
+    let c = &problem.counters;
     Ok(FitReport {
         params,
+        start_values,
+        fixed,
         mu_kinetic,
         mu_static,
         rig: problem.rig,
         initial: problem.initial,
+        camera: problem.camera,
         correlation,
         rms_residual_m,
         rms_per_marker_m,
         noise_m: problem.sigma,
-        reduced_chi2: s2,
+        noise: noise_measured,
+        reduced_chi2: adequacy.reduced_chi2,
         residual_autocorrelation: rho,
+        adequacy,
+        models,
+        nuisances,
+        windows,
+        outliers,
+        sliding_speed_range,
         events: sol.events,
         identifiable,
         starts,
-        n_residuals: n_res,
+        n_residuals: n_rows,
+        n_frames,
+        work: Work {
+            iterations,
+            residual_evals: c.residuals.load(Ordering::Relaxed),
+            jacobian_evals: c.jacobians.load(Ordering::Relaxed),
+        },
+        stop_reason,
         warnings,
     })
 }
 
-/// Lag-1 autocorrelation of the residual series, per coordinate stream, pooled.
-fn lag1(problem: &TrajectoryProblem, r: &[f64]) -> f64 {
-    let markers = problem.row_markers();
-    // Rows come as frame-major (slider x, y, bob x, y); pair each row with the next row of
-    // the same stream, 2 or 4 rows later depending on which markers the frames have.
-    let mut num = 0.0;
-    let mut den = 0.0;
-    for (i, &ri) in r.iter().enumerate() {
-        den += ri * ri;
-        if let Some(k) =
-            (i + 1..r.len().min(i + 6)).find(|&k| markers[k] == markers[i] && (k - i) % 2 == 0)
-        {
-            num += ri * r[k];
-        }
+/// The one plain sentence when the model limits the result: chi-square fails against the
+/// measured noise (p < 0.001), the residuals are correlated enough to widen the errors by half,
+/// or the thirds disagree (p < 0.01).
+fn adequacy_sentence(
+    a: &uncertainty::Assessment,
+    block_ratio: f64,
+    windows_p: Option<f64>,
+    mu: Option<&Estimate>,
+) -> Option<String> {
+    let mut why = Vec::new();
+    if a.p_value < 1e-3 {
+        why.push(format!(
+            "chi-square is {:.0} for {:.0} degrees of freedom against the noise measured from the tracks (reduced {:.2}, p = {:.1e})",
+            a.chi2, a.dof, a.reduced_chi2, a.p_value
+        ));
     }
-    if den > 0.0 {
-        num / den
-    } else {
-        0.0
+    if block_ratio > 1.5 {
+        why.push(format!(
+            "the residuals are correlated in time (block standard error {block_ratio:.1} times the plain one)"
+        ));
     }
-}
-
-/// 95% profile-likelihood interval for parameter `k`: where the best cost with that parameter
-/// fixed rises by chi2(1, 0.95) = 3.84 times the residual variance.
-fn profile_interval(
-    problem: &TrajectoryProblem,
-    p: &DVector<f64>,
-    k: usize,
-    se: f64,
-    s2: f64,
-    settings: &FitSettings,
-    lower_limit: f64,
-) -> Option<[f64; 2]> {
-    let target = 3.84 * s2;
-    let base = p.clone();
-    let s_min = problem.residuals(p).ok()?.norm_squared();
-    let mut fixed = problem.clone();
-    fixed.free.remove(k);
-    let others: Vec<usize> = (0..p.len()).filter(|&i| i != k).collect();
-    let profile = |v: f64, warm: &DVector<f64>| -> Option<(f64, DVector<f64>)> {
-        let mut pr = fixed.clone();
-        let mut full = base.clone();
-        full[k] = v;
-        let mut tmp = problem.clone();
-        tmp.set_values(&full);
-        pr.rig = tmp.rig;
-        pr.initial = tmp.initial;
-        let (opt, cost) = solve(&pr, warm.clone(), settings.max_iters).ok()?;
-        Some((2.0 * cost - s_min, opt))
-    };
-    let start: DVector<f64> = DVector::from_iterator(others.len(), others.iter().map(|&i| p[i]));
-    let mut ends = [0.0; 2];
-    for (side, dir) in [-1.0f64, 1.0].iter().enumerate() {
-        // A standard error larger than half the value means the linearisation says nothing
-        // (a bound is active): start from a step relative to the value instead.
-        let scale = p[k].abs().max(1e-3);
-        let step0 = if se.is_finite() && se < 0.5 * scale {
-            se.max(1e-6 * scale)
-        } else {
-            0.01 * scale
-        };
-        let mut lo = (p[k], 0.0);
-        let mut warm = start.clone();
-        let mut step = 2.0 * step0;
-        let mut hi = None;
-        for _ in 0..12 {
-            let v = (p[k] + dir * step).max(lower_limit);
-            let (d, opt) = profile(v, &warm)?;
-            if d >= target {
-                hi = Some((v, d));
-                break;
-            }
-            lo = (v, d);
-            warm = opt;
-            if v == lower_limit {
-                break;
-            }
-            step *= 2.0;
-        }
-        let Some(mut hi) = hi else {
-            if lo.0 == lower_limit {
-                ends[side] = lower_limit;
-                continue;
-            }
-            return None;
-        };
-        for _ in 0..8 {
-            // Interpolate on the square root of the rise, which is nearly linear in the value.
-            let (a, b) = (lo.1.max(0.0).sqrt(), hi.1.sqrt());
-            let frac = ((target.sqrt() - a) / (b - a)).clamp(0.05, 0.95);
-            let v = lo.0 + frac * (hi.0 - lo.0);
-            let (d, opt) = profile(v, &warm)?;
-            if d >= target {
-                hi = (v, d);
-            } else {
-                lo = (v, d);
-                warm = opt;
-            }
-            if (hi.0 - lo.0).abs() < 0.02 * step0 {
-                break;
-            }
-        }
-        ends[side] = 0.5 * (lo.0 + hi.0);
+    if let Some(pw) = windows_p.filter(|p| *p < 0.01) {
+        why.push(format!(
+            "the recording's thirds disagree on mu_kinetic (p = {pw:.1e})"
+        ));
     }
-    Some(ends)
+    if why.is_empty() {
+        return None;
+    }
+    let interval = mu.map_or(String::new(), |e| {
+        format!(
+            "; the interval for mu_kinetic was widened to [{:.5}, {:.5}] ({})",
+            e.ci95[0], e.ci95[1], e.interval
+        )
+    });
+    Some(format!(
+        "The result is limited by the model, not by the noise: {}{interval}.",
+        why.join("; ")
+    ))
 }

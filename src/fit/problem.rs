@@ -2,12 +2,13 @@
 //! weighted per marker, as a function of the free parameters (rig and initial state).
 
 use super::lm::LeastSquares;
-use crate::model::{markers, Rig, Scalar, State};
+use crate::model::{observed_markers, Camera, Rig, Scalar, State};
 use crate::sim::{simulate, Options, Request, SimError};
 use argmin::core::Error;
 use nalgebra::{DMatrix, DVector, U1};
 use num_dual::{Derivative, DualSVec64};
 use serde::Serialize;
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 /// Marker observations in the rail frame (metres, y up), times in seconds from the first frame.
@@ -39,6 +40,26 @@ pub enum Param {
     ThetaDot,
     /// Rod length (m).
     RodLength,
+    /// Rail tilt alpha (rad, +x downhill).
+    RailTilt,
+    /// Viscous torque coefficient at the pivot (N m s).
+    PivotDamping,
+    /// Viscous rail friction (N s/m).
+    ViscousFriction,
+    /// Stribeck speed v_s (m/s).
+    StribeckVelocity,
+    /// Relative camera scale error (positions times 1 + this).
+    ScaleError,
+    /// Bob marker's offset along the rod from its end (m).
+    BobAlong,
+    /// Bob marker's offset across the rod (m).
+    BobAcross,
+    /// Slider marker's offset along the rail (m).
+    SliderDx,
+    /// Slider marker's offset perpendicular to the rail (m, y down).
+    SliderDy,
+    /// Lag of the bob's track behind the slider's (s).
+    Lag,
 }
 
 impl Param {
@@ -52,9 +73,41 @@ impl Param {
             Param::XDot => "x_dot",
             Param::ThetaDot => "theta_dot",
             Param::RodLength => "rod_length",
+            Param::RailTilt => "rail_tilt",
+            Param::PivotDamping => "pivot_damping",
+            Param::ViscousFriction => "viscous_friction",
+            Param::StribeckVelocity => "stribeck_velocity",
+            Param::ScaleError => "camera_scale_error",
+            Param::BobAlong => "bob_marker_along",
+            Param::BobAcross => "bob_marker_across",
+            Param::SliderDx => "slider_marker_dx",
+            Param::SliderDy => "slider_marker_dy",
+            Param::Lag => "marker_lag",
+        }
+    }
+
+    /// Unit of the parameter's value, for reports.
+    pub fn unit(self) -> &'static str {
+        match self {
+            Param::MuKinetic | Param::MuStatic | Param::ScaleError => "",
+            Param::X
+            | Param::RodLength
+            | Param::BobAlong
+            | Param::BobAcross
+            | Param::SliderDx
+            | Param::SliderDy => "m",
+            Param::Theta | Param::RailTilt => "rad",
+            Param::XDot | Param::StribeckVelocity => "m/s",
+            Param::ThetaDot => "rad/s",
+            Param::PivotDamping => "N m s",
+            Param::ViscousFriction => "N s/m",
+            Param::Lag => "s",
         }
     }
 }
+
+/// The most parameters a fit frees at once (the dual-number Jacobian is built for each count).
+pub const MAX_FREE: usize = 10;
 
 /// One residual row: which frame, which marker (0 slider, 1 bob), which coordinate.
 #[derive(Debug, Clone, Copy)]
@@ -73,6 +126,8 @@ pub struct TrajectoryProblem {
     pub rig: Rig<f64>,
     /// Initial state holding the values of parameters that are not free.
     pub initial: State<f64>,
+    /// Camera and marker model holding the values of its parameters that are not free.
+    pub camera: Camera<f64>,
     /// Free parameters, in the order of the parameter vector.
     pub free: Vec<Param>,
     /// Keep mu_static equal to mu_kinetic while mu_static is not free.
@@ -87,6 +142,17 @@ pub struct TrajectoryProblem {
     times: Vec<f64>,
     /// Samples at the frame times, nothing else: built once, not per evaluation.
     request: Request,
+    /// Evaluations of this problem and its clones, for the report.
+    pub counters: Arc<Counters>,
+}
+
+/// How often a fit evaluated its residuals and its Jacobian (shared by a problem's clones).
+#[derive(Debug, Default)]
+pub struct Counters {
+    /// Residual evaluations (one simulation each).
+    pub residuals: AtomicU64,
+    /// Jacobian evaluations (one simulation in dual numbers each).
+    pub jacobians: AtomicU64,
 }
 
 impl TrajectoryProblem {
@@ -124,6 +190,7 @@ impl TrajectoryProblem {
             obs,
             rig,
             initial,
+            camera: Camera::default(),
             free,
             tie_static: true,
             options,
@@ -135,7 +202,18 @@ impl TrajectoryProblem {
                 friction_work: false,
             },
             times: frames,
+            counters: Arc::new(Counters::default()),
         }
+    }
+
+    /// Frame index (into the problem's frames with data) of each residual row.
+    pub fn row_frames(&self) -> Vec<usize> {
+        self.rows.iter().map(|r| r.frame).collect()
+    }
+
+    /// Observed value of each residual row (m).
+    pub fn row_observed(&self) -> Vec<f64> {
+        self.rows.iter().map(|r| r.observed).collect()
     }
 
     /// The observations.
@@ -168,20 +246,32 @@ impl TrajectoryProblem {
             Param::XDot => self.initial[2],
             Param::ThetaDot => self.initial[3],
             Param::RodLength => self.rig.rod_length,
+            Param::RailTilt => self.rig.rail_tilt,
+            Param::PivotDamping => self.rig.pivot_damping,
+            Param::ViscousFriction => self.rig.viscous_friction,
+            Param::StribeckVelocity => self.rig.stribeck_velocity,
+            Param::ScaleError => self.camera.scale_error,
+            Param::BobAlong => self.camera.bob_along,
+            Param::BobAcross => self.camera.bob_across,
+            Param::SliderDx => self.camera.slider_dx,
+            Param::SliderDy => self.camera.slider_dy,
+            Param::Lag => self.camera.lag,
         }
     }
 
     /// Store a parameter vector into the rig and initial state.
     pub fn set_values(&mut self, v: &DVector<f64>) {
-        let (rig, y0) = self.apply::<f64>(v.as_slice());
+        let (rig, y0, camera) = self.apply::<f64>(v.as_slice());
         self.rig = rig;
         self.initial = y0;
+        self.camera = camera;
     }
 
-    /// Rig and initial state for a parameter vector, in any scalar.
-    pub fn apply<T: Scalar>(&self, p: &[T]) -> (Rig<T>, State<T>) {
+    /// Rig, initial state and camera for a parameter vector, in any scalar.
+    pub fn apply<T: Scalar>(&self, p: &[T]) -> (Rig<T>, State<T>, Camera<T>) {
         let mut rig: Rig<T> = self.rig.lift();
         let mut y0: State<T> = self.initial.map(T::from);
+        let mut cam: Camera<T> = self.camera.lift();
         for (&param, &v) in self.free.iter().zip(p) {
             match param {
                 Param::MuKinetic => rig.mu_kinetic = v,
@@ -191,12 +281,22 @@ impl TrajectoryProblem {
                 Param::XDot => y0[2] = v,
                 Param::ThetaDot => y0[3] = v,
                 Param::RodLength => rig.rod_length = v,
+                Param::RailTilt => rig.rail_tilt = v,
+                Param::PivotDamping => rig.pivot_damping = v,
+                Param::ViscousFriction => rig.viscous_friction = v,
+                Param::StribeckVelocity => rig.stribeck_velocity = v,
+                Param::ScaleError => cam.scale_error = v,
+                Param::BobAlong => cam.bob_along = v,
+                Param::BobAcross => cam.bob_across = v,
+                Param::SliderDx => cam.slider_dx = v,
+                Param::SliderDy => cam.slider_dy = v,
+                Param::Lag => cam.lag = v,
             }
         }
         if self.tie_static && !self.free.contains(&Param::MuStatic) {
             rig.mu_static = rig.mu_kinetic;
         }
-        (rig, y0)
+        (rig, y0, cam)
     }
 
     /// Simulate with parameters `p` and hand every residual row (predicted - observed, in
@@ -207,7 +307,7 @@ impl TrajectoryProblem {
         p: &[T],
         mut each: impl FnMut(usize, &Row, T),
     ) -> Result<(), SimError> {
-        let (rig, y0) = self.apply(p);
+        let (rig, y0, camera) = self.apply(p);
         let t_end = self.times.last().copied().unwrap_or(0.0);
         let sol = simulate(&rig, &y0, t_end, &self.options, &self.request)?;
         if sol.samples.len() < self.times.len() {
@@ -221,7 +321,8 @@ impl TrajectoryProblem {
             let m = match cached {
                 Some((f, m)) if f == r.frame => m,
                 _ => {
-                    let m = markers(&rig, &sol.samples[r.frame].state);
+                    let sample = &sol.samples[r.frame];
+                    let m = observed_markers(&rig, &camera, sample.mode, &sample.state);
                     cached = Some((r.frame, m));
                     m
                 }
@@ -296,6 +397,7 @@ fn to_err(e: SimError) -> Error {
 
 impl LeastSquares for TrajectoryProblem {
     fn residuals(&self, p: &DVector<f64>) -> Result<DVector<f64>, Error> {
+        self.counters.residuals.fetch_add(1, Ordering::Relaxed);
         let r = self.weighted(p.as_slice()).map_err(to_err)?;
         Ok(DVector::from_vec(r))
     }
@@ -303,6 +405,7 @@ impl LeastSquares for TrajectoryProblem {
     /// Exact Jacobian by forward-mode dual numbers through the integrator, with event times
     /// differentiated implicitly at every mode switch.
     fn residuals_jacobian(&self, p: &DVector<f64>) -> Result<(DVector<f64>, DMatrix<f64>), Error> {
+        self.counters.jacobians.fetch_add(1, Ordering::Relaxed);
         match p.len() {
             1 => self.jacobian_n::<1>(p),
             2 => self.jacobian_n::<2>(p),
@@ -311,7 +414,14 @@ impl LeastSquares for TrajectoryProblem {
             5 => self.jacobian_n::<5>(p),
             6 => self.jacobian_n::<6>(p),
             7 => self.jacobian_n::<7>(p),
-            n => return Err(Error::msg(format!("at most 7 free parameters, got {n}"))),
+            8 => self.jacobian_n::<8>(p),
+            9 => self.jacobian_n::<9>(p),
+            10 => self.jacobian_n::<10>(p),
+            n => {
+                return Err(Error::msg(format!(
+                    "at most {MAX_FREE} free parameters, got {n}"
+                )))
+            }
         }
         .map_err(to_err)
     }
@@ -325,9 +435,19 @@ impl LeastSquares for TrajectoryProblem {
         if let Some(i) = idx(Param::MuStatic) {
             p[i] = p[i].max(mu_k);
         }
-        if let Some(i) = idx(Param::RodLength) {
-            p[i] = p[i].max(1e-6);
-        }
+        // Physical ranges: the solver steps back inside them rather than simulating nonsense.
+        let clamp = |p: &mut DVector<f64>, q: Param, lo: f64, hi: f64| {
+            if let Some(i) = idx(q) {
+                p[i] = p[i].clamp(lo, hi);
+            }
+        };
+        clamp(p, Param::RodLength, 1e-6, f64::INFINITY);
+        clamp(p, Param::PivotDamping, 0.0, f64::INFINITY);
+        clamp(p, Param::ViscousFriction, 0.0, f64::INFINITY);
+        clamp(p, Param::StribeckVelocity, 1e-4, 10.0);
+        clamp(p, Param::RailTilt, -0.3, 0.3);
+        clamp(p, Param::ScaleError, -0.5, 0.5);
+        clamp(p, Param::Lag, -0.05, 0.05);
     }
 }
 

@@ -3,7 +3,7 @@
 //! All functions are generic over [`Scalar`] so that the same formulas serve the simulator in
 //! `f64` and the fit in dual numbers.
 
-use super::{sign, Rig, Scalar, State, THETA, THETA_DOT, X, X_DOT};
+use super::{sign, Mode, Rig, Scalar, State, THETA, THETA_DOT, X, X_DOT};
 
 /// The shorthands D, a, b, c, Q and A of PHYSICS.md at one (theta, theta'), with sin and cos
 /// kept because every acceleration needs them again. With tilt and pivot damping they are the
@@ -32,27 +32,33 @@ pub struct Shorthands<T> {
 
 impl<T: Scalar> Shorthands<T> {
     /// Evaluate the shorthands at angle `theta` and angular velocity `w`.
-    #[inline]
+    #[inline(always)]
     pub fn new(rig: &Rig<T>, theta: T, w: T) -> Self {
         let (sin, cos) = theta.sin_cos();
         let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);
-        let (gx, gy) = rig.gravity_components();
         let lw2 = l * w * w;
         let d = m1 + m2 * cos * cos;
         let a = m2 * sin * cos;
+        if rig.rail_tilt.is_zero() && rig.pivot_damping.is_zero() {
+            // The ideal rig: the paper's forms, one test for the whole evaluation.
+            let g = rig.gravity;
+            return Shorthands {
+                d,
+                a,
+                b: -(m1 * g + m2 * sin * (g * sin + lw2)),
+                c: m2 * cos * (g * sin + lw2),
+                q: -m1 * ((m1 + m2) * g + m2 * l * w * w * sin),
+                pend: g * cos,
+                sin,
+                cos,
+            };
+        }
+        let (gx, gy) = rig.gravity_components();
         // The ideal rig's forms, which keep full precision for a light slider (b never
         // subtracts (m1 + m2) g from m2 g cos^2), plus the drive of tilt and damping.
-        let mut b = -(m1 * gy + m2 * sin * (gy * sin + lw2));
-        let mut c = m2 * cos * (gy * sin + lw2);
-        let extra = rig.extra_drive(sin, w);
-        let pend = match extra {
-            Some(e) => {
-                b += m2 * cos * e;
-                c += m2 * sin * e + (m1 + m2) * gx;
-                gy * cos + e
-            }
-            None => gy * cos,
-        };
+        let e = rig.extra_drive(sin, w).unwrap_or_else(T::zero);
+        let b = -(m1 * gy + m2 * sin * (gy * sin + lw2)) + m2 * cos * e;
+        let c = m2 * cos * (gy * sin + lw2) + m2 * sin * e + (m1 + m2) * gx;
         let q = rig.normal_numerator_sc(sin, cos, w);
         Shorthands {
             d,
@@ -60,7 +66,7 @@ impl<T: Scalar> Shorthands<T> {
             b,
             c,
             q,
-            pend,
+            pend: gy * cos + e,
             sin,
             cos,
         }
@@ -140,7 +146,7 @@ impl<T: Scalar> Rig<T> {
     }
 
     /// Q from sin and cos of theta (cos is unused on a rig without pivot damping).
-    #[inline]
+    #[inline(always)]
     fn normal_numerator_sc(&self, sin: T, cos: T, w: T) -> T {
         let (m1, m2) = (self.slider_mass, self.bob_mass);
         let (_, gy) = self.gravity_components();
@@ -154,7 +160,7 @@ impl<T: Scalar> Rig<T> {
 
     /// The part of A = g_y cos(theta) - g_x sin(theta) - c_p w / (m2 l) that a level, undamped
     /// rail lacks: -g_x sin(theta) - c_p w / (m2 l); `None` on such a rail.
-    #[inline]
+    #[inline(always)]
     fn extra_drive(&self, sin: T, w: T) -> Option<T> {
         let tilt = !self.rail_tilt.is_zero();
         let damped = !self.pivot_damping.is_zero();
@@ -173,7 +179,7 @@ impl<T: Scalar> Rig<T> {
 
     /// Angular acceleration of the pendulum model at (theta, w), theta'' = A / l, without the
     /// other shorthands (the stick phase's right-hand side needs nothing else).
-    #[inline]
+    #[inline(always)]
     pub fn stick_angular_acceleration(&self, theta: T, w: T) -> T {
         if self.rail_tilt.is_zero() && self.pivot_damping.is_zero() {
             return self.gravity * theta.cos() / self.rod_length;
@@ -194,7 +200,7 @@ impl<T: Scalar> Rig<T> {
     /// (both +1 or -1) at velocity `x_dot`: with mu = mu(|x'|),
     /// x'' = (c - mu s sigma b - c_v x') / (D + mu s sigma a), N = b + a x''
     /// = (Q - a c_v x') / (same), l theta'' = A + sin(theta) x''.
-    #[inline]
+    #[inline(always)]
     pub fn slide(&self, sh: &Shorthands<T>, s: f64, sigma: f64, x_dot: T) -> SlideDynamics<T> {
         let mu = self.friction_mu(x_dot * s);
         let ms = mu * (s * sigma);
@@ -262,6 +268,26 @@ impl<T: Scalar> Rig<T> {
             coulomb
         } else {
             coulomb - self.viscous_friction * x_dot * x_dot
+        }
+    }
+
+    /// Accelerations (x'', theta'') of the model that governs `mode` at state `y` (the
+    /// consistent branch with positive denominator while sliding).
+    pub fn accelerations(&self, mode: Mode, y: &[T]) -> (T, T) {
+        match mode {
+            Mode::Stick => (
+                T::zero(),
+                self.stick_angular_acceleration(y[THETA], y[THETA_DOT]),
+            ),
+            Mode::Slide(dir) => {
+                let s = dir.sign();
+                let sh = Shorthands::at(self, y);
+                let sigma = self
+                    .slide_sigma(&sh, s, y[X_DOT])
+                    .unwrap_or_else(|| sign(sh.q.re()));
+                let d = self.slide(&sh, s, sigma, y[X_DOT]);
+                (d.x_ddot, d.theta_ddot)
+            }
         }
     }
 

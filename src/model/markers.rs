@@ -1,6 +1,8 @@
-//! What a camera sees: marker positions in the rail frame (metres, x along the rail, y up).
+//! What a camera sees: marker positions in the rail frame (metres, x along the rail, y up),
+//! for ideal markers ([`markers`]) and through the observation model of PHYSICS.md ("What a
+//! camera adds": marker offsets, camera scale, a lag between the markers; [`Camera`]).
 
-use super::{Rig, Scalar, State, THETA, X};
+use super::{Mode, Rig, Scalar, State, THETA, THETA_DOT, X, X_DOT};
 
 /// Slider and bob positions `[slider_x, slider_y, bob_x, bob_y]` in the rail frame with y up:
 /// the slider at (x, 0), the bob at (x + l cos(theta), -l sin(theta)) (the model's y-down
@@ -10,4 +12,102 @@ pub fn markers<T: Scalar>(rig: &Rig<T>, y: &State<T>) -> [T; 4] {
     let (sin, cos) = y[THETA].sin_cos();
     let l = rig.rod_length;
     [y[X], T::from(0.0), y[X] + l * cos, -(l * sin)]
+}
+
+/// How the camera and the markers differ from the ideal: every field zero (and the scale one)
+/// is the ideal camera of [`markers`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Camera<T> {
+    /// Relative scale error: every position is multiplied by 1 + `scale_error`.
+    pub scale_error: T,
+    /// Bob marker's offset along the rod from the rod's end (m): it sits at l + `bob_along`.
+    pub bob_along: T,
+    /// Bob marker's offset across the rod, toward increasing theta (m).
+    pub bob_across: T,
+    /// Slider marker's offset from the pivot along the rail (m).
+    pub slider_dx: T,
+    /// Slider marker's offset from the pivot perpendicular to the rail, y down (m).
+    pub slider_dy: T,
+    /// Lag of the bob's track behind the slider's (s): the bob seen at frame time t was at
+    /// t - `lag`.
+    pub lag: T,
+}
+
+impl<T: Scalar> Default for Camera<T> {
+    fn default() -> Self {
+        let z = T::from(0.0);
+        Camera {
+            scale_error: z,
+            bob_along: z,
+            bob_across: z,
+            slider_dx: z,
+            slider_dy: z,
+            lag: z,
+        }
+    }
+}
+
+impl Camera<f64> {
+    /// The same camera in another scalar type (derivative parts zero).
+    pub fn lift<T: Scalar>(&self) -> Camera<T> {
+        Camera {
+            scale_error: T::from(self.scale_error),
+            bob_along: T::from(self.bob_along),
+            bob_across: T::from(self.bob_across),
+            slider_dx: T::from(self.slider_dx),
+            slider_dy: T::from(self.slider_dy),
+            lag: T::from(self.lag),
+        }
+    }
+}
+
+/// Marker positions `[slider_x, slider_y, bob_x, bob_y]` (rail frame, y up) as `camera` sees
+/// the rig in `mode` at state `y` (PHYSICS.md, "What a camera adds"). A lag is applied to the
+/// bob by a second-order Taylor step back along the motion (lags are milliseconds, so the
+/// third-order term is far below any camera's noise).
+pub fn observed_markers<T: Scalar>(
+    rig: &Rig<T>,
+    camera: &Camera<T>,
+    mode: Mode,
+    y: &State<T>,
+) -> [T; 4] {
+    let k = T::from(1.0) + camera.scale_error;
+    let (sin, cos) = y[THETA].sin_cos();
+    let lb = rig.rod_length + camera.bob_along;
+    let e = camera.bob_across;
+    // Bob relative to the slider, y down, and its first two angular derivatives' factors.
+    let along = lb * cos - e * sin; // d(bx)/d(theta) = -across_y
+    let across = lb * sin + e * cos; // by (y down); d(by)/d(theta) = along
+    let mut bx = y[X] + along;
+    let mut by = across;
+    if camera.lag.re() != 0.0 || camera.lag.eps_is_nonzero() {
+        let (x_dd, th_dd) = rig.accelerations(mode, y);
+        let w = y[THETA_DOT];
+        let vx = y[X_DOT] - across * w;
+        let vy = along * w;
+        let ax = x_dd - across * th_dd - along * w * w;
+        let ay = along * th_dd - across * w * w;
+        let tau = camera.lag;
+        let half_tau2 = tau * tau * 0.5;
+        bx = bx - tau * vx + half_tau2 * ax;
+        by = by - tau * vy + half_tau2 * ay;
+    }
+    [
+        k * (y[X] + camera.slider_dx),
+        -(k * camera.slider_dy),
+        k * bx,
+        -(k * by),
+    ]
+}
+
+/// Whether a scalar carries a nonzero derivative part (a lag that is zero but being
+/// differentiated must still take the Taylor path).
+trait EpsNonzero {
+    fn eps_is_nonzero(&self) -> bool;
+}
+
+impl<T: Scalar> EpsNonzero for T {
+    fn eps_is_nonzero(&self) -> bool {
+        !(*self - T::from(self.re())).is_zero()
+    }
 }

@@ -258,7 +258,7 @@ impl<T: Scalar> Rig<T> {
 
     /// Gravity's components (g_x, g_y) in the rail frame: (g sin alpha, g cos alpha). A level
     /// rail skips the trigonometry (and keeps its results bit for bit).
-    #[inline]
+    #[inline(always)]
     pub fn gravity_components(&self) -> (T, T) {
         if self.rail_tilt.is_zero() {
             (T::zero(), self.gravity)
@@ -269,7 +269,7 @@ impl<T: Scalar> Rig<T> {
     }
 
     /// The sliding friction coefficient at speed `speed` = |x'| under the rig's law.
-    #[inline]
+    #[inline(always)]
     pub fn friction_mu(&self, speed: T) -> T {
         match self.friction_law {
             FrictionLaw::Coulomb => self.mu_kinetic,

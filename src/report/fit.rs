@@ -3,7 +3,7 @@
 
 use super::plot::{data_range, Figure, PlotError};
 use crate::fit::{Estimate, FitReport, Observations, Param, StaticResult};
-use crate::model::{markers, Mode};
+use crate::model::{observed_markers, Mode};
 use crate::sim::{simulate, Options, Request};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -11,25 +11,36 @@ use serde_json::{json, Value};
 use std::fmt::Write as _;
 
 fn estimate_json(e: &Estimate) -> Value {
-    json!({"value": e.value, "stderr": e.stderr, "ci95": e.ci95})
+    json!({"value": e.value, "stderr": e.stderr, "ci95": e.ci95, "interval": e.interval})
 }
 
 fn get(rep: &FitReport, p: Param) -> f64 {
-    rep.params.iter().find(|(q, _)| *q == p).map_or_else(
-        || match p {
-            Param::X => rep.initial[0],
-            Param::Theta => rep.initial[1],
-            Param::XDot => rep.initial[2],
-            Param::ThetaDot => rep.initial[3],
-            Param::MuKinetic => rep.rig.mu_kinetic,
-            Param::MuStatic => rep.rig.mu_static,
-            Param::RodLength => rep.rig.rod_length,
-        },
-        |(_, e)| e.value,
-    )
+    rep.params
+        .iter()
+        .find(|(q, _)| *q == p)
+        .map(|(_, e)| e.value)
+        .or_else(|| rep.fixed.iter().find(|(q, _)| *q == p).map(|(_, v)| *v))
+        .unwrap_or(f64::NAN)
 }
 
-/// The JSON object of `appell fit --json` (one line per recording for a directory).
+/// Pairs of free parameters whose correlation exceeds 0.1 in size, largest first.
+fn correlated_pairs(rep: &FitReport) -> Vec<(Param, Param, f64)> {
+    let mut out = Vec::new();
+    for i in 0..rep.params.len() {
+        for j in i + 1..rep.params.len() {
+            let r = rep.correlation[(i, j)];
+            if r.abs() > 0.1 {
+                out.push((rep.params[i].0, rep.params[j].0, r));
+            }
+        }
+    }
+    out.sort_by(|a, b| b.2.abs().total_cmp(&a.2.abs()));
+    out
+}
+
+/// The JSON object of `appell fit --json` (one line per recording for a directory). Keys are
+/// stable: `mu_kinetic.value`, `.stderr`, `.ci95`; `mu_static.lower_bound` when only a bound is
+/// known.
 pub fn fit_json(rep: &FitReport) -> Value {
     let mu_static = match &rep.mu_static {
         StaticResult::Estimated(e) => estimate_json(e),
@@ -47,90 +58,240 @@ pub fn fit_json(rep: &FitReport) -> Value {
             .collect(),
         None => Default::default(),
     };
-    json!({
+    let start = |p: Param| {
+        rep.start_values
+            .iter()
+            .find(|(q, _)| *q == p)
+            .map(|(_, v)| *v)
+    };
+    let parameters: serde_json::Map<String, Value> = rep
+        .params
+        .iter()
+        .map(|(p, e)| {
+            let mut v = estimate_json(e);
+            v["stderr_percent"] = json!(100.0 * e.stderr / e.value.abs());
+            v["start"] = json!(start(*p));
+            v["unit"] = json!(p.unit());
+            (p.name().to_owned(), v)
+        })
+        .collect();
+    let noise = |m: usize| {
+        rep.noise[m].map_or(
+            json!({"sigma": rep.noise_m[m], "source": "fallback"}),
+            |n| json!({"sigma": rep.noise_m[m], "dof": n.dof, "source": n.source}),
+        )
+    };
+    let a = &rep.adequacy;
+    let mut v = json!({
         "mu_kinetic": rep.mu_kinetic.as_ref().map(estimate_json),
         "mu_static": mu_static,
         "initial": {
             "x": get(rep, Param::X), "theta": get(rep, Param::Theta),
             "x_dot": get(rep, Param::XDot), "theta_dot": get(rep, Param::ThetaDot),
         },
-        "parameters": rep.params.iter().map(|(p, e)| (p.name().to_owned(), estimate_json(e))).collect::<serde_json::Map<_, _>>(),
+        "parameters": parameters,
+        "fixed": rep.fixed.iter().map(|(p, v)| (p.name().to_owned(), json!(v))).collect::<serde_json::Map<_, _>>(),
         "correlation_with_mu_kinetic": correlations,
+        "correlations": correlated_pairs(rep).iter().map(|(a, b, r)| json!({"a": a.name(), "b": b.name(), "r": r})).collect::<Vec<_>>(),
+        "method": "Levenberg-Marquardt (argmin executor), exact Jacobian by dual numbers through the hybrid simulation",
+        "iterations": rep.work.iterations,
+        "residual_evals": rep.work.residual_evals,
+        "jacobian_evals": rep.work.jacobian_evals,
+        "stop_reason": rep.stop_reason,
+        "n_frames": rep.n_frames,
+        "n_residuals": rep.n_residuals,
+        "n_variables": rep.params.len(),
+        "dof": a.dof,
+        "chi2": a.chi2,
+        "reduced_chi2": a.reduced_chi2,
+        "chi2_p_value": a.p_value,
+        "aic": a.aic,
+        "bic": a.bic,
+        "criterion": "BIC (forward selection; a nuisance is kept when it lowers BIC by more than 2)",
+    });
+    let more = json!({
+        "noise": {"slider": noise(0), "bob": noise(1)},
+        "noise_m": {"slider": rep.noise_m[0], "bob": rep.noise_m[1]},
+        "models": rep.models,
+        "nuisances": rep.nuisances.iter().map(|n| n.name()).collect::<Vec<_>>(),
+        "windows": rep.windows,
+        "windows_p_value": a.windows_p_value,
+        "block_se_ratio": a.block_se_ratio,
+        "block_frames": a.block_frames,
+        "limited_by_model": a.limited_by_model,
+        "outliers": {"slider": rep.outliers[0], "bob": rep.outliers[1]},
+        "sliding_speed_range": rep.sliding_speed_range,
         "rms_residual_m": rep.rms_residual_m,
         "rms_residual_per_marker_m": {"slider": rep.rms_per_marker_m[0], "bob": rep.rms_per_marker_m[1]},
-        "noise_m": {"slider": rep.noise_m[0], "bob": rep.noise_m[1]},
-        "reduced_chi2": rep.reduced_chi2,
         "residual_lag1_autocorrelation": rep.residual_autocorrelation,
         "identifiable": rep.identifiable,
         "events": rep.events.iter().map(|e| json!({"t": e.t, "from": e.from.name(), "to": e.to.name(), "kind": e.kind})).collect::<Vec<_>>(),
         "starts": rep.starts,
-        "n_residuals": rep.n_residuals,
         "warnings": rep.warnings,
-    })
+    });
+    if let (Value::Object(m), Value::Object(extra)) = (&mut v, more) {
+        m.extend(extra);
+    }
+    v
 }
 
-fn line(s: &mut String, name: &str, e: &Estimate, unit: &str) {
-    let _ = writeln!(
-        s,
-        "  {name:<12} {:>14.8} +- {:<11.3e} 95% [{:.8}, {:.8}] {unit}",
-        e.value, e.stderr, e.ci95[0], e.ci95[1]
-    );
-}
-
-/// The readable report of `appell fit`.
+/// The readable report of `appell fit`: what lmfit's fit_report gives, and the model
+/// comparison, the noise, the thirds and the adequacy verdict.
 pub fn fit_text(rep: &FitReport) -> String {
     let mut s = String::new();
+    let a = &rep.adequacy;
+    if let Some(sentence) = &a.limited_by_model {
+        let _ = writeln!(s, "{sentence}\n");
+    }
+    let _ = writeln!(s, "[[Fit statistics]]");
     let _ = writeln!(
         s,
-        "fitted parameters (value +- standard error, 95% interval: for mu from its profile, unless --no-profile):"
+        "    method             Levenberg-Marquardt, exact dual-number Jacobian"
+    );
+    let _ = writeln!(
+        s,
+        "    evaluations        {} iterations, {} residual and {} Jacobian evaluations; stopped: {}",
+        rep.work.iterations, rep.work.residual_evals, rep.work.jacobian_evals, rep.stop_reason
+    );
+    let _ = writeln!(
+        s,
+        "    data points        {} residuals from {} frames ({} slider and {} bob positions left out as mis-tracked)",
+        rep.n_residuals, rep.n_frames, rep.outliers[0], rep.outliers[1]
+    );
+    let _ = writeln!(
+        s,
+        "    variables          {} (degrees of freedom {:.0})",
+        rep.params.len(),
+        a.dof
+    );
+    let src = |m: usize| rep.noise[m].map_or("fallback", |n| n.source);
+    let _ = writeln!(
+        s,
+        "    noise              slider {:.3e} m ({}), bob {:.3e} m ({})",
+        rep.noise_m[0],
+        src(0),
+        rep.noise_m[1],
+        src(1)
+    );
+    let _ = writeln!(
+        s,
+        "    chi-square         {:.1}; reduced {:.4}; p = {:.3} (against the noise above)",
+        a.chi2, a.reduced_chi2, a.p_value
+    );
+    let _ = writeln!(s, "    AIC, BIC           {:.1}, {:.1}", a.aic, a.bic);
+    let _ = writeln!(
+        s,
+        "    residual RMS       {:.3e} m (slider {:.3e}, bob {:.3e}); lag-1 autocorrelation {:.3}",
+        rep.rms_residual_m, rep.rms_per_marker_m[0], rep.rms_per_marker_m[1], a.lag1
+    );
+    let _ = writeln!(
+        s,
+        "[[Variables]] value +- standard error (%), 95% interval [method], start"
     );
     for (p, e) in &rep.params {
-        let unit = match p {
-            Param::X | Param::RodLength => "m",
-            Param::Theta => "rad",
-            Param::XDot => "m/s",
-            Param::ThetaDot => "rad/s",
-            _ => "",
-        };
-        line(&mut s, p.name(), e, unit);
+        let start = rep
+            .start_values
+            .iter()
+            .find(|(q, _)| q == p)
+            .map_or(f64::NAN, |(_, v)| *v);
+        let _ = writeln!(
+            s,
+            "    {:<20} {:>14.8} +- {:<10.3e} ({:>6.2}%) [{:.8}, {:.8}] [{}] start {:.6} {}",
+            p.name(),
+            e.value,
+            e.stderr,
+            100.0 * e.stderr / e.value.abs(),
+            e.ci95[0],
+            e.ci95[1],
+            e.interval,
+            start,
+            p.unit()
+        );
+    }
+    for (p, v) in &rep.fixed {
+        let _ = writeln!(s, "    {:<20} {v:>14.8} (fixed) {}", p.name(), p.unit());
     }
     match (&rep.mu_kinetic, &rep.mu_static) {
         (None, StaticResult::LowerBound(b)) => {
             let _ = writeln!(
                 s,
-                "  mu_kinetic   not identifiable (the slider never slides)"
+                "    mu_kinetic           not identifiable (the slider never slides)"
             );
             let _ = writeln!(
                 s,
-                "  mu_static    >= {b:.5} (largest |F|/|N| the stuck slider needed)"
+                "    mu_static            >= {b:.5} (largest |F|/|N| the stuck slider needed)"
             );
         }
         (_, StaticResult::NotIdentifiable) => {
             let _ = writeln!(
                 s,
-                "  mu_static    not identifiable (tied to mu_kinetic for the fit)"
+                "    mu_static            not identifiable (tied to mu_kinetic for the fit)"
+            );
+        }
+        (_, StaticResult::Estimated(e))
+            if !rep.params.iter().any(|(p, _)| *p == Param::MuStatic) =>
+        {
+            let _ = writeln!(
+                s,
+                "    mu_static            at its bound mu_kinetic; 95% [{:.6}, {:.6}] [{}]",
+                e.ci95[0], e.ci95[1], e.interval
             );
         }
         _ => {}
     }
-    if let Some(k) = rep.params.iter().position(|(p, _)| *p == Param::MuKinetic) {
-        let corr: Vec<String> = rep
-            .params
-            .iter()
-            .enumerate()
-            .filter(|(i, _)| *i != k)
-            .map(|(i, (p, _))| format!("{} {:+.3}", p.name(), rep.correlation[(k, i)]))
-            .collect();
-        let _ = writeln!(s, "correlation of mu_kinetic with: {}", corr.join(", "));
+    if let Some([lo, hi]) = rep.sliding_speed_range {
+        let _ = writeln!(
+            s,
+            "    sliding speeds     {lo:.4} to {hi:.4} m/s behind mu_kinetic"
+        );
     }
-    let _ = writeln!(
-        s,
-        "residual RMS {:.3e} m (slider {:.3e}, bob {:.3e}); reduced chi2 {:.3}; lag-1 autocorrelation {:.3}; {} residuals",
-        rep.rms_residual_m, rep.rms_per_marker_m[0], rep.rms_per_marker_m[1], rep.reduced_chi2, rep.residual_autocorrelation, rep.n_residuals
-    );
-    let _ = writeln!(s, "event timeline of the fit:");
-    for e in &rep.events {
-        let _ = writeln!(s, "  {:>12.6} s  {:<7} -> {}", e.t, e.from.name(), e.to);
+    let pairs = correlated_pairs(rep);
+    if !pairs.is_empty() {
+        let _ = writeln!(s, "[[Correlations]] (|r| > 0.1)");
+        for (p, q, r) in pairs {
+            let _ = writeln!(s, "    C({}, {}) = {r:+.3}", p.name(), q.name());
+        }
+    }
+    if !rep.models.is_empty() {
+        let _ = writeln!(
+            s,
+            "[[Models compared]] by BIC = chi2 + k ln(n), forward selection"
+        );
+        for m in &rep.models {
+            let _ = writeln!(
+                s,
+                "  {} {:<36} k {:>2}  chi2 {:>12.1}  BIC {:>12.1}  dBIC {:>+10.1}",
+                if m.chosen { "*" } else { " " },
+                m.name,
+                m.free.len(),
+                m.chi2,
+                m.bic,
+                m.delta_bic
+            );
+        }
+    }
+    if !rep.windows.is_empty() {
+        let _ = writeln!(
+            s,
+            "[[Thirds]] mu_kinetic per stretch (agreement p = {})",
+            a.windows_p_value
+                .map_or("-".to_owned(), |p| format!("{p:.3}"))
+        );
+        for w in &rep.windows {
+            let _ = writeln!(
+                s,
+                "    {:>7.3} - {:>7.3} s   {:.6} +- {:.2e}",
+                w.t_start, w.t_end, w.mu_kinetic, w.stderr
+            );
+        }
+    }
+    if rep.events.is_empty() {
+        let _ = writeln!(s, "[[Fitted timeline]] no mode changes");
+    } else {
+        let _ = writeln!(s, "[[Fitted timeline]]");
+        for e in &rep.events {
+            let _ = writeln!(s, "  {:>12.6} s  {:<7} -> {}", e.t, e.from.name(), e.to);
+        }
     }
     for w in &rep.warnings {
         let _ = writeln!(s, "warning: {w}");
@@ -185,7 +346,13 @@ impl Figure for FitFigure<'_> {
         let pred: Vec<(f64, [f64; 4], Mode)> = sol
             .samples
             .iter()
-            .map(|s| (s.t, markers(&rep.rig, &s.state), s.mode))
+            .map(|s| {
+                (
+                    s.t,
+                    observed_markers(&rep.rig, &rep.camera, s.mode, &s.state),
+                    s.mode,
+                )
+            })
             .collect();
         let panels = root.split_evenly((3, 1));
         let series = |k: usize| -> Panel {

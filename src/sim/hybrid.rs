@@ -49,7 +49,7 @@ struct ModeSystem<'a, T> {
 }
 
 impl<T: Scalar, const N: usize> OdeSystem<T, N> for ModeSystem<'_, T> {
-    #[inline]
+    #[inline(always)]
     fn rhs(&self, y: &[T; N], dy: &mut [T; N]) {
         dy[0] = y[2];
         dy[1] = y[3];

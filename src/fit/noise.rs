@@ -1,0 +1,129 @@
+//! Each marker's measurement noise from the data alone, before any model is fitted: the third
+//! differences of a track sampled at consecutive frames cancel any smooth motion (a quadratic
+//! exactly; a pendulum at camera rates to far below a pixel) and leave 20 times the noise
+//! variance. A fit that does not describe the data cannot hide behind this estimate, unlike a
+//! noise level read from its own residuals.
+
+use super::problem::Observations;
+
+/// Variance factor of a third difference of white noise: 1 + 9 + 9 + 1.
+const THIRD_DIFF_VAR: f64 = 20.0;
+
+/// Sum over lags of the squared correlations of overlapping third differences
+/// (1 + 2 (0.75^2 + 0.3^2 + 0.05^2)): how many of them make one independent square.
+const OVERLAP: f64 = 2.31;
+
+/// Third differences beyond this many noise deviations are mis-tracked frames, not noise.
+const TRIM: f64 = 4.5;
+
+/// One marker's noise estimate.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct NoiseEstimate {
+    /// Standard deviation per coordinate (m).
+    pub sigma: f64,
+    /// Effective number of independent squares behind it (the estimate's degrees of freedom).
+    pub dof: f64,
+    /// Where the value comes from: `"data"` (third differences) or `"given"`.
+    pub source: &'static str,
+}
+
+/// Noise of each marker (slider, bob) from its third differences; `None` for a marker with
+/// fewer than 20 runs of four consecutive frames.
+pub fn from_tracks(obs: &Observations) -> [Option<NoiseEstimate>; 2] {
+    [0, 1].map(|m| {
+        let track = if m == 0 { &obs.slider } else { &obs.bob };
+        let mut d3 = Vec::new();
+        for w in track.windows(4) {
+            if let [Some(a), Some(b), Some(c), Some(d)] = w {
+                for k in 0..2 {
+                    d3.push(d[k] - 3.0 * c[k] + 3.0 * b[k] - a[k]);
+                }
+            }
+        }
+        estimate(&d3)
+    })
+}
+
+/// Trimmed mean of squares of third differences, starting from their median absolute value
+/// (robust to mis-tracked frames) and keeping those within [`TRIM`] deviations.
+fn estimate(d3: &[f64]) -> Option<NoiseEstimate> {
+    if d3.len() < 40 {
+        return None;
+    }
+    let mut abs: Vec<f64> = d3.iter().map(|v| v.abs()).collect();
+    abs.sort_by(f64::total_cmp);
+    let robust = abs[abs.len() / 2] / 0.674_489_750_196_081_7;
+    if !(robust.is_finite() && robust > 0.0) {
+        // Noiseless (or quantised to zero steps) data: no noise level to speak of.
+        return Some(NoiseEstimate {
+            sigma: 0.0,
+            dof: d3.len() as f64 / OVERLAP,
+            source: "data",
+        });
+    }
+    let kept: Vec<f64> = d3
+        .iter()
+        .copied()
+        .filter(|v| v.abs() <= TRIM * robust)
+        .collect();
+    let var = kept.iter().map(|v| v * v).sum::<f64>() / kept.len() as f64;
+    Some(NoiseEstimate {
+        sigma: (var / THIRD_DIFF_VAR).sqrt(),
+        dof: kept.len() as f64 / OVERLAP,
+        source: "data",
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// White noise on a fast pendulum-like motion: the estimate recovers the noise, not the
+    /// motion, within its own statistical error.
+    #[test]
+    fn recovers_white_noise_under_smooth_motion() {
+        let mut state = 12345u64;
+        let mut gauss = || {
+            let mut u = || {
+                state ^= state << 13;
+                state ^= state >> 7;
+                state ^= state << 17;
+                (state >> 11) as f64 / (1u64 << 53) as f64
+            };
+            let (a, b) = (u().max(1e-300), u());
+            (-2.0 * a.ln()).sqrt() * (std::f64::consts::TAU * b).cos()
+        };
+        let n = 4000;
+        let sigma = 2e-4;
+        let times: Vec<f64> = (0..n).map(|k| k as f64 * 1e-3).collect();
+        let track = |amp: f64, w: f64, noise: &mut dyn FnMut() -> f64| -> Vec<Option<[f64; 2]>> {
+            times
+                .iter()
+                .map(|t| {
+                    Some([
+                        amp * (w * t).sin() + sigma * noise(),
+                        -amp * (w * t).cos() + sigma * noise(),
+                    ])
+                })
+                .collect()
+        };
+        let slider = track(0.05, 6.0, &mut gauss);
+        let mut bob = track(0.3, 9.0, &mut gauss);
+        bob[100] = Some([5.0, 5.0]); // a mis-tracked frame
+        bob[2000] = None; // a gap
+        let obs = Observations {
+            times: times.clone(),
+            slider,
+            bob,
+        };
+        for est in from_tracks(&obs) {
+            let est = est.unwrap();
+            let rel = 1.0 / est.dof.sqrt();
+            assert!(
+                (est.sigma / sigma - 1.0).abs() < 4.0 * rel,
+                "{} vs {sigma}",
+                est.sigma
+            );
+        }
+    }
+}

@@ -1,0 +1,369 @@
+//! Uncertainty that stays honest when the model does not describe the data: chi-square against
+//! the noise measured from the tracks, a covariance from the exact Jacobian, a block
+//! (heteroskedasticity-and-autocorrelation-consistent) covariance over contiguous stretches of
+//! frames, fits of the recording's thirds, and the profile interval for a parameter.
+
+use super::lm::LeastSquares;
+use super::problem::{Observations, Param, TrajectoryProblem};
+use super::{solve, FitSettings};
+use crate::model::Mode;
+use crate::sim::{simulate, Request};
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+use statrs::distribution::{ChiSquared, ContinuousCDF, FisherSnedecor};
+use std::sync::Arc;
+
+/// Goodness of fit and the covariances at an optimum.
+#[derive(Debug, Clone)]
+pub struct Assessment {
+    /// Chi-square: sum of squared residuals standardised by the measured noise (rows with
+    /// weight zero, the outliers, excluded).
+    pub chi2: f64,
+    /// Degrees of freedom: residual rows used minus free parameters.
+    pub dof: f64,
+    /// chi2 / dof.
+    pub reduced_chi2: f64,
+    /// Probability of a chi-square at least this large if the model and the measured noise
+    /// were right (an F test: the noise level is itself estimated, with `noise_dof`).
+    pub p_value: f64,
+    /// Covariance from the Jacobian, scaled by max(1, reduced chi-square).
+    pub cov: DMatrix<f64>,
+    /// Standard errors from `cov`.
+    pub se: Vec<f64>,
+    /// Standard errors from the block covariance (residual correlation in time allowed).
+    pub se_block: Vec<f64>,
+    /// Frames per block of the block covariance.
+    pub block_frames: usize,
+    /// The residuals (weighted) and Jacobian at the optimum.
+    pub r: DVector<f64>,
+}
+
+/// The chi-square, its p-value and the covariances of `problem` at `p`.
+pub fn assess(
+    problem: &TrajectoryProblem,
+    p: &DVector<f64>,
+    noise_dof: f64,
+) -> Result<Assessment, String> {
+    let (r, j) = problem.residuals_jacobian(p).map_err(|e| e.to_string())?;
+    let used = problem.row_weights.iter().filter(|w| **w > 0.0).count();
+    let k = p.len();
+    let dof = (used.saturating_sub(k)).max(1) as f64;
+    let chi2 = r.norm_squared();
+    let reduced = chi2 / dof;
+    let p_value = if noise_dof.is_finite() && noise_dof > 1.0 {
+        FisherSnedecor::new(dof, noise_dof)
+            .map(|f| f.sf(reduced))
+            .unwrap_or(f64::NAN)
+    } else {
+        ChiSquared::new(dof).map(|c| c.sf(chi2)).unwrap_or(f64::NAN)
+    };
+    let jtj = j.tr_mul(&j);
+    let inv = jtj.clone().try_inverse().unwrap_or_else(|| {
+        jtj.pseudo_inverse(1e-14)
+            .unwrap_or(DMatrix::from_element(k, k, f64::NAN))
+    });
+    let cov = &inv * reduced.max(1.0);
+    let se: Vec<f64> = (0..k).map(|i| cov[(i, i)].max(0.0).sqrt()).collect();
+    let frames = problem.row_frames();
+    let block = block_length(problem, r.as_slice());
+    let mut meat = DMatrix::zeros(k, k);
+    let mut g = DVector::zeros(k);
+    let mut current = usize::MAX;
+    for (row, &f) in frames.iter().enumerate() {
+        let b = f / block;
+        if b != current {
+            meat += &g * g.transpose();
+            g.fill(0.0);
+            current = b;
+        }
+        g += j.row(row).transpose() * r[row];
+    }
+    meat += &g * g.transpose();
+    let n_blocks = frames.last().map_or(1, |f| f / block + 1) as f64;
+    // Small-sample correction of the cluster-robust estimate: G / (G - 1) (n - 1) / (n - k).
+    let n = used.max(k + 2) as f64;
+    let correction = n_blocks / (n_blocks - 1.0).max(1.0) * (n - 1.0) / (n - k as f64);
+    let cov_block = &inv * meat * &inv * correction;
+    let se_block = (0..k).map(|i| cov_block[(i, i)].max(0.0).sqrt()).collect();
+    Ok(Assessment {
+        chi2,
+        dof,
+        reduced_chi2: reduced,
+        p_value,
+        cov,
+        se,
+        se_block,
+        block_frames: block,
+        r,
+    })
+}
+
+/// Frames per block: twice the lag at which the residuals' autocorrelation falls below 0.1,
+/// at least 5 frames and at most a tenth of the recording (at least ten blocks).
+fn block_length(problem: &TrajectoryProblem, r: &[f64]) -> usize {
+    let frames = problem.row_frames();
+    let n_frames = frames.last().map_or(1, |f| f + 1);
+    let streams = streams(problem, r);
+    let den: f64 = streams.iter().flatten().map(|v| v * v).sum();
+    let mut lag_small = 1;
+    if den > 0.0 {
+        for lag in 1..(n_frames / 10).max(2) {
+            let num: f64 = streams
+                .iter()
+                .map(|s| s.windows(lag + 1).map(|w| w[0] * w[lag]).sum::<f64>())
+                .sum();
+            lag_small = lag;
+            if num / den < 0.1 {
+                break;
+            }
+        }
+    }
+    (2 * lag_small).clamp(5, (n_frames / 10).max(5))
+}
+
+/// The residuals split into their coordinate streams (slider x, y, bob x, y), in frame order.
+fn streams(problem: &TrajectoryProblem, r: &[f64]) -> Vec<Vec<f64>> {
+    let markers = problem.row_markers();
+    let mut out = vec![Vec::new(); 4];
+    // Rows come frame-major with x before y for each marker present.
+    let mut last: Option<(usize, usize)> = None;
+    for (i, &v) in r.iter().enumerate() {
+        let coord = match last {
+            Some((m, 0)) if m == markers[i] => 1,
+            _ => 0,
+        };
+        out[2 * markers[i] + coord].push(v);
+        last = Some((markers[i], coord));
+    }
+    out
+}
+
+/// Lag-1 autocorrelation of the residuals, per coordinate stream, pooled (0 for white noise).
+pub fn lag1(problem: &TrajectoryProblem, r: &[f64]) -> f64 {
+    let streams = streams(problem, r);
+    let den: f64 = streams.iter().flatten().map(|v| v * v).sum();
+    let num: f64 = streams
+        .iter()
+        .map(|s| s.windows(2).map(|w| w[0] * w[1]).sum::<f64>())
+        .sum();
+    if den > 0.0 {
+        num / den
+    } else {
+        0.0
+    }
+}
+
+/// mu_kinetic fitted on one stretch of the recording.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct WindowFit {
+    /// Start of the stretch (s, recording time).
+    pub t_start: f64,
+    /// End of the stretch (s).
+    pub t_end: f64,
+    /// mu_kinetic fitted on it.
+    pub mu_kinetic: f64,
+    /// Its standard error (scaled by the stretch's reduced chi-square when above one).
+    pub stderr: f64,
+}
+
+/// mu_kinetic fitted on each of `parts` equal stretches of the recording: the state at the
+/// stretch's start from the whole fit, then mu_kinetic and that state free, everything else
+/// held. Stretches where the whole fit does not slide are left out (mu says nothing there).
+pub fn windows(
+    problem: &TrajectoryProblem,
+    parts: usize,
+    settings: &FitSettings,
+) -> Vec<WindowFit> {
+    let obs = problem.observations();
+    let n = obs.times.len();
+    if n < 30 * parts {
+        return Vec::new();
+    }
+    let t_end = obs.times[n - 1];
+    let bounds: Vec<usize> = (0..=parts).map(|k| k * (n - 1) / parts).collect();
+    let starts: Vec<f64> = bounds.iter().map(|&i| obs.times[i]).collect();
+    let Ok(sol) = simulate(
+        &problem.rig,
+        &problem.initial,
+        t_end,
+        &problem.options,
+        &Request {
+            sample_times: starts.clone(),
+            friction_work: false,
+        },
+    ) else {
+        return Vec::new();
+    };
+    if sol.samples.len() < parts {
+        return Vec::new();
+    }
+    (0..parts)
+        .into_par_iter()
+        .with_max_len(1)
+        .filter_map(|w| {
+            let (a, b) = (bounds[w], bounds[w + 1]);
+            let t0 = obs.times[a];
+            let sub = Observations {
+                times: obs.times[a..=b].iter().map(|t| t - t0).collect(),
+                slider: obs.slider[a..=b].to_vec(),
+                bob: obs.bob[a..=b].to_vec(),
+            };
+            let start = sol.samples[w];
+            let mut free = vec![Param::MuKinetic, Param::X, Param::Theta, Param::ThetaDot];
+            let mut y0 = start.state;
+            if start.mode == Mode::Stick {
+                y0[2] = 0.0;
+            } else {
+                free.push(Param::XDot);
+            }
+            let mut m =
+                TrajectoryProblem::new(Arc::new(sub), problem.rig, y0, free, problem.options);
+            m.camera = problem.camera;
+            m.tie_static = problem.tie_static && !problem.free.contains(&Param::MuStatic);
+            m.sigma = problem.sigma;
+            let (q, _, _) = solve(&m, m.values(), settings.max_iters).ok()?;
+            m.set_values(&q);
+            // Only a stretch that slides says anything about mu_kinetic.
+            let slides = simulate(
+                &m.rig,
+                &m.initial,
+                m.frame_times().last().copied().unwrap_or(0.0),
+                &m.options,
+                &Request {
+                    sample_times: m.frame_times().to_vec(),
+                    friction_work: false,
+                },
+            )
+            .ok()?
+            .samples
+            .iter()
+            .filter(|s| matches!(s.mode, Mode::Slide(_)))
+            .count()
+                >= 10;
+            if !slides {
+                return None;
+            }
+            let fit = assess(&m, &q, f64::INFINITY).ok()?;
+            Some(WindowFit {
+                t_start: starts[w],
+                t_end: obs.times[b],
+                mu_kinetic: q[0],
+                stderr: fit.se[0].max(fit.se_block[0]),
+            })
+        })
+        .collect()
+}
+
+/// Whether the windows' values agree within their errors: the p-value of
+/// sum ((mu_i - mean) / se_i)^2 against chi-square with (windows - 1) degrees of freedom, the
+/// mean weighted by 1 / se^2. `None` with fewer than two windows.
+pub fn window_consistency(windows: &[WindowFit]) -> Option<f64> {
+    if windows.len() < 2 {
+        return None;
+    }
+    let w: Vec<f64> = windows.iter().map(|x| 1.0 / x.stderr.powi(2)).collect();
+    let sw: f64 = w.iter().sum();
+    let mean = windows
+        .iter()
+        .zip(&w)
+        .map(|(x, wi)| x.mu_kinetic * wi)
+        .sum::<f64>()
+        / sw;
+    let q: f64 = windows
+        .iter()
+        .zip(&w)
+        .map(|(x, wi)| (x.mu_kinetic - mean).powi(2) * wi)
+        .sum();
+    if !q.is_finite() {
+        return Some(0.0);
+    }
+    ChiSquared::new((windows.len() - 1) as f64)
+        .ok()
+        .map(|c| c.sf(q))
+}
+
+/// 95% profile-likelihood interval for parameter `k`: where the best chi-square with that
+/// parameter held rises by 3.84 times `scale` (the reduced chi-square when above one).
+pub fn profile_interval(
+    problem: &TrajectoryProblem,
+    p: &DVector<f64>,
+    k: usize,
+    se: f64,
+    scale: f64,
+    settings: &FitSettings,
+    lower_limit: f64,
+) -> Option<[f64; 2]> {
+    let target = 3.84 * scale;
+    let base = p.clone();
+    let s_min = problem.residuals(p).ok()?.norm_squared();
+    let mut fixed = problem.clone();
+    fixed.free.remove(k);
+    let others: Vec<usize> = (0..p.len()).filter(|&i| i != k).collect();
+    let profile = |v: f64, warm: &DVector<f64>| -> Option<(f64, DVector<f64>)> {
+        let mut pr = fixed.clone();
+        let mut full = base.clone();
+        full[k] = v;
+        let mut tmp = problem.clone();
+        tmp.set_values(&full);
+        pr.rig = tmp.rig;
+        pr.initial = tmp.initial;
+        pr.camera = tmp.camera;
+        let (opt, cost, _) = solve(&pr, warm.clone(), settings.max_iters).ok()?;
+        Some((2.0 * cost - s_min, opt))
+    };
+    let start: DVector<f64> = DVector::from_iterator(others.len(), others.iter().map(|&i| p[i]));
+    let mut ends = [0.0; 2];
+    for (side, dir) in [-1.0f64, 1.0].iter().enumerate() {
+        // A standard error larger than half the value means the linearisation says nothing
+        // (a bound is active): start from a step relative to the value instead.
+        let scale_v = p[k].abs().max(1e-3);
+        let step0 = if se.is_finite() && se < 0.5 * scale_v {
+            se.max(1e-6 * scale_v)
+        } else {
+            0.01 * scale_v
+        };
+        let mut lo = (p[k], 0.0);
+        let mut warm = start.clone();
+        let mut step = 2.0 * step0;
+        let mut hi = None;
+        for _ in 0..12 {
+            let v = (p[k] + dir * step).max(lower_limit);
+            let (d, opt) = profile(v, &warm)?;
+            if d >= target {
+                hi = Some((v, d));
+                break;
+            }
+            lo = (v, d);
+            warm = opt;
+            if v == lower_limit {
+                break;
+            }
+            step *= 2.0;
+        }
+        let Some(mut hi) = hi else {
+            if lo.0 == lower_limit {
+                ends[side] = lower_limit;
+                continue;
+            }
+            return None;
+        };
+        for _ in 0..8 {
+            // Interpolate on the square root of the rise, which is nearly linear in the value.
+            let (a, b) = (lo.1.max(0.0).sqrt(), hi.1.sqrt());
+            let frac = ((target.sqrt() - a) / (b - a)).clamp(0.05, 0.95);
+            let v = lo.0 + frac * (hi.0 - lo.0);
+            let (d, opt) = profile(v, &warm)?;
+            if d >= target {
+                hi = (v, d);
+            } else {
+                lo = (v, d);
+                warm = opt;
+            }
+            if (hi.0 - lo.0).abs() < 0.02 * step0 {
+                break;
+            }
+        }
+        ends[side] = 0.5 * (lo.0 + hi.0);
+    }
+    Some(ends)
+}

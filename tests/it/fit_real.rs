@@ -1,0 +1,279 @@
+//! The fit on recordings its plain model does not describe: real-rig physics (tilt, damping,
+//! Stribeck friction), camera effects (scale, marker offsets, lag), gaps, bad cells and
+//! mu_static above mu_kinetic. Recordings are made by the project's simulator with the real
+//! terms and the camera's observation model, then Gaussian noise; the fit never sees the
+//! truth. The sweeps over many seeds are `#[ignore]`d (run with `--ignored`); CI runs one seed
+//! of each case.
+
+use super::helpers::Normal;
+use appell::fit::{fit, FitReport, FitSettings, Observations};
+use appell::model::{observed_markers, Camera, Rig, State};
+use appell::sim::{simulate, Options, Request};
+
+/// The shared example's rig (FORMATS.md): m1 = 0.5, m2 = 0.2, l = 0.3, mu = 0.12.
+fn example_rig(mu: f64) -> Rig<f64> {
+    Rig::new(0.5, 0.2, 0.3, 9.81, mu, None).unwrap()
+}
+
+/// Released from rest 0.9 rad from the downward vertical, like the shipped example.
+const Y0: State<f64> = [0.0, std::f64::consts::FRAC_PI_2 - 0.9, 0.0, 0.0];
+
+/// A recording of `rig` seen through `camera`: `rate` Hz for `duration` s, noise `sigma` m.
+fn record(
+    rig: &Rig<f64>,
+    camera: &Camera<f64>,
+    y0: State<f64>,
+    rate: f64,
+    duration: f64,
+    sigma: f64,
+    seed: u64,
+) -> Observations {
+    let times: Vec<f64> = (0..=(duration * rate).round() as usize)
+        .map(|k| k as f64 / rate)
+        .collect();
+    let opts = Options {
+        rtol: 1e-12,
+        atol: 1e-14,
+        ..Options::default()
+    };
+    let sol = simulate(
+        rig,
+        &y0,
+        duration,
+        &opts,
+        &Request {
+            sample_times: times.clone(),
+            friction_work: false,
+        },
+    )
+    .unwrap();
+    let mut rng = Normal::new(seed * 7919 + 17);
+    let mut obs = Observations {
+        times,
+        slider: vec![],
+        bob: vec![],
+    };
+    for s in &sol.samples {
+        let m = observed_markers(rig, camera, s.mode, &s.state);
+        let mut n = || sigma * rng.sample();
+        obs.slider.push(Some([m[0] + n(), m[1] + n()]));
+        obs.bob.push(Some([m[2] + n(), m[3] + n()]));
+    }
+    obs
+}
+
+/// A case: what the recording has that the plain model lacks.
+struct Case {
+    name: &'static str,
+    rig: Rig<f64>,
+    camera: Camera<f64>,
+}
+
+fn cases() -> Vec<Case> {
+    let base = example_rig(0.12);
+    let cam = Camera::default();
+    vec![
+        Case {
+            name: "well-specified",
+            rig: base,
+            camera: cam,
+        },
+        Case {
+            name: "tilt 0.5 deg",
+            rig: base.with_rail_tilt(0.5f64.to_radians()),
+            camera: cam,
+        },
+        Case {
+            name: "pivot damping",
+            rig: base.with_pivot_damping(2e-3),
+            camera: cam,
+        },
+        Case {
+            name: "stribeck",
+            rig: Rig::new(0.5, 0.2, 0.3, 9.81, 0.12, Some(0.16))
+                .unwrap()
+                .with_stribeck(0.05),
+            camera: cam,
+        },
+        Case {
+            name: "mu_static 0.16 > mu_kinetic",
+            rig: Rig::new(0.5, 0.2, 0.3, 9.81, 0.12, Some(0.16)).unwrap(),
+            camera: cam,
+        },
+        Case {
+            name: "camera scale 2% off",
+            rig: base,
+            camera: Camera {
+                scale_error: 0.02,
+                ..cam
+            },
+        },
+        Case {
+            name: "bob marker 1 cm off the axis",
+            rig: base,
+            camera: Camera {
+                bob_across: 0.01,
+                ..cam
+            },
+        },
+        Case {
+            name: "3 ms lag between markers",
+            rig: base,
+            camera: Camera { lag: 0.003, ..cam },
+        },
+    ]
+}
+
+/// Whether the report's 95% interval covers `truth`, and its half-width relative to it.
+fn covers(rep: &FitReport, truth: f64) -> (bool, f64, f64) {
+    let mu = rep.mu_kinetic.expect("mu_kinetic identifiable");
+    let ok = mu.ci95[0] <= truth && truth <= mu.ci95[1];
+    let half = 0.5 * (mu.ci95[1] - mu.ci95[0]) / truth;
+    (ok, half, (mu.value - truth) / mu.stderr)
+}
+
+/// Fit each case on `seeds` seeds; per case: covered count, median half-width, worst |z|.
+fn sweep(seeds: u64, rate: f64) -> Vec<(&'static str, usize, usize, f64, f64)> {
+    let settings = FitSettings::default();
+    cases()
+        .into_iter()
+        .map(|c| {
+            let mut hits = 0;
+            let mut halves = Vec::new();
+            let mut worst: f64 = 0.0;
+            for seed in 0..seeds {
+                let obs = record(&c.rig, &c.camera, Y0, rate, 2.0, 2e-4, seed + 1);
+                let rep = fit(obs, &example_rig(0.3), &settings).unwrap();
+                let (ok, half, z) = covers(&rep, c.rig.mu_kinetic);
+                hits += usize::from(ok);
+                halves.push(half);
+                worst = worst.max(z.abs());
+                if !ok {
+                    eprintln!(
+                        "{} seed {seed}: {:?} nuisances {:?} limited {:?}",
+                        c.name,
+                        rep.mu_kinetic,
+                        rep.nuisances,
+                        rep.adequacy.limited_by_model
+                    );
+                }
+            }
+            halves.sort_by(f64::total_cmp);
+            let line = (c.name, hits, seeds as usize, halves[halves.len() / 2], worst);
+            eprintln!("{line:?}");
+            line
+        })
+        .collect()
+}
+
+/// One seed of every case, at 500 Hz: each interval covers the truth and stays narrow
+/// (half-width under 2% of mu).
+#[test]
+fn every_misspecification_is_covered_on_one_seed() {
+    for (name, hits, n, half, _) in sweep(1, 500.0) {
+        assert_eq!(hits, n, "{name}: interval misses the truth");
+        assert!(half < 0.02, "{name}: half-width {half}");
+    }
+}
+
+/// The sweep behind the closing note's coverage figures: 10 seeds of every case at 1 kHz.
+#[test]
+#[ignore]
+fn misspecification_sweep_ten_seeds() {
+    for (name, hits, n, half, worst) in sweep(10, 1000.0) {
+        eprintln!("SWEEP {name}: {hits}/{n} covered, median half-width {half:.4}, worst |z| {worst:.1}");
+    }
+}
+
+/// Coverage of the 95% interval over 100 well-specified recordings (different seeds and
+/// releases): between 92 and 98 covered is honest.
+#[test]
+#[ignore]
+fn well_specified_coverage_over_100_recordings() {
+    let settings = FitSettings::default();
+    let mut hits = 0;
+    for seed in 0..100u64 {
+        let theta0 = std::f64::consts::FRAC_PI_2 - 0.7 - 0.004 * seed as f64;
+        let y0 = [0.0, theta0, 0.0, 0.0];
+        let rig = example_rig(0.12);
+        let obs = record(&rig, &Camera::default(), y0, 500.0, 2.0, 2e-4, seed + 100);
+        let rep = fit(obs, &example_rig(0.3), &settings).unwrap();
+        let (ok, _, z) = covers(&rep, 0.12);
+        hits += usize::from(ok);
+        if !ok {
+            eprintln!("seed {seed}: z {z:.2} nuisances {:?}", rep.nuisances);
+        }
+    }
+    eprintln!("COVERAGE {hits}/100");
+    assert!((92..=98).contains(&hits), "{hits}/100 covered");
+}
+
+/// A dropped bob frame and 20% of one marker's frames missing: the slider still slides, and
+/// mu is found (the starts survive gaps).
+#[test]
+fn gaps_in_either_marker_do_not_lose_the_slide() {
+    let rig = example_rig(0.12);
+    let mut obs = record(&rig, &Camera::default(), Y0, 500.0, 2.0, 2e-4, 5);
+    obs.bob[3] = None;
+    let rep = fit(obs.clone(), &example_rig(0.3), &FitSettings::default()).unwrap();
+    let (ok, _, _) = covers(&rep, 0.12);
+    assert!(ok, "{:?}", rep.mu_kinetic);
+    for (k, s) in obs.slider.iter_mut().enumerate() {
+        if k % 5 == 2 {
+            *s = None;
+        }
+    }
+    let rep = fit(obs, &example_rig(0.3), &FitSettings::default()).unwrap();
+    let (ok, _, _) = covers(&rep, 0.12);
+    assert!(ok, "{:?}", rep.mu_kinetic);
+}
+
+/// One bad cell (bob x = -0.0 in an early frame) and 1% gross outliers: detected without a
+/// flag, counted, and the fit still covers the truth.
+#[test]
+fn bad_cells_and_gross_outliers_are_found_without_a_flag() {
+    let rig = example_rig(0.12);
+    let mut obs = record(&rig, &Camera::default(), Y0, 500.0, 2.0, 2e-4, 9);
+    if let Some(b) = obs.bob[4].as_mut() {
+        b[0] = -0.0;
+    }
+    let mut rng = Normal::new(3);
+    for k in (10..obs.times.len()).step_by(97) {
+        if let Some(b) = obs.bob[k].as_mut() {
+            b[1] += 0.03 * rng.sample().signum();
+        }
+    }
+    let rep = fit(obs, &example_rig(0.3), &FitSettings::default()).unwrap();
+    assert!(rep.outliers[1] >= 10, "outliers {:?}", rep.outliers);
+    let (ok, half, _) = covers(&rep, 0.12);
+    assert!(ok && half < 0.02, "{:?}", rep.mu_kinetic);
+}
+
+/// The chi-square against the measured noise reveals a misfit that a noise read from the
+/// residuals would hide: the plain model on a tilted rig fails the test.
+#[test]
+fn chi_square_against_measured_noise_reveals_a_misfit() {
+    let tilted = example_rig(0.12).with_rail_tilt(1f64.to_radians());
+    let obs = record(&tilted, &Camera::default(), Y0, 500.0, 2.0, 2e-4, 11);
+    let plain = FitSettings {
+        nuisances: false,
+        windows: false,
+        profile: false,
+        ..FitSettings::default()
+    };
+    let rep = fit(obs.clone(), &example_rig(0.3), &plain).unwrap();
+    assert!(rep.adequacy.p_value < 1e-3, "p {}", rep.adequacy.p_value);
+    assert!(rep.adequacy.limited_by_model.is_some());
+    // With the nuisance search on, tilt is chosen and the chi-square passes.
+    let rep = fit(obs, &example_rig(0.3), &FitSettings::default()).unwrap();
+    assert!(
+        rep.nuisances
+            .iter()
+            .any(|n| *n == appell::fit::Nuisance::RailTilt),
+        "{:?}",
+        rep.nuisances
+    );
+    assert!(rep.adequacy.p_value > 1e-3, "p {}", rep.adequacy.p_value);
+    let (ok, _, z) = covers(&rep, 0.12);
+    assert!(ok && z.abs() < 3.0, "z {z}");
+}
