@@ -4,6 +4,7 @@ mod cli_fit;
 mod cli_regions;
 mod cli_simulate;
 mod fit;
+mod fit_real;
 mod helpers;
 mod paradox;
 mod plan;
