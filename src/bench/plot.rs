@@ -68,13 +68,16 @@ impl WorkPrecisionPlot<'_> {
             format!("errors below {ERROR_FLOOR:.0e} are drawn at {ERROR_FLOOR:.0e}"),
         ];
         for r in &self.result.references {
-            out.push(format!(
-                "{}: references agree to {} s in event times, {:.1e} in the final state",
-                r.scene,
-                r.event_time_disagreement_s
-                    .map_or("-".to_owned(), |d| format!("{d:.1e}")),
-                r.state_disagreement
-            ));
+            out.push(match r.event_time_disagreement_s {
+                Some(d) => format!(
+                    "{}: references agree to {d:.1e} s in event times, {:.1e} in the final state",
+                    r.scene, r.state_disagreement
+                ),
+                None => format!(
+                    "{}: no events; references agree to {:.1e} in the final state",
+                    r.scene, r.state_disagreement
+                ),
+            });
         }
         out
     }

@@ -350,7 +350,7 @@ impl<'a> RegionFigure<'a> {
         ];
         if self.rig.rail_tilt != 0.0 {
             out.push(format!(
-                "rail tilt {:.2} deg: the two slide directions differ",
+                "rail tilt {:.2} deg (+x downhill): the plane is not mirror-symmetric",
                 self.rig.rail_tilt.to_degrees()
             ));
         }
@@ -372,7 +372,7 @@ impl<'a> RegionFigure<'a> {
             }
         } else {
             out.push(
-                "no paradox band (mu_k <= mu*): sliding has exactly one solution everywhere in either direction, so one panel serves s = +1 and s = -1"
+                "no paradox band (the largest sliding mu <= mu*): sliding has exactly one solution everywhere in either direction, so one panel serves s = +1 and s = -1"
                     .to_owned(),
             );
         }
