@@ -5,11 +5,14 @@ with terminal events, restarted at every mode switch) fitted with scipy.optimize
 
 Outside CI. Setup and run (from the repo root):
     python3 -m venv /tmp/venv-scipy && /tmp/venv-scipy/bin/pip install scipy numpy
-    /tmp/venv-scipy/bin/python scripts/compare_scipy_fit.py
-Compare with: cargo run --release -- bench --fit
+    /tmp/venv-scipy/bin/python scripts/compare_scipy_fit.py [RECORDING.csv] [--appell target/release/appell]
+With --appell, the same recording is also fitted by `appell fit --json --no-profile` and both
+results are printed. Compare with: cargo run --release -- bench --fit
 """
+import argparse
 import csv
-import sys
+import json
+import subprocess
 import time
 
 import numpy as np
@@ -95,7 +98,12 @@ def markers(states):
 
 
 def main():
-    path = sys.argv[1] if len(sys.argv) > 1 else "tests/data/markers_reference.csv"
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("recording", nargs="?", default="tests/data/markers_reference.csv")
+    ap.add_argument("--appell", help="path of the appell binary to compare with")
+    ap.add_argument("--rig", default="configs/rig_example.toml", help="rig file for --appell")
+    args = ap.parse_args()
+    path = args.recording
     rows = list(csv.DictReader(open(path)))
     t = np.array([float(r["t"]) for r in rows])
     obs = np.array([[float(r[k]) for k in ("slider_x", "slider_y", "bob_x", "bob_y")] for r in rows])
@@ -117,6 +125,14 @@ def main():
     print(f"scipy least_squares + solve_ivp DOP853 with events: mu = {res.x[0]:.6f} +- {se[0]:.2e} "
           f"(truth 0.12), rms {np.sqrt(np.mean(res.fun**2)):.3e} m, {res.nfev} residual evaluations, "
           f"median {sorted(times)[1]:.3f} s")
+    if args.appell:
+        cmd = [args.appell, "fit", path, "--rig", args.rig, "--json", "--no-profile"]
+        t0 = time.perf_counter()
+        out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
+        wall = time.perf_counter() - t0
+        mu = json.loads(out)["mu_kinetic"]
+        print(f"appell fit (whole process, --no-profile): mu = {mu['value']:.6f} +- {mu['stderr']:.2e}, "
+              f"{wall:.3f} s wall")
 
 
 if __name__ == "__main__":

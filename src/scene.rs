@@ -325,12 +325,23 @@ impl Scene {
     }
 }
 
-/// A rig file (`RIG.toml`): just the `[rig]` section of a scene.
+/// A rig file (`RIG.toml`): the `[rig]` section of a scene, alone or in a whole scene file
+/// (whose `[initial]`, `[run]` and `[output]` are then not read). Any other section is an
+/// error naming it.
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct RigFile {
     /// `[rig]`.
     pub rig: RigSpec,
+    /// A scene's `[initial]`, ignored.
+    #[serde(default)]
+    initial: Option<serde::de::IgnoredAny>,
+    /// A scene's `[run]`, ignored.
+    #[serde(default)]
+    run: Option<serde::de::IgnoredAny>,
+    /// A scene's `[output]`, ignored.
+    #[serde(default)]
+    output: Option<serde::de::IgnoredAny>,
 }
 
 impl RigFile {

@@ -136,11 +136,11 @@ fn print_summary(wp: &WorkPrecision) {
     println!("\ngoals:");
     for g in &wp.goals {
         let verdict = match g.met {
-            Some(true) => "met    ",
+            Some(true) => "met",
             Some(false) => "NOT met",
-            None => "unknown",
+            None => "undecided",
         };
-        println!("  {verdict} {:<13} {}", g.scene, g.detail);
+        println!("  {verdict:<9} {:<13} {}", g.scene, g.detail);
     }
 }
 

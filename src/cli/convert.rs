@@ -10,10 +10,13 @@ use std::path::PathBuf;
 /// Arguments of `appell convert`.
 #[derive(Debug, clap::Args)]
 pub struct Args {
-    /// Input file(s), then the output CSV. Formats with one marker per file (Tracker) take
-    /// their files together: `appell convert slider.txt bob.txt out.csv`.
-    #[arg(required = true, num_args = 2.., value_name = "INPUT... OUTPUT.csv")]
-    paths: Vec<PathBuf>,
+    /// Input file(s). Formats with one marker per file (Tracker) take their files together:
+    /// `appell convert tests/data/tracker_slider.txt tests/data/tracker_bob.txt out.csv`.
+    #[arg(required = true, num_args = 1.., value_name = "INPUT")]
+    inputs: Vec<PathBuf>,
+    /// The canonical CSV to write (last).
+    #[arg(required = true, value_name = "OUTPUT.csv")]
+    output: PathBuf,
     #[command(flatten)]
     recording: RecordingArgs,
 }
@@ -23,7 +26,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         .recording
         .resolve()
         .map_err(|e| Failure::Input(anyhow!(e)))?;
-    let (output, inputs) = args.paths.split_last().expect("clap requires two paths");
+    let (output, inputs) = (&args.output, &args.inputs);
     if inputs.contains(output) {
         return Err(Failure::Input(anyhow!(
             "the output {} is also an input",

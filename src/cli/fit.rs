@@ -122,8 +122,10 @@ fn settings(args: &Args) -> Result<FitSettings, String> {
     })
 }
 
-/// Recordings in a directory: files with a recording extension, sorted.
-fn directory_files(dir: &Path) -> Result<Vec<PathBuf>, Failure> {
+/// Recordings in a directory: files with a recording extension, sorted. Without `--format`,
+/// a file whose format cannot be told from its start (a `notes.txt`) is not a recording: it
+/// is skipped with a note on stderr and the rest are fitted.
+fn directory_files(dir: &Path, format_given: bool) -> Result<Vec<PathBuf>, Failure> {
     let entries = std::fs::read_dir(dir)
         .map_err(|e| Failure::Input(anyhow!("{}: cannot list: {e}", dir.display())))?;
     let mut files: Vec<PathBuf> = entries
@@ -141,6 +143,15 @@ fn directory_files(dir: &Path) -> Result<Vec<PathBuf>, Failure> {
         })
         .collect();
     files.sort();
+    if !format_given {
+        files.retain(|f| match appell::data::detect(f) {
+            Err(e @ appell::data::DataError::UnknownFormat { .. }) => {
+                eprintln!("note: skipped, not a recording: {e}");
+                false
+            }
+            _ => true,
+        });
+    }
     if files.is_empty() {
         return Err(Failure::Input(anyhow!(
             "{}: no recordings (.csv, .mcap, .txt, .tsv) in this directory",
@@ -177,7 +188,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         appell::report::plot::ImageFormat::from_path(p).map_err(|e| Failure::Input(e.into()))?;
     }
     if args.inputs.len() == 1 && args.inputs[0].is_dir() {
-        let files = directory_files(&args.inputs[0])?;
+        let files = directory_files(&args.inputs[0], opts.format.is_some())?;
         let bar = ProgressBar::new(files.len() as u64);
         bar.set_style(
             ProgressStyle::with_template("{bar:40} {pos}/{len} recordings fitted ({elapsed})")
@@ -213,13 +224,17 @@ pub fn run(args: Args) -> Result<(), Failure> {
                 }
                 Err(Failure::Input(e) | Failure::Run(e)) => {
                     failed += 1;
+                    // The messages name the file already (once).
+                    let message = super::messages(&e).join(": ");
                     if args.json {
                         outln!(
                             "{}",
-                            serde_json::json!({"recording": file.display().to_string(), "error": format!("{e:#}")})
+                            serde_json::json!({"recording": file.display().to_string(), "error": message})
                         );
+                    } else if message.contains(&file.display().to_string()) {
+                        eprintln!("error: {message}");
                     } else {
-                        eprintln!("{}: error: {e:#}", file.display());
+                        eprintln!("error: {}: {message}", file.display());
                     }
                 }
             }

@@ -97,11 +97,26 @@ pub fn main() -> ExitCode {
         Ok(()) => ExitCode::SUCCESS,
         Err(failure) => {
             let (Failure::Input(e) | Failure::Run(e)) = &failure;
-            eprintln!("error: {e}");
-            for cause in e.chain().skip(1) {
+            let messages = messages(e);
+            eprintln!("error: {}", messages[0]);
+            for cause in &messages[1..] {
                 eprintln!("  caused by: {cause}");
             }
             ExitCode::from(failure.code())
         }
     }
+}
+
+/// The messages of an error and its causes, leaving out a cause whose message the one before
+/// it already contains (errors that print their source, as most of the library's do), so
+/// nothing is said twice. Never empty.
+pub fn messages(e: &anyhow::Error) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for cause in e.chain() {
+        let m = cause.to_string();
+        if !out.last().is_some_and(|prev| prev.contains(&m)) {
+            out.push(m);
+        }
+    }
+    out
 }

@@ -2,10 +2,10 @@
 
 use super::Failure;
 use anyhow::anyhow;
-use appell::model::regions::{PlaneWindow, RegionMap};
+use appell::model::regions::RegionMap;
 use appell::report::plot::{render, ImageFormat};
 use appell::report::regions::{
-    phase_portrait, regions_json, regions_summary, PortraitOptions, RegionFigure,
+    figure_window, phase_portrait, regions_json, regions_summary, PortraitOptions, RegionFigure,
 };
 use appell::scene::RigFile;
 use std::path::PathBuf;
@@ -41,7 +41,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         )));
     }
     let rig = RigFile::load(&args.rig).map_err(|e| Failure::Input(e.into()))?;
-    let window = PlaneWindow::for_rig(&rig);
+    let window = figure_window(&rig);
     let map = RegionMap::new(&rig, &window);
     let trajectories = phase_portrait(
         &rig,
@@ -52,11 +52,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         },
     );
     if let Some(path) = &args.plot {
-        let figure = RegionFigure {
-            rig: &rig,
-            map: &map,
-            trajectories: &trajectories,
-        };
+        let figure = RegionFigure::new(&rig, &map, &trajectories);
         render(path, &figure).map_err(|e| {
             Failure::Run(anyhow!(e).context(format!("plotting {}", path.display())))
         })?;

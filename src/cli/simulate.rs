@@ -15,7 +15,8 @@ pub struct Args {
     /// Print one JSON object instead of the timeline.
     #[arg(long)]
     json: bool,
-    /// Write the sampled trajectory to this CSV (needs output.frame_rate in the scene).
+    /// Write the sampled trajectory to this CSV (at the scene's output.frame_rate, else
+    /// 1000 Hz).
     #[arg(long, value_name = "FILE.csv")]
     out: Option<PathBuf>,
 }

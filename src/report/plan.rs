@@ -2,8 +2,8 @@
 //! the proposals over the stick region (drawn by the region figure of `appell regions`).
 
 use super::plot::{Figure, PlotError};
-use super::regions::{RegionFigure, Trajectory};
-use crate::model::regions::{PlaneWindow, RegionMap};
+use super::regions::{figure_window, impulse_times, RegionFigure, Trajectory};
+use crate::model::regions::RegionMap;
 use crate::plan::{PlanReport, Proposal};
 use crate::sim::{Event, EventKind, Outcome};
 use plotters::coord::Shift;
@@ -195,7 +195,9 @@ pub fn plan_table(report: &PlanReport) -> String {
 }
 
 /// The proposals' nominal runs over the regions of `appell regions` (stick region and its
-/// boundary |c| = mu_s |b|, both slide directions), coloured by mode.
+/// boundary |c| = mu_s |b|, both slide directions when there is a paradox band), coloured by
+/// mode; each release labelled with its rank (#1 the best, drawn thicker), and each
+/// proposal's release, robustness and predicted stderr(mu) in the legend column.
 pub struct PlanFigure<'a> {
     /// The plan.
     pub report: &'a PlanReport,
@@ -214,26 +216,65 @@ impl PlanFigure<'_> {
                     .last()
                     .is_some_and(|e| e.kind == EventKind::Paradox),
                 error: None,
+                impulse_times: impulse_times(&p.events),
             })
             .collect()
+    }
+
+    /// One line per proposal: rank, release, robustness, predicted stderr(mu).
+    pub fn proposal_notes(&self) -> Vec<String> {
+        let mut out = vec![format!("targets: {}", target_label(self.report))];
+        if self.report.proposals.is_empty() {
+            out.push(format!(
+                "no proposals{}",
+                self.report
+                    .nearest
+                    .as_ref()
+                    .map_or(String::new(), |n| format!(": {}", n.message))
+            ));
+        }
+        for (i, p) in self.report.proposals.iter().enumerate() {
+            let y = p.initial;
+            let push = if y[2] == 0.0 {
+                String::new()
+            } else {
+                format!(", x'0 = {:.3} m/s", y[2])
+            };
+            out.push(format!(
+                "#{}: theta0 = {:.1} deg, theta'0 = {:.2} rad/s{push}; robustness >= {:.3}, stderr(mu) = {:.2e}",
+                i + 1,
+                y[1].to_degrees(),
+                y[3],
+                p.robustness,
+                p.predicted_mu_stderr
+            ));
+        }
+        out
     }
 }
 
 impl Figure for PlanFigure<'_> {
     fn size(&self) -> (u32, u32) {
-        (1200, 1100)
+        self.with_region_figure(|f| f.size())
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
+        self.with_region_figure(|f| f.draw(root))
+    }
+}
+
+impl PlanFigure<'_> {
+    /// Build the region figure of the plan's rig with the proposals and hand it to `f`.
+    fn with_region_figure<R>(&self, f: impl FnOnce(&RegionFigure<'_>) -> R) -> R {
         let rig = &self.report.rig;
-        let window = PlaneWindow::for_rig(rig);
-        let map = RegionMap::new(rig, &window);
+        let map = RegionMap::new(rig, &figure_window(rig));
         let trajectories = self.trajectories();
-        RegionFigure {
-            rig,
-            map: &map,
-            trajectories: &trajectories,
-        }
-        .draw(root)
+        let figure = RegionFigure {
+            labels: (1..=trajectories.len()).map(|k| format!("#{k}")).collect(),
+            notes: self.proposal_notes(),
+            emphasise_first: true,
+            ..RegionFigure::new(rig, &map, &trajectories)
+        };
+        f(&figure)
     }
 }

@@ -8,6 +8,7 @@ use super::write_atomic;
 use plotters::coord::Shift;
 use plotters::drawing::DrawingAreaErrorKind;
 use plotters::prelude::*;
+use std::io::Write;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 use std::sync::Once;
@@ -99,6 +100,115 @@ pub fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTransl
     Ok(())
 }
 
+/// How a legend entry of [`draw_side_legend`] is drawn.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Swatch {
+    /// A filled box of this colour (a shaded region).
+    Fill(RGBColor),
+    /// A line of this colour and width.
+    Line(RGBColor, u32),
+    /// A dashed line of this colour.
+    Dashed(RGBColor),
+    /// A dot of this colour.
+    Dot(RGBColor),
+}
+
+/// A legend drawn in its own area beside the charts, so that it never covers data: a title,
+/// the entries (swatch and label), then free text lines (the figure's key numbers). Long
+/// labels are wrapped at `wrap` characters.
+pub fn draw_side_legend<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    title: &str,
+    entries: &[(Swatch, String)],
+    notes: &[String],
+    wrap: usize,
+) -> Result<(), PlotError> {
+    let text = ("sans-serif", 14).into_font().color(&BLACK);
+    // Only the regular face is registered (ensure_font): a larger size marks the title.
+    let bold = ("sans-serif", 17).into_font().color(&BLACK);
+    let (x0, line) = (8, 18);
+    let mut y = 12;
+    area.draw(&Text::new(title.to_owned(), (x0, y), bold.clone()))?;
+    y += line + 6;
+    for (swatch, label) in entries {
+        let mid = y + line / 2 - 2;
+        match *swatch {
+            Swatch::Fill(c) => {
+                area.draw(&Rectangle::new(
+                    [(x0, mid - 6), (x0 + 22, mid + 6)],
+                    c.filled(),
+                ))?;
+                area.draw(&Rectangle::new([(x0, mid - 6), (x0 + 22, mid + 6)], BLACK))?;
+            }
+            Swatch::Line(c, w) => {
+                area.draw(&PathElement::new(
+                    vec![(x0, mid), (x0 + 22, mid)],
+                    c.stroke_width(w),
+                ))?;
+            }
+            Swatch::Dashed(c) => {
+                for k in 0..3 {
+                    let a = x0 + 9 * k;
+                    area.draw(&PathElement::new(
+                        vec![(a, mid), (a + 5, mid)],
+                        c.stroke_width(2),
+                    ))?;
+                }
+            }
+            Swatch::Dot(c) => {
+                area.draw(&Circle::new((x0 + 11, mid), 4, c.filled()))?;
+            }
+        }
+        for (i, piece) in wrap_words(label, wrap).into_iter().enumerate() {
+            let indent = if i == 0 { 0 } else { 8 };
+            area.draw(&Text::new(piece, (x0 + 30 + indent, y), text.clone()))?;
+            y += line;
+        }
+        y += 4;
+    }
+    y += 10;
+    for note in notes {
+        for piece in wrap_words(note, wrap + 4) {
+            area.draw(&Text::new(piece, (x0, y), text.clone()))?;
+            y += line;
+        }
+        y += 4;
+    }
+    Ok(())
+}
+
+/// The height in pixels that [`draw_side_legend`] needs for these entries and notes.
+pub fn side_legend_height(entries: &[(Swatch, String)], notes: &[String], wrap: usize) -> u32 {
+    let mut y = 12 + 18 + 6;
+    for (_, label) in entries {
+        y += 18 * wrap_words(label, wrap).len() + 4;
+    }
+    y += 10;
+    for note in notes {
+        y += 18 * wrap_words(note, wrap + 4).len() + 4;
+    }
+    (y + 12) as u32
+}
+
+/// Split `s` into lines of at most `width` characters at spaces (a longer word stays whole).
+pub fn wrap_words(s: &str, width: usize) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut line = String::new();
+    for word in s.split_whitespace() {
+        if !line.is_empty() && line.len() + 1 + word.len() > width {
+            out.push(std::mem::take(&mut line));
+        }
+        if !line.is_empty() {
+            line.push(' ');
+        }
+        line.push_str(word);
+    }
+    if !line.is_empty() {
+        out.push(line);
+    }
+    out
+}
+
 /// Something that draws itself on a plotters drawing area of any backend.
 pub trait Figure {
     /// Size in pixels (width, height).
@@ -111,8 +221,8 @@ pub trait Figure {
 }
 
 /// Write `figure` to `path` as SVG or PNG (by extension). Nothing is left at `path` unless the
-/// whole image was written: SVG is drawn into memory and written atomically, PNG is drawn to a
-/// temporary sibling and renamed.
+/// whole image was written: either is drawn into memory and written through a temporary
+/// sibling and a rename.
 pub fn render(path: &Path, figure: &impl Figure) -> Result<(), PlotError> {
     ensure_font();
     let io = |source| PlotError::Io {
@@ -131,30 +241,33 @@ pub fn render(path: &Path, figure: &impl Figure) -> Result<(), PlotError> {
             write_atomic(path, |w| w.write_all(svg.as_bytes())).map_err(io)
         }
         ImageFormat::Png => {
-            let name = path.file_name().ok_or_else(|| {
-                io(std::io::Error::new(
-                    std::io::ErrorKind::InvalidInput,
-                    "output path has no file name",
-                ))
-            })?;
-            let mut tmp_name = std::ffi::OsString::from(".");
-            tmp_name.push(name);
-            tmp_name.push(format!(".{}.tmp.png", std::process::id()));
-            let tmp = path.with_file_name(tmp_name);
-            let drawn = (|| {
-                let root = BitMapBackend::new(&tmp, figure.size()).into_drawing_area();
+            // Drawn into memory and encoded with the png crate (not plotters' image-crate
+            // encoder, which costs a minute and a half of a cold build for the JPEG, GIF and BMP
+            // codecs no figure uses), then written atomically like the SVG.
+            let (width, height) = figure.size();
+            let mut rgb = vec![0u8; width as usize * height as usize * 3];
+            {
+                let root =
+                    BitMapBackend::with_buffer(&mut rgb, (width, height)).into_drawing_area();
                 root.fill(&WHITE)?;
                 figure.draw(&root)?;
                 root.present()?;
-                Ok(())
-            })();
-            let result = drawn.and_then(|()| std::fs::rename(&tmp, path).map_err(io));
-            if result.is_err() {
-                let _ = std::fs::remove_file(&tmp);
             }
-            result
+            write_atomic(path, |w| encode_png(w, width, height, &rgb)).map_err(io)
         }
     }
+}
+
+/// Encode 8-bit RGB pixels, row by row from the top, as a PNG.
+fn encode_png(out: &mut dyn Write, width: u32, height: u32, rgb: &[u8]) -> std::io::Result<()> {
+    let mut encoder = png::Encoder::new(out, width, height);
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    let mut writer = encoder.write_header().map_err(std::io::Error::other)?;
+    writer
+        .write_image_data(rgb)
+        .map_err(std::io::Error::other)?;
+    writer.finish().map_err(std::io::Error::other)
 }
 
 /// One line series of a [`LinePlot`].

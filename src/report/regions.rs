@@ -1,11 +1,12 @@
 //! Output of `appell regions`: the phase portrait runs, the readable summary, the JSON object
 //! and the region figure in the (theta, theta') plane.
 
-use super::plot::{Figure, PlotError};
+use super::plot::{draw_side_legend, side_legend_height, Figure, PlotError, Swatch};
 use crate::model::regions::{
-    in_paradox_band, slide_count_intervals, slide_solution_count, stick_intervals, Curve, RegionMap,
+    in_paradox_band, slide_count_intervals, slide_solution_count, stick_intervals, Curve,
+    PlaneWindow, RegionMap,
 };
-use crate::model::{Mode, Rig, State, THETA, THETA_DOT};
+use crate::model::{Direction, Mode, Rig, State, THETA, THETA_DOT};
 use crate::sim::{simulate, Options, Request, Sample};
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -25,24 +26,26 @@ pub struct PortraitOptions {
 }
 
 impl Default for PortraitOptions {
-    /// Eight runs of 3 s at 200 Hz.
+    /// Eight runs of 3 s at 1000 Hz (smooth curves at the figure's scale).
     fn default() -> Self {
         PortraitOptions {
             trajectories: 8,
             duration: 3.0,
-            frame_rate: 200.0,
+            frame_rate: 1000.0,
         }
     }
 }
 
 /// The initial states of a phase portrait of `n` runs: about half released from rest at angles
-/// spread over -30..210 degrees (both sides of the hanging position, some with the bob above
-/// the rail), the rest starting from the hanging position theta = 90 deg with angular
-/// velocities +-1.0, +-1.7, +-2.4, ... sqrt(g / l) (alternating signs).
+/// spread over -30..80 degrees (one side of the hanging position only: a stuck release at
+/// theta swings to 180 deg - theta, so a release from the other side would retrace the same
+/// curve), the rest starting from the hanging position theta = 90 deg with angular velocities
+/// +1.0, -1.6, +2.2, -2.8, ... sqrt(g / l) (alternating signs, growing, so no two runs are
+/// mirror images of each other).
 pub fn portrait_initial_states(rig: &Rig<f64>, n: usize) -> Vec<State<f64>> {
     let n_rest = n.div_ceil(2);
     let n_spin = n - n_rest;
-    let (lo, hi) = (-30f64.to_radians(), 210f64.to_radians());
+    let (lo, hi) = (-30f64.to_radians(), 80f64.to_radians());
     let mut out = Vec::with_capacity(n);
     for k in 0..n_rest {
         let theta = if n_rest == 1 {
@@ -55,7 +58,7 @@ pub fn portrait_initial_states(rig: &Rig<f64>, n: usize) -> Vec<State<f64>> {
     let unit = (rig.gravity / rig.rod_length).sqrt();
     for k in 0..n_spin {
         let sign = if k % 2 == 0 { 1.0 } else { -1.0 };
-        let w0 = sign * unit * (1.0 + 0.7 * (k / 2) as f64);
+        let w0 = sign * unit * (1.0 + 0.6 * k as f64);
         out.push([0.0, PI / 2.0, 0.0, w0]);
     }
     out
@@ -72,6 +75,9 @@ pub struct Trajectory {
     pub stopped_at_paradox: bool,
     /// Why the simulator failed, when it did (the samples are then empty).
     pub error: Option<String>,
+    /// Times of impulsive stops (s): theta' jumps there, so the figure does not join the
+    /// samples on either side as if the rig moved between them.
+    pub impulse_times: Vec<f64>,
 }
 
 /// Simulate the runs of a phase portrait with [`crate::sim::simulate`] (rtol 1e-8). A run
@@ -94,6 +100,7 @@ pub fn phase_portrait(rig: &Rig<f64>, options: &PortraitOptions) -> Vec<Trajecto
                 Ok(sol) => Trajectory {
                     initial: y0,
                     stopped_at_paradox: sol.stopped_at_paradox(),
+                    impulse_times: impulse_times(&sol.events),
                     samples: sol.samples,
                     error: None,
                 },
@@ -102,9 +109,19 @@ pub fn phase_portrait(rig: &Rig<f64>, options: &PortraitOptions) -> Vec<Trajecto
                     samples: Vec::new(),
                     stopped_at_paradox: false,
                     error: Some(e.to_string()),
+                    impulse_times: Vec::new(),
                 },
             },
         )
+        .collect()
+}
+
+/// The times of the events that apply an impulsive stop.
+pub fn impulse_times(events: &[crate::sim::Event]) -> Vec<f64> {
+    events
+        .iter()
+        .filter(|e| e.impulse.is_some())
+        .map(|e| e.t)
         .collect()
 }
 
@@ -252,89 +269,261 @@ pub fn mode_color(mode: Mode) -> RGBColor {
     }
 }
 
-const STICK_FILL: RGBColor = RGBColor(150, 210, 150);
-const NONE_FILL: RGBColor = RGBColor(240, 120, 120);
-const TWO_FILL: RGBColor = RGBColor(140, 160, 240);
+// Opaque fills, so that overlapping columns draw no seams and each region shows exactly the
+// colour of its legend swatch.
+const STICK_FILL: RGBColor = RGBColor(205, 235, 205);
+const NONE_FILL: RGBColor = RGBColor(248, 190, 190);
+const TWO_FILL: RGBColor = RGBColor(195, 205, 248);
 const BOUNDARY: RGBColor = RGBColor(0, 120, 0);
 const Q_ZERO: RGBColor = RGBColor(150, 0, 150);
 const EDGE: RGBColor = RGBColor(90, 90, 90);
+const OTHER_SLIDE: RGBColor = RGBColor(175, 175, 175);
+const JUMP: RGBColor = RGBColor(200, 0, 0);
 
-/// The region figure: one panel per slide direction (s = +1 above, s = -1 below), each with
-/// the stick region shaded and outlined, the sliding model's regions without a solution and
-/// with two solutions shaded, the band edges, the curve Q = 0, and the phase-portrait
-/// trajectories coloured by mode.
+/// Width of the legend column beside the panels (px), and its text width (characters).
+const LEGEND_WIDTH: u32 = 360;
+const LEGEND_WRAP: usize = 42;
+
+/// The window of the region figures: theta from -90 to 270 degrees, so that the hanging
+/// position (90) is in the middle and releases on either side (e.g. -20 deg) keep their sign;
+/// |theta'| up to 3 sqrt(g / l) as in [`PlaneWindow::for_rig`].
+pub fn figure_window(rig: &Rig<f64>) -> PlaneWindow {
+    PlaneWindow {
+        theta_min: -PI / 2.0,
+        theta_max: 1.5 * PI,
+        ..PlaneWindow::for_rig(rig)
+    }
+}
+
+/// The region figure in the (theta, theta') plane: the stick region shaded and outlined, the
+/// curve Q = 0, the paradox band's edges and regions where sliding in direction s has no or
+/// two solutions, and the phase-portrait trajectories coloured by mode. With a paradox band
+/// there is one panel per slide direction (s = +1 above, s = -1 below); without one, nothing
+/// in the plane depends on s and one panel is drawn. The legend and the rig's key numbers sit
+/// in a column of their own beside the panels.
 pub struct RegionFigure<'a> {
     /// The rig.
     pub rig: &'a Rig<f64>,
-    /// Its region map (curves and window).
+    /// Its region map (curves and window; [`figure_window`] is the one to use).
     pub map: &'a RegionMap,
     /// Trajectories to overlay.
     pub trajectories: &'a [Trajectory],
+    /// A label per trajectory drawn at its start (e.g. `#1`; empty: none).
+    pub labels: Vec<String>,
+    /// Lines of key numbers added under the rig's in the legend column.
+    pub notes: Vec<String>,
+    /// Draw the first trajectory thicker than the others (the plan's best proposal).
+    pub emphasise_first: bool,
 }
 
-/// Points of a trajectory in degrees, wrapped into the window and split where the wrap jumps
-/// or the mode changes; each piece carries its mode (pieces of one mode join the next at the
-/// switching sample).
-fn trajectory_pieces(map: &RegionMap, t: &Trajectory) -> Vec<(Mode, Vec<(f64, f64)>)> {
+impl<'a> RegionFigure<'a> {
+    /// The figure of `appell regions`: no labels, no extra notes.
+    pub fn new(rig: &'a Rig<f64>, map: &'a RegionMap, trajectories: &'a [Trajectory]) -> Self {
+        RegionFigure {
+            rig,
+            map,
+            trajectories,
+            labels: Vec::new(),
+            notes: Vec::new(),
+            emphasise_first: false,
+        }
+    }
+
+    /// Two panels (one per slide direction) when the sliding model's solution count depends on
+    /// s somewhere in the plane, that is when there is a paradox band.
+    pub fn two_panels(&self) -> bool {
+        self.map.summary.paradox_possible()
+    }
+
+    /// The key numbers printed beside the panels.
+    pub fn key_numbers(&self) -> Vec<String> {
+        let s = &self.map.summary;
+        let mut out = vec![
+            format!(
+                "m1/m2 = {:.3}, l = {} m, mu_k = {}, mu_s = {}",
+                s.mass_ratio, self.rig.rod_length, s.mu_kinetic, s.mu_static
+            ),
+            format!(
+                "mu* = 2 sqrt(r (1 + r)) = {:.3}, theta* = {:.1} deg",
+                s.mu_critical, s.theta_critical_deg
+            ),
+        ];
+        if self.rig.rail_tilt != 0.0 {
+            out.push(format!(
+                "rail tilt {:.2} deg (+x downhill): the plane is not mirror-symmetric",
+                self.rig.rail_tilt.to_degrees()
+            ));
+        }
+        if s.paradox_possible() {
+            let bands: Vec<String> = s
+                .paradox_band_deg
+                .iter()
+                .map(|[lo, hi]| format!("{lo:.1}..{hi:.1}"))
+                .collect();
+            out.push(format!(
+                "paradox band (mu_k |a| > D): {} deg (and the same |tan theta| below 0 and above 180 deg)",
+                bands.join(" and ")
+            ));
+            if self.rig.rail_tilt == 0.0 {
+                out.push(
+                    "level rig: the s = -1 panel is the s = +1 panel mirrored, (theta, theta') -> (180 deg - theta, -theta')"
+                        .to_owned(),
+                );
+            }
+        } else {
+            out.push(
+                "no paradox band (the largest sliding mu <= mu*): sliding has exactly one solution everywhere in either direction, so one panel serves s = +1 and s = -1"
+                    .to_owned(),
+            );
+        }
+        out
+    }
+
+    /// The rig's key numbers, then the figure's own notes.
+    fn all_notes(&self) -> Vec<String> {
+        let mut notes = self.key_numbers();
+        notes.extend(self.notes.iter().cloned());
+        notes
+    }
+
+    fn legend_entries(&self) -> Vec<(Swatch, String)> {
+        let mut out = vec![
+            (
+                Swatch::Fill(STICK_FILL),
+                "stick region |c| <= mu_s |b| (pendulum model holds)".to_owned(),
+            ),
+            (
+                Swatch::Line(BOUNDARY, 2),
+                "stick boundary |c| = mu_s |b|: branches c = +mu_s b and c = -mu_s b (two close lines bound a thin stick strip)".to_owned(),
+            ),
+        ];
+        if !self.map.q_zero.is_empty() {
+            out.push((
+                Swatch::Line(Q_ZERO, 2),
+                "Q = 0: the rail reaction N changes sign while sliding".to_owned(),
+            ));
+        }
+        if self.two_panels() {
+            out.push((
+                Swatch::Fill(NONE_FILL),
+                "sliding in direction s: no solution".to_owned(),
+            ));
+            out.push((
+                Swatch::Fill(TWO_FILL),
+                "sliding in direction s: two solutions".to_owned(),
+            ));
+            out.push((Swatch::Dashed(EDGE), "band edge mu_k |a| = D".to_owned()));
+        }
+        if !self.trajectories.is_empty() {
+            out.push((
+                Swatch::Line(mode_color(Mode::Stick), 2),
+                "trajectory: stick".to_owned(),
+            ));
+            out.push((
+                Swatch::Line(mode_color(Mode::Slide(Direction::Positive)), 2),
+                "trajectory: slide+ (x' > 0)".to_owned(),
+            ));
+            out.push((
+                Swatch::Line(mode_color(Mode::Slide(Direction::Negative)), 2),
+                "trajectory: slide- (x' < 0)".to_owned(),
+            ));
+            if self.two_panels() {
+                out.push((
+                    Swatch::Line(OTHER_SLIDE, 2),
+                    "trajectory sliding in the other panel's direction".to_owned(),
+                ));
+            }
+            out.push((
+                Swatch::Dot(BLACK),
+                "release (start of a trajectory)".to_owned(),
+            ));
+            if self
+                .trajectories
+                .iter()
+                .any(|t| !t.impulse_times.is_empty())
+            {
+                out.push((
+                    Swatch::Dashed(JUMP),
+                    "impulsive stop: x' -> 0, theta' jumps".to_owned(),
+                ));
+            }
+        }
+        out
+    }
+}
+
+/// A trajectory cut for drawing: pieces of one mode, and the jumps of impulsive stops.
+struct Pieces {
+    /// Points in degrees and rad/s with their mode; consecutive pieces share their switching
+    /// sample.
+    lines: Vec<(Mode, Vec<(f64, f64)>)>,
+    /// (before, after) of each impulsive stop, drawn as a dashed jump, not as motion.
+    jumps: Vec<[(f64, f64); 2]>,
+}
+
+/// Points of a trajectory in degrees, wrapped into the window and split where the wrap jumps,
+/// the mode changes or an impulsive stop makes theta' jump.
+fn trajectory_pieces(map: &RegionMap, t: &Trajectory) -> Pieces {
     let win = &map.window;
-    let mut out: Vec<(Mode, Vec<(f64, f64)>)> = Vec::new();
-    let mut prev: Option<(f64, f64)> = None;
+    let mut out = Pieces {
+        lines: Vec::new(),
+        jumps: Vec::new(),
+    };
+    let mut prev: Option<(f64, f64, f64)> = None;
     for s in &t.samples {
         let p = (
             win.wrap(s.state[THETA]).to_degrees(),
             s.state[THETA_DOT].clamp(-win.w_max, win.w_max),
         );
-        let jump = prev.is_some_and(|q| (p.0 - q.0).abs() > 180.0);
-        match out.last_mut() {
-            Some((m, pts)) if *m == s.mode && !jump => pts.push(p),
+        let wrapped = prev.is_some_and(|q| (p.0 - q.0).abs() > 180.0);
+        let impulsive =
+            prev.is_some_and(|q| t.impulse_times.iter().any(|&te| q.2 <= te && te <= s.t));
+        if let (Some(q), true, false) = (prev, impulsive, wrapped) {
+            out.jumps.push([(q.0, q.1), p]);
+        }
+        let joined = !(wrapped || impulsive);
+        match out.lines.last_mut() {
+            Some((m, pts)) if *m == s.mode && joined => pts.push(p),
             _ => {
                 let mut pts = Vec::new();
-                if let (Some(q), false) = (prev, jump) {
-                    pts.push(q);
+                if let (Some(q), true) = (prev, joined) {
+                    pts.push((q.0, q.1));
                 }
                 pts.push(p);
-                out.push((s.mode, pts));
+                out.lines.push((s.mode, pts));
             }
         }
-        prev = Some(p);
+        prev = Some((p.0, p.1, s.t));
     }
     out
 }
 
 impl RegionFigure<'_> {
+    /// One panel: `s` is the slide direction whose solution counts are shaded (`None`: the
+    /// single panel of a rig without a paradox band).
     fn panel<DB: DrawingBackend>(
         &self,
         area: &DrawingArea<DB, Shift>,
-        s: f64,
+        s: Option<f64>,
     ) -> Result<(), PlotError> {
         let win = &self.map.window;
         let (t0, t1) = (win.theta_min.to_degrees(), win.theta_max.to_degrees());
         let w = win.w_max;
-        let sm = &self.map.summary;
-        let caption = format!(
-            "slide {} (s = {:+}): m1/m2 = {:.3}, mu_k = {}, mu_s = {}, mu* = {:.3}",
-            if s > 0.0 { "+" } else { "-" },
-            s as i32,
-            sm.mass_ratio,
-            sm.mu_kinetic,
-            sm.mu_static,
-            sm.mu_critical
-        );
+        let caption = match s {
+            Some(s) if s > 0.0 => "slide direction s = +1 (x' > 0)".to_owned(),
+            Some(_) => "slide direction s = -1 (x' < 0)".to_owned(),
+            None => "stick region and phase portraits (either slide direction)".to_owned(),
+        };
         let mut chart = ChartBuilder::on(area)
             .caption(caption, ("sans-serif", 18))
             .margin(10)
-            .x_label_area_size(40)
+            .x_label_area_size(45)
             .y_label_area_size(60)
             .build_cartesian_2d(t0..t1, -w..w)?;
-        chart
-            .configure_mesh()
-            .x_desc("theta [deg] (90: hanging, 270: above the rail)")
-            .y_desc("theta' [rad/s]")
-            .label_style(("sans-serif", 13))
-            .light_line_style(WHITE.mix(0.0))
-            .draw()?;
-        // Shaded regions, one column per degree step, exact in theta' within each column.
-        let columns = 360usize;
+        // Shaded regions, one column per degree, exact in theta' within each column; the
+        // paradox regions of this direction are drawn over the stick region, whose outline
+        // stays visible on top.
+        let columns = (t1 - t0).round().max(1.0) as usize;
         let mut stick_rects = Vec::new();
         let mut none_rects = Vec::new();
         let mut two_rects = Vec::new();
@@ -347,118 +536,154 @@ impl RegionFigure<'_> {
             for (lo, hi) in stick_intervals(self.rig, mid, w) {
                 stick_rects.push([(ad, lo), (bd, hi)]);
             }
-            if in_paradox_band(self.rig, mid) {
-                for (lo, hi, n) in slide_count_intervals(self.rig, mid, s, w) {
-                    match n {
-                        0 => none_rects.push([(ad, lo), (bd, hi)]),
-                        2 => two_rects.push([(ad, lo), (bd, hi)]),
-                        _ => {}
+            if let Some(s) = s {
+                if in_paradox_band(self.rig, mid) {
+                    for (lo, hi, n) in slide_count_intervals(self.rig, mid, s, w) {
+                        match n {
+                            0 => none_rects.push([(ad, lo), (bd, hi)]),
+                            2 => two_rects.push([(ad, lo), (bd, hi)]),
+                            _ => {}
+                        }
                     }
                 }
             }
         }
-        let legend_box = |c: RGBColor| {
-            move |(x, y): (i32, i32)| Rectangle::new([(x, y - 6), (x + 18, y + 6)], c.filled())
-        };
+        for (rects, color) in [
+            (stick_rects, STICK_FILL),
+            (none_rects, NONE_FILL),
+            (two_rects, TWO_FILL),
+        ] {
+            chart.draw_series(rects.into_iter().map(|r| Rectangle::new(r, color.filled())))?;
+        }
         chart
-            .draw_series(
-                stick_rects
-                    .into_iter()
-                    .map(|r| Rectangle::new(r, STICK_FILL.mix(0.45).filled())),
-            )?
-            .label("stick region |c| <= mu_s |b|")
-            .legend(legend_box(STICK_FILL));
-        if !none_rects.is_empty() {
-            chart
-                .draw_series(
-                    none_rects
-                        .into_iter()
-                        .map(|r| Rectangle::new(r, NONE_FILL.mix(0.45).filled())),
-                )?
-                .label("sliding: no solution")
-                .legend(legend_box(NONE_FILL));
-        }
-        if !two_rects.is_empty() {
-            chart
-                .draw_series(
-                    two_rects
-                        .into_iter()
-                        .map(|r| Rectangle::new(r, TWO_FILL.mix(0.45).filled())),
-                )?
-                .label("sliding: two solutions")
-                .legend(legend_box(TWO_FILL));
-        }
+            .configure_mesh()
+            .x_desc("theta [deg]   (90 = hanging, 0 and 180 = rod along the rail, 270 = bob above the slider)")
+            .y_desc("theta' [rad/s]")
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 15))
+            .x_labels(13)
+            .y_labels(9)
+            .x_label_formatter(&|v| format!("{v:.0}"))
+            .y_label_formatter(&|v| format!("{v:.0}"))
+            .light_line_style(TRANSPARENT)
+            .bold_line_style(BLACK.mix(0.12))
+            .draw()?;
         let to_deg = |c: &Curve| -> Vec<(f64, f64)> {
             c.points.iter().map(|p| (p[0].to_degrees(), p[1])).collect()
         };
-        for (i, c) in self.map.stick_boundary.iter().enumerate() {
-            let drawn = chart.draw_series(LineSeries::new(to_deg(c), BOUNDARY.stroke_width(2)))?;
-            if i == 0 {
-                drawn.label("|c| = mu_s |b|").legend(|(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], BOUNDARY.stroke_width(2))
-                });
+        if s.is_some() {
+            for &e in &self.map.band_edges {
+                let e = e.to_degrees();
+                chart.draw_series(DashedLineSeries::new(
+                    vec![(e, -w), (e, w)],
+                    6,
+                    4,
+                    EDGE.stroke_width(1),
+                ))?;
             }
         }
-        for (i, c) in self.map.q_zero.iter().enumerate() {
-            let drawn = chart.draw_series(LineSeries::new(to_deg(c), Q_ZERO.stroke_width(2)))?;
-            if i == 0 {
-                drawn.label("Q = 0 (N changes sign)").legend(|(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], Q_ZERO.stroke_width(2))
-                });
-            }
+        for c in &self.map.q_zero {
+            chart.draw_series(LineSeries::new(to_deg(c), Q_ZERO.stroke_width(2)))?;
         }
-        for (i, &e) in self.map.band_edges.iter().enumerate() {
-            let e = e.to_degrees();
-            let drawn = chart.draw_series(DashedLineSeries::new(
-                vec![(e, -w), (e, w)],
-                6,
-                4,
-                EDGE.stroke_width(1),
-            ))?;
-            if i == 0 {
-                drawn.label("band edge mu_k |a| = D").legend(|(x, y)| {
-                    PathElement::new(vec![(x, y), (x + 18, y)], EDGE.stroke_width(1))
-                });
-            }
+        for c in &self.map.stick_boundary {
+            chart.draw_series(LineSeries::new(to_deg(c), BOUNDARY.stroke_width(2)))?;
         }
-        let mut labelled = std::collections::HashSet::new();
-        for t in self.trajectories {
-            for (mode, pts) in trajectory_pieces(self.map, t) {
-                let color = mode_color(mode);
-                let drawn = chart.draw_series(LineSeries::new(pts, color.stroke_width(1)))?;
-                if labelled.insert(mode) {
-                    drawn
-                        .label(format!("trajectory: {}", mode.name()))
-                        .legend(move |(x, y)| {
-                            PathElement::new(vec![(x, y), (x + 18, y)], color.stroke_width(2))
-                        });
-                }
+        for (k, t) in self.trajectories.iter().enumerate() {
+            let width = if self.emphasise_first && k > 0 { 1 } else { 2 };
+            let pieces = trajectory_pieces(self.map, t);
+            for (mode, pts) in pieces.lines {
+                let color = match (s, mode) {
+                    (Some(s), Mode::Slide(dir)) if dir.sign() != s => OTHER_SLIDE,
+                    _ => mode_color(mode),
+                };
+                chart.draw_series(LineSeries::new(pts, color.stroke_width(width)))?;
             }
-            if let Some(first) = t.samples.first() {
-                chart.draw_series(std::iter::once(Circle::new(
-                    (
-                        win.wrap(first.state[THETA]).to_degrees(),
-                        first.state[THETA_DOT],
-                    ),
+            for [a, b] in pieces.jumps {
+                chart.draw_series(DashedLineSeries::new(
+                    vec![a, b],
+                    4,
                     3,
-                    BLACK.filled(),
-                )))?;
+                    JUMP.stroke_width(2),
+                ))?;
             }
         }
-        crate::report::plot::draw_legend(&mut chart, SeriesLabelPosition::UpperRight, 12)?;
+        // Release dots and labels last, so no curve hides them. Labels are stacked in rank
+        // order in a column left of the leftmost labelled release (right of the rightmost
+        // when there is no room), each joined to its dot by a thin leader line, so releases a
+        // few pixels apart keep readable labels.
+        let mut labelled: Vec<(&str, (i32, i32))> = Vec::new();
+        for (k, t) in self.trajectories.iter().enumerate() {
+            let Some(first) = t.samples.first() else {
+                continue;
+            };
+            let p = (
+                win.wrap(first.state[THETA]).to_degrees(),
+                first.state[THETA_DOT].clamp(-w, w),
+            );
+            chart.draw_series(std::iter::once(Circle::new(p, 4, BLACK.filled())))?;
+            if let Some(label) = self.labels.get(k).filter(|l| !l.is_empty()) {
+                labelled.push((label, chart.backend_coord(&p)));
+            }
+        }
+        if !labelled.is_empty() {
+            let plot = chart.plotting_area();
+            let (x_px, y_px) = plot.get_pixel_range();
+            let step = 19;
+            let n = labelled.len() as i32;
+            let mean_y = labelled.iter().map(|l| l.1 .1).sum::<i32>() / n;
+            let top = (mean_y - step * (n - 1) / 2)
+                .clamp(y_px.start + 4, (y_px.end - step * n).max(y_px.start + 4));
+            let min_x = labelled.iter().map(|l| l.1 .0).min().unwrap_or(0);
+            let max_x = labelled.iter().map(|l| l.1 .0).max().unwrap_or(0);
+            let left = min_x - 70 > x_px.start;
+            let font = ("sans-serif", 16).into_font().color(&BLACK);
+            let root = plot.strip_coord_spec();
+            for (i, (label, dot)) in labelled.iter().enumerate() {
+                let y = top + step * i as i32;
+                let (text_x, anchor_x) = if left {
+                    (min_x - 66, min_x - 32)
+                } else {
+                    (max_x + 34, max_x + 30)
+                };
+                let rel = |(x, y): (i32, i32)| (x - x_px.start, y - y_px.start);
+                root.draw(&PathElement::new(
+                    vec![rel((anchor_x, y)), rel(*dot)],
+                    BLACK.mix(0.5).stroke_width(1),
+                ))?;
+                root.draw(&Text::new(
+                    label.to_string(),
+                    rel((text_x, y - 8)),
+                    font.clone(),
+                ))?;
+            }
+        }
         Ok(())
     }
 }
 
 impl Figure for RegionFigure<'_> {
     fn size(&self) -> (u32, u32) {
-        (1200, 1100)
+        let panels = if self.two_panels() { 1100 } else { 650 };
+        let legend = side_legend_height(&self.legend_entries(), &self.all_notes(), LEGEND_WRAP);
+        (1400, panels.max(legend))
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
-        let panels = root.split_evenly((2, 1));
-        self.panel(&panels[0], 1.0)?;
-        self.panel(&panels[1], -1.0)?;
-        Ok(())
+        let (width, _) = root.dim_in_pixel();
+        let (plots, side) = root.split_horizontally(width.saturating_sub(LEGEND_WIDTH));
+        if self.two_panels() {
+            let panels = plots.split_evenly((2, 1));
+            self.panel(&panels[0], Some(1.0))?;
+            self.panel(&panels[1], Some(-1.0))?;
+        } else {
+            self.panel(&plots, None)?;
+        }
+        draw_side_legend(
+            &side,
+            "Legend",
+            &self.legend_entries(),
+            &self.all_notes(),
+            LEGEND_WRAP,
+        )
     }
 }

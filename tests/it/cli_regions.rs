@@ -77,6 +77,12 @@ fn paper_rig_json_svg_and_png() {
     assert!(curves[0]["points"][0].as_array().unwrap().len() == 2);
     assert_eq!(v["trajectories"].as_array().unwrap().len(), 4);
     check_svg(&svg);
+    // No band: nothing depends on the slide direction, one panel says so (issue 13: the two
+    // panels were identical); the key numbers are on the figure.
+    let text = crate::helpers::svg_text(&std::fs::read_to_string(&svg).unwrap());
+    assert!(text.contains("one panel serves s = +1 and s = -1"));
+    assert!(!text.contains("slide direction s = -1"));
+    assert!(text.contains("mu* = 2 sqrt(r (1 + r)) = 2.828"));
 
     let png = scratch("paper.png");
     let out = appell(&[
@@ -90,7 +96,7 @@ fn paper_rig_json_svg_and_png() {
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stdout).contains("mu* = 2.8284"));
     let bytes = std::fs::read(&png).unwrap();
-    assert_eq!(png_size(&bytes), (1200, 1100));
+    assert_eq!(png_size(&bytes), (1400, 650));
     assert!(bytes.len() > 20_000);
 }
 
@@ -116,7 +122,12 @@ fn paradox_rig_json_svg_and_png() {
         assert_eq!(v["band_edges_deg"].as_array().unwrap().len(), 8);
     }
     check_svg(&svg);
-    assert_eq!(png_size(&std::fs::read(&png).unwrap()), (1200, 1100));
+    // A band: one panel per direction, which on this level rig are mirror images, as stated.
+    let text = crate::helpers::svg_text(&std::fs::read_to_string(&svg).unwrap());
+    assert!(text.contains("slide direction s = +1") && text.contains("slide direction s = -1"));
+    assert!(text.contains("level rig: the s = -1 panel is the s = +1 panel mirrored"));
+    assert!(text.contains("64.8..84.2"));
+    assert_eq!(png_size(&std::fs::read(&png).unwrap()), (1400, 1100));
 }
 
 fn bad_rig(name: &str, body: &str) -> Output {

@@ -201,3 +201,19 @@ pub fn synthetic(
     }
     obs
 }
+
+/// The text of an SVG figure: the content of its `<text>` elements joined by spaces, so that a
+/// legend line wrapped over several elements reads as written.
+pub fn svg_text(svg: &str) -> String {
+    let mut out = Vec::new();
+    for piece in svg.split("<text").skip(1) {
+        let Some(start) = piece.find('>') else {
+            continue;
+        };
+        let body = &piece[start + 1..];
+        if let Some(end) = body.find("</text>") {
+            out.push(body[..end].trim().to_owned());
+        }
+    }
+    out.join(" ")
+}

@@ -218,6 +218,14 @@ fn cli_example_plan_json_and_figure() {
     assert_eq!(p["target"], "stick_to_slide + slide_to_stick");
     let text = std::fs::read_to_string(&svg).unwrap();
     assert!(text.contains("|c| = mu_s |b|") && text.trim_end().ends_with("</svg>"));
+    // Issue 13: the proposals are labelled by rank and listed with their key numbers, and a
+    // release at a negative angle keeps its sign.
+    assert!(text.contains("#1"), "proposal #1 is labelled");
+    let theta0 = p["theta_deg"].as_f64().unwrap();
+    assert!(
+        crate::helpers::svg_text(&text).contains(&format!("#1: theta0 = {theta0:.1} deg")),
+        "proposal #1 listed with its release"
+    );
 }
 
 /// A bad plan file exits with code 2 and names the file and the key.

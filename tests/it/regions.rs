@@ -402,3 +402,44 @@ fn simulated_modes_lie_in_their_regions() {
         );
     }
 }
+
+/// The region figure says that on a level rig the s = -1 panel is the s = +1 panel mirrored,
+/// (theta, theta') -> (180 deg - theta, -theta'): the reflection x -> -x of the rig. Checked
+/// pointwise, with the stick region mapped onto itself; with tilt the mirror breaks.
+#[test]
+fn level_rig_slide_directions_are_mirror_images_and_tilt_breaks_the_mirror() {
+    let rig = shipped("rig_paradox.toml");
+    assert_eq!(rig.rail_tilt, 0.0);
+    let w_max = 3.0 * (rig.gravity / rig.rod_length).sqrt();
+    let mut rng = Rng(0x9E37_79B9_7F4A_7C15);
+    let mut in_band = 0;
+    for _ in 0..20_000 {
+        let theta = rng.uniform(-PI / 2.0, 1.5 * PI);
+        let w = rng.uniform(-w_max, w_max);
+        let plus = slide_solution_count(&rig, theta, w, 1.0);
+        assert_eq!(
+            plus,
+            slide_solution_count(&rig, PI - theta, -w, -1.0),
+            "theta {theta}, w {w}"
+        );
+        assert_eq!(
+            in_stick_region(&rig, theta, w),
+            in_stick_region(&rig, PI - theta, -w)
+        );
+        in_band += usize::from(plus != 1);
+    }
+    assert!(in_band > 100, "the band is sampled ({in_band} points)");
+    let mut tilted = rig;
+    tilted.rail_tilt = 2f64.to_radians();
+    let mut differ = 0;
+    for _ in 0..20_000 {
+        let theta = rng.uniform(-PI / 2.0, 1.5 * PI);
+        let w = rng.uniform(-w_max, w_max);
+        differ += usize::from(
+            slide_solution_count(&tilted, theta, w, 1.0)
+                != slide_solution_count(&tilted, PI - theta, -w, -1.0)
+                || in_stick_region(&tilted, theta, w) != in_stick_region(&tilted, PI - theta, -w),
+        );
+    }
+    assert!(differ > 0, "a tilted rig is not mirror-symmetric");
+}

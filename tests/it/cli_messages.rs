@@ -1,0 +1,202 @@
+//! What a user sees on the command line (issue 13): a scene accepted as a rig file, files that
+//! are not recordings skipped in a directory, each error said once, help and usage lines that
+//! match what the commands do.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn appell(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_appell"))
+        .args(args)
+        .output()
+        .expect("run appell")
+}
+
+fn path(rel: &str) -> String {
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join(rel)
+        .display()
+        .to_string()
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!("appell-cli-msg-{}-{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+/// Every `caused by:` line says something its predecessor did not already say.
+fn assert_no_repeated_cause(err: &str) {
+    let lines: Vec<&str> = err.lines().collect();
+    for pair in lines.windows(2) {
+        if let Some(cause) = pair[1].trim_start().strip_prefix("caused by: ") {
+            assert!(!pair[0].contains(cause), "repeated cause:\n{err}");
+        }
+    }
+}
+
+#[test]
+fn a_scene_file_is_accepted_as_the_rig() {
+    let out = appell(&[
+        "regions",
+        &path("configs/paper_rest_horizontal.toml"),
+        "--trajectories",
+        "0",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(String::from_utf8_lossy(&out.stdout).contains("mu* = 2.8284"));
+    let out = appell(&[
+        "fit",
+        &path("tests/data/markers_reference.csv"),
+        "--rig",
+        &path("configs/markers_example.toml"),
+        "--json",
+        "--no-profile",
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    // Sections that belong to no scene are still refused, by name.
+    let dir = scratch("rig");
+    let bad = dir.join("typo.toml");
+    std::fs::write(
+        &bad,
+        "[rig]\nslider_mass = 0.1\nbob_mass = 0.1\nrod_length = 0.3\ngravity = 9.81\nmu_kinetic = 0.3\n[rgi]\nx = 1\n",
+    )
+    .unwrap();
+    let out = appell(&["regions", bad.to_str().unwrap(), "--trajectories", "0"]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(stderr(&out).contains("rgi"), "{}", stderr(&out));
+}
+
+/// Fit a directory holding the shipped canonical CSV (as `good.csv`) and `extra` files (name,
+/// content), without profile intervals.
+fn fit_directory(name: &str, extra: &[(&str, &str)], json: bool) -> (PathBuf, Output) {
+    let dir = scratch(name);
+    std::fs::copy(
+        path("tests/data/markers_reference.csv"),
+        dir.join("good.csv"),
+    )
+    .unwrap();
+    for (file, content) in extra {
+        std::fs::write(dir.join(file), content).unwrap();
+    }
+    let rig = path("configs/rig_example.toml");
+    let mut args = vec![
+        "fit",
+        dir.to_str().unwrap(),
+        "--rig",
+        rig.as_str(),
+        "--no-profile",
+    ];
+    if json {
+        args.push("--json");
+    }
+    let out = appell(&args);
+    (dir, out)
+}
+
+#[test]
+fn directory_fit_skips_files_that_are_not_recordings() {
+    let notes = ("notes.txt", "Tuesday: rail cleaned, camera refocused\n");
+    let (_, out) = fit_directory("notes", &[notes], true);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let err = stderr(&out);
+    assert!(
+        err.contains("note: skipped, not a recording") && err.contains("notes.txt"),
+        "{err}"
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(stdout.lines().count(), 1, "{stdout}");
+    assert!(stdout.contains("good.csv"));
+}
+
+#[test]
+fn directory_fit_failures_are_each_said_once() {
+    // Recognised as the canonical CSV, but broken in its second row.
+    let broken = (
+        "broken.csv",
+        "t,slider_x,slider_y,bob_x,bob_y\n0,0,0,0.3,0\nzero,0,0,0.3,0\n",
+    );
+    let (dir, out) = fit_directory("fail", &[broken], false);
+    assert_eq!(out.status.code(), Some(1));
+    let err = stderr(&out);
+    assert_eq!(err.matches("could not be fitted").count(), 1, "{err}");
+    let broken = dir.join("broken.csv").display().to_string();
+    let lines: Vec<&str> = err.lines().filter(|l| l.contains(&broken)).collect();
+    assert_eq!(lines.len(), 1, "{err}");
+    assert_eq!(lines[0].matches(&broken).count(), 1, "{err}");
+    assert_no_repeated_cause(&err);
+}
+
+#[test]
+fn error_causes_are_not_repeated() {
+    let missing = path("configs/no_such_rig.toml");
+    for args in [
+        vec!["regions", missing.as_str()],
+        vec![
+            "fit",
+            "/nonexistent/recording.csv",
+            "--rig",
+            missing.as_str(),
+        ],
+    ] {
+        let out = appell(&args);
+        assert_eq!(out.status.code(), Some(2));
+        let err = stderr(&out);
+        assert!(err.contains("no_such_rig.toml"), "{err}");
+        assert_eq!(err.matches("no_such_rig.toml").count(), 1, "{err}");
+        assert_no_repeated_cause(&err);
+    }
+}
+
+#[test]
+fn simulate_out_help_says_the_default_frame_rate() {
+    let out = appell(&["simulate", "--help"]);
+    let help = String::from_utf8_lossy(&out.stdout);
+    assert!(!help.contains("needs output.frame_rate"), "{help}");
+    assert!(
+        help.contains("else 1000 Hz") || help.contains("else\n"),
+        "{help}"
+    );
+    // And it does: a scene without [output] writes a 1000 Hz trajectory.
+    let dir = scratch("simulate");
+    let csv = dir.join("traj.csv");
+    let out = appell(&[
+        "simulate",
+        &path("configs/paper_rest_horizontal.toml"),
+        "--out",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    assert!(text.lines().count() > 1000);
+}
+
+#[test]
+fn convert_usage_names_inputs_then_the_output() {
+    let out = appell(&["convert", "--help"]);
+    let help = String::from_utf8_lossy(&out.stdout);
+    let usage = help
+        .lines()
+        .find(|l| l.starts_with("Usage:"))
+        .expect("a usage line");
+    assert!(usage.contains("<INPUT>... <OUTPUT.csv>"), "{usage}");
+    assert!(!usage.contains("<INPUT... OUTPUT.csv>"), "{usage}");
+    // Two inputs and the output, as the README's Tracker example.
+    let dir = scratch("convert");
+    let csv = dir.join("out.csv");
+    let out = appell(&[
+        "convert",
+        &path("tests/data/tracker_slider.txt"),
+        &path("tests/data/tracker_bob.txt"),
+        csv.to_str().unwrap(),
+    ]);
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(csv.exists());
+    let out = appell(&["convert", csv.to_str().unwrap()]);
+    assert_eq!(out.status.code(), Some(2), "one path is not enough");
+}
