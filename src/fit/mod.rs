@@ -438,20 +438,24 @@ fn base_fit(
     // which no small nonzero x'(0) reproduces.
     let free_model = problem.clone();
     let mut candidates = Vec::new();
+    // Both starts compete: a release from rest looks like a moving start within a few noisy
+    // frames (the slider accelerates at once), and a wrong x'(0) is a deep local minimum.
+    let mut rest = problem.clone();
+    rest.free.retain(|&q| q != Param::XDot);
+    rest.initial[2] = 0.0;
     if at_rest {
-        let mut rest = problem.clone();
-        rest.free.retain(|&q| q != Param::XDot);
-        rest.initial[2] = 0.0;
         candidates.push(rest.clone());
         if let (Some(mu_s), Some(true)) = (mu_s_data, static_evidence) {
-            let mut m = rest;
+            let mut m = rest.clone();
             m.free.push(Param::MuStatic);
             m.tie_static = false;
             m.rig.mu_static = mu_s;
             candidates.push(m);
         }
+        candidates.push(free_model.clone());
     } else {
         candidates.push(free_model.clone());
+        candidates.push(rest);
     }
     let mu0 = mu_data.unwrap_or(rig.mu_kinetic);
     let start_values = |m: &TrajectoryProblem, mu: f64| {
@@ -589,12 +593,28 @@ fn drop_residual_outliers(
         return dropped;
     };
     let frames = problem.row_frames();
+    // The scale: the measured noise, or the residuals' own robust spread when larger (a fit
+    // that misses the motion has large residuals everywhere, and those are not outliers).
+    let scale = [0, 1].map(|m| {
+        let mut a: Vec<f64> = raw
+            .iter()
+            .filter(|(mm, _)| *mm == m)
+            .map(|(_, r)| r.abs())
+            .collect();
+        a.sort_by(f64::total_cmp);
+        let mad = a.get(a.len() / 2).copied().unwrap_or(0.0) / 0.6745;
+        problem.sigma[m].max(mad)
+    });
     // A position is one frame's marker: both its coordinates go together.
     let mut bad = std::collections::HashSet::new();
     for (i, &(m, r)) in raw.iter().enumerate() {
-        if problem.row_weights[i] > 0.0 && (r / problem.sigma[m]).abs() > RESIDUAL_OUTLIER {
+        if problem.row_weights[i] > 0.0 && (r / scale[m]).abs() > RESIDUAL_OUTLIER {
             bad.insert((frames[i], m));
         }
+    }
+    // More than 2% of the positions flagged is a misfit, not mis-tracking.
+    if bad.len() * 2 * 50 > raw.len() {
+        return dropped;
     }
     if bad.is_empty() {
         return dropped;
