@@ -49,6 +49,9 @@ pub struct RecordingArgs {
     /// Keep frames up to this time (s from the first frame); MCAP is not decoded past it.
     #[arg(long, value_name = "S")]
     pub t_end: Option<f64>,
+    /// MCAP: read only this channel (repeat for several; default: every marker channel).
+    #[arg(long, value_name = "TOPIC")]
+    pub topic: Vec<String>,
 }
 
 impl RecordingArgs {
@@ -96,6 +99,7 @@ impl RecordingArgs {
                     Some((s, e))
                 }
             },
+            topics: self.topic.clone(),
         })
     }
 }

@@ -179,6 +179,10 @@ impl<R: Read> Rows<R> {
     }
 }
 
+/// The largest time (seconds from the first frame) a recording may hold: about 32 years, far
+/// beyond any recording, and small enough that differences of times stay exact to 1e-7 s.
+pub(crate) const MAX_SECONDS: f64 = 1e9;
+
 /// Checks that one track's times increase.
 #[derive(Default)]
 struct Clock {
@@ -187,6 +191,15 @@ struct Clock {
 
 impl Clock {
     fn check(&mut self, path: &Path, at: &str, t: f64) -> Result<(), DataError> {
+        if !(t.is_finite() && t.abs() < MAX_SECONDS) {
+            return Err(DataError::parse(
+                path,
+                at,
+                "time",
+                format!("a time within +-{MAX_SECONDS:e} s of the first frame"),
+                t.to_string(),
+            ));
+        }
         if let Some(prev) = self.prev {
             if t <= prev {
                 return Err(DataError::Time {
@@ -301,7 +314,7 @@ impl TimeReader {
             if let Ok(ns) = raw.parse::<i64>() {
                 let base = *self.base_ns.get_or_insert(ns);
                 self.base.get_or_insert(base as f64 * 1e-9);
-                return Ok((ns - base) as f64 * 1e-9);
+                return Ok((ns as i128 - base as i128) as f64 * 1e-9);
             }
         }
         let v = rows.req(self.col, "time", false)?;

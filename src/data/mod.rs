@@ -10,6 +10,7 @@ mod csv_formats;
 mod error;
 pub mod mcap;
 mod recording;
+mod ros_cdr;
 pub mod synth;
 
 pub use error::DataError;
@@ -90,6 +91,8 @@ pub struct ReadOptions {
     /// Keep only frames with start <= t <= end (seconds from the first frame), re-zeroed to
     /// start at 0; MCAP files are not decoded past the window.
     pub time_window: Option<(f64, f64)>,
+    /// MCAP channels (topics) to read; empty reads every channel that carries markers.
+    pub topics: Vec<String>,
 }
 
 impl Default for ReadOptions {
@@ -107,6 +110,7 @@ impl Default for ReadOptions {
             min_likelihood: 0.6,
             drop_outliers: false,
             time_window: None,
+            topics: Vec::new(),
         }
     }
 }
@@ -409,9 +413,27 @@ fn align(a: Series, b: Series) -> (Vec<f64>, Track, Track) {
 /// Read one recording from any reader (a file or bytes in memory); `label` names it in
 /// errors and provenance. The format is detected from the first bytes unless given.
 pub fn read_recording_from(
+    input: impl Read,
+    label: &Path,
+    opts: &ReadOptions,
+) -> Result<Recording, DataError> {
+    read_sized(input, label, opts, None)
+}
+
+/// Read one recording held in memory; its length bounds every length the input declares.
+pub fn read_recording_bytes(
+    bytes: &[u8],
+    label: &Path,
+    opts: &ReadOptions,
+) -> Result<Recording, DataError> {
+    read_sized(bytes, label, opts, Some(bytes.len() as u64))
+}
+
+fn read_sized(
     mut input: impl Read,
     label: &Path,
     opts: &ReadOptions,
+    size: Option<u64>,
 ) -> Result<Recording, DataError> {
     let mut head = Vec::with_capacity(4096);
     input
@@ -429,7 +451,7 @@ pub fn read_recording_from(
     };
     let chained = head.as_slice().chain(input);
     let parsed = match format {
-        Format::Mcap => mcap::read_from(chained, label, opts)?,
+        Format::Mcap => mcap::read_from(chained, label, opts, size)?,
         f => csv_formats::read_from(chained, label, f, opts)?,
     };
     assemble(&[label.to_owned()], format, detected, parsed, opts)

@@ -4,6 +4,7 @@ mod cli_fit;
 mod cli_regions;
 mod cli_simulate;
 mod fit;
+mod hardening;
 mod helpers;
 mod paradox;
 mod plan;
