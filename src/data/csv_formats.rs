@@ -467,94 +467,189 @@ fn read_long(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed
     })
 }
 
+/// A Tracker column name without its subscript (`x_{1}` is `x`), trimmed and lower-cased.
+pub(crate) fn tracker_column(cell: &str) -> String {
+    let c = cell.trim().trim_matches('"').to_lowercase();
+    match c.find("_{") {
+        Some(i) if c.ends_with('}') => c[..i].to_string(),
+        _ => c,
+    }
+}
+
+/// The delimiter of a Tracker column-name line (`t x y`), if it is one: the first of tab,
+/// semicolon, comma and space that splits it into cells with t, x and y.
+pub(crate) fn tracker_header_delimiter(line: &str) -> Option<u8> {
+    let line = line
+        .trim_start_matches('\u{feff}')
+        .trim_end_matches(['\r', '\n']);
+    [b'\t', b';', b',', b' '].into_iter().find(|&d| {
+        let cells: Vec<String> = line.split(d as char).map(tracker_column).collect();
+        cells.first().is_some_and(|c| c == "t")
+            && cells.iter().any(|c| c == "x")
+            && cells.iter().any(|c| c == "y")
+    })
+}
+
 fn read_tracker(input: impl Read, path: &Path) -> Result<Parsed, DataError> {
     let mut input = BufReader::new(input);
-    let mut line1 = String::new();
-    let mut line2 = String::new();
     let io = |source| DataError::Io {
         path: path.to_owned(),
         source,
     };
-    input.read_line(&mut line1).map_err(io)?;
-    if line1.trim().is_empty() {
-        return Err(DataError::Empty {
-            path: path.to_owned(),
-            expected: "a Tracker export (track name, then t x y)".into(),
-        });
-    }
-    input.read_line(&mut line2).map_err(io)?;
-    let name = line1
-        .trim()
-        .trim_start_matches('\u{feff}')
-        .trim_matches('"')
-        .to_string();
-    let delim = [b'\t', b';', b',', b' ']
-        .into_iter()
-        .find(|&d| line2.trim().bytes().filter(|&b| b == d).count() >= 2)
-        .ok_or_else(|| {
-            DataError::parse(
-                path,
-                "line 2",
-                "header",
-                "column names t, x, y separated by tab, comma, semicolon or space",
-                format!("{:?}", line2.trim()),
-            )
-        })?;
-    let cols: Vec<String> = line2
-        .trim()
+    // Up to three lines before the data: `#multi:`, a name row, the column names.
+    let mut head: Vec<String> = Vec::new();
+    let (delim, names_row) = loop {
+        let mut line = String::new();
+        if input.read_line(&mut line).map_err(io)? == 0 || head.len() == 3 {
+            return Err(if head.iter().all(|l| l.trim().is_empty()) {
+                DataError::Empty {
+                    path: path.to_owned(),
+                    expected: "a Tracker export (track name, then t x y)".into(),
+                }
+            } else {
+                DataError::parse(
+                    path,
+                    format!("line {}", head.len().max(1)),
+                    "header",
+                    "column names t, x, y separated by tab, comma, semicolon or space (after an optional track name or #multi: line)",
+                    format!("{:?}", head.last().map(|l| l.trim()).unwrap_or("")),
+                )
+            });
+        }
+        if let Some(d) = tracker_header_delimiter(&line) {
+            let names = head
+                .iter()
+                .rev()
+                .find(|l| {
+                    !l.trim().is_empty() && !l.trim_start_matches('\u{feff}').starts_with("#multi")
+                })
+                .cloned();
+            head.push(line);
+            break (d, names);
+        }
+        head.push(line);
+    };
+    let header_line = head.len() as u64;
+    let clean = |l: &str| {
+        l.trim_start_matches('\u{feff}')
+            .trim_end_matches(['\r', '\n'])
+            .to_string()
+    };
+    let cols: Vec<String> = clean(&head[head.len() - 1])
         .split(delim as char)
-        .map(|c| c.trim().trim_matches('"').to_lowercase())
+        .map(tracker_column)
         .collect();
-    let find = |n: &str| cols.iter().position(|c| c == n);
-    let (Some(tc), Some(xc), Some(yc)) = (find("t"), find("x"), find("y")) else {
+    let multi = head.first().is_some_and(|l| {
+        l.trim_start_matches('\u{feff}')
+            .trim()
+            .eq_ignore_ascii_case("#multi:")
+    });
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "track".into());
+    // One group per x column: its y is the next y, its t the nearest t before it, its name the
+    // nearest name above it or before it in a multi-track name row.
+    let name_cells: Vec<String> = match &names_row {
+        Some(l) if multi => clean(l)
+            .split(delim as char)
+            .map(|c| c.trim().trim_matches('"').to_string())
+            .collect(),
+        _ => Vec::new(),
+    };
+    let single_name = match &names_row {
+        Some(l) if !multi => clean(l).trim().trim_matches('"').to_string(),
+        _ => stem.clone(),
+    };
+    let mut groups: Vec<(String, usize, usize, usize)> = Vec::new();
+    for (xc, c) in cols.iter().enumerate() {
+        if c != "x" {
+            continue;
+        }
+        let Some(yc) = (xc + 1..cols.len()).find(|&j| cols[j] == "y") else {
+            continue;
+        };
+        let Some(tc) = (0..xc).rev().find(|&j| cols[j] == "t") else {
+            continue;
+        };
+        let name = if multi {
+            (0..=xc.min(name_cells.len().saturating_sub(1)))
+                .rev()
+                .find(|&j| name_cells.get(j).is_some_and(|n| !n.is_empty()))
+                .map(|j| name_cells[j].clone())
+                .unwrap_or_else(|| format!("{stem} {}", groups.len() + 1))
+        } else if groups.is_empty() {
+            single_name.clone()
+        } else {
+            format!("{single_name} {}", groups.len() + 1)
+        };
+        groups.push((name, tc, xc, yc));
+    }
+    if groups.is_empty() {
         return Err(DataError::parse(
             path,
-            "line 2",
+            format!("line {header_line}"),
             "header",
             "columns t, x and y",
-            format!("{:?}", line2.trim()),
+            format!("{:?}", cols.join(" ")),
         ));
-    };
+    }
     let decimal_comma = delim != b',';
     let mut rows = Rows::new(input, path, delim);
-    let mut s = Series {
-        name,
-        ..Series::default()
-    };
-    let mut clock = Clock::default();
+    let mut series: Vec<Series> = groups
+        .iter()
+        .map(|(name, ..)| Series {
+            name: name.clone(),
+            ..Series::default()
+        })
+        .collect();
+    let mut clocks: Vec<Clock> = groups.iter().map(|_| Clock::default()).collect();
     while rows.next()? {
         if rows.is_blank() {
             continue;
         }
-        rows.line += 2;
-        let t = match rows.num(tc, "t", decimal_comma)? {
-            Some(t) => t,
-            None if rows.point([xc, yc], "point", decimal_comma)?.is_none() => continue,
-            None => return Err(rows.err("t", "a time", "an empty cell")),
-        };
-        clock.check(path, &rows.at(), t)?;
-        s.times.push(t);
-        s.points.push(rows.point([xc, yc], &s.name, decimal_comma)?);
+        rows.line += header_line;
+        for (k, (name, tc, xc, yc)) in groups.iter().enumerate() {
+            let p = rows.point([*xc, *yc], name, decimal_comma)?;
+            let t = match rows.num(*tc, "t", decimal_comma)? {
+                Some(t) => t,
+                None if p.is_none() => continue,
+                None => return Err(rows.err("t", "a time", "an empty cell")),
+            };
+            clocks[k].check(path, &rows.at(), t)?;
+            series[k].times.push(t);
+            series[k].points.push(p);
+        }
     }
-    if s.times.is_empty() {
+    if series.iter().all(|s| s.times.is_empty()) {
         return Err(DataError::NoFrames {
             path: path.to_owned(),
             what: "a track name and a header".into(),
         });
     }
+    series.retain(|s| !s.times.is_empty());
     let notes = vec![format!(
-        "Tracker file {}: track {:?}, delimiter {:?}{}",
+        "Tracker file {}: {} {}, delimiter {:?}{}",
         path.display(),
-        s.name,
-        delim as char,
-        if decimal_comma {
-            ", decimal comma accepted"
+        if multi {
+            "multi-track export, tracks"
         } else {
-            ""
+            "track"
+        },
+        series
+            .iter()
+            .map(|s| format!("{:?}", s.name))
+            .collect::<Vec<_>>()
+            .join(", "),
+        delim as char,
+        match (&names_row, multi) {
+            (None, _) => ", no name row (named after the file)",
+            _ if decimal_comma => ", decimal comma accepted",
+            _ => "",
         }
     )];
     Ok(Parsed {
-        series: vec![s],
+        series,
         scale: Some((
             1.0,
             "metres assumed: Tracker writes no units (use --scale if calibrated otherwise)".into(),
@@ -805,7 +900,11 @@ fn read_motive(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Pars
             }
         }
     }
-    let mut names: Option<Vec<String>> = None;
+    // Header rows between the metadata and `Frame,Time`: labelled `,Type`, `,Name`, `,ID`,
+    // `,Parent` (1.23 on), or unlabelled in that order (1.21); the row of `Position` and
+    // `Rotation` comes last.
+    let mut labelled: HashMap<String, Vec<String>> = HashMap::new();
+    let mut unlabelled: Vec<Vec<String>> = Vec::new();
     let mut kinds: Vec<String> = Vec::new();
     let header = loop {
         if !rows.next()? {
@@ -818,14 +917,41 @@ fn read_motive(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Pars
         if row.first().is_some_and(|c| c.eq_ignore_ascii_case("frame")) {
             break row;
         }
-        if row.get(1).is_some_and(|c| c == "Name") {
-            names = Some(row);
-        } else if !rows.is_blank() {
+        if rows.is_blank() {
+            continue;
+        }
+        let label = row.get(1).map(|c| c.to_lowercase()).unwrap_or_default();
+        if ["type", "name", "id", "parent"].contains(&label.as_str()) {
+            labelled.insert(label, row);
+        } else if row
+            .iter()
+            .skip(2)
+            .any(|c| c.eq_ignore_ascii_case("position") || c.eq_ignore_ascii_case("rotation"))
+        {
             kinds = row;
+        } else {
+            unlabelled.push(row);
         }
     };
-    let names =
-        names.ok_or_else(|| rows.err("header", "a ,Name row before the Frame row", "none"))?;
+    let names = labelled
+        .remove("name")
+        .or_else(|| unlabelled.get(1).cloned())
+        .or_else(|| unlabelled.first().cloned());
+    if header.len() <= 2
+        || names
+            .as_ref()
+            .is_none_or(|n| n.iter().skip(2).all(|c| c.is_empty()))
+    {
+        return Err(rows.err(
+            "header",
+            "marker position columns X, Y, Z after Frame and Time",
+            format!(
+                "{:?}: this export holds no marker data (export again with markers or rigid bodies ticked)",
+                header.join(",")
+            ),
+        ));
+    }
+    let names = names.expect("checked above");
     let groups = group_xyz(
         (2..header.len()).filter_map(|j| {
             let kind = kinds.get(j).map(String::as_str).unwrap_or("");
@@ -840,19 +966,40 @@ fn read_motive(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Pars
     )?;
     let plane = opts.plane.unwrap_or(Plane::Xy);
     let scale = units.as_deref().and_then(unit_scale);
+    // Time from the frame number and the export rate: the Time column is rounded (to the
+    // millisecond in 1.23 exports).
+    let rate_hz = rate
+        .as_deref()
+        .and_then(|r| r.parse::<f64>().ok())
+        .filter(|r| r.is_finite() && *r > 0.0);
     let mut base = None;
     let series = read_xyz_rows(
         &mut rows,
         path,
         &markers,
         plane,
-        |r| {
-            let t = r.req(1, "Time (Seconds)", false)?;
-            let b = *base.get_or_insert(t);
-            Ok(t - b)
+        |r| match rate_hz {
+            Some(hz) => {
+                let f = r.req(0, "Frame", false)?;
+                let b = *base.get_or_insert(f);
+                Ok((f - b) / hz)
+            }
+            None => {
+                let t = r.req(1, "Time (Seconds)", false)?;
+                let b = *base.get_or_insert(t);
+                Ok(t - b)
+            }
         },
         false,
     )?;
+    let time_note = match rate_hz {
+        Some(hz) => format!("t = (Frame - first frame) / Export Frame Rate {hz} Hz from the header (the Time column is rounded)"),
+        None => "t from the Time column (no Export Frame Rate in the header)".to_string(),
+    };
+    let base = match rate_hz {
+        Some(hz) => base.map(|f| f / hz),
+        None => base,
+    };
     Ok(Parsed {
         series,
         scale: Some(match scale {
@@ -864,10 +1011,8 @@ fn read_motive(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Pars
         }),
         time_base: base.unwrap_or(0.0),
         notes: vec![format!(
-            "Motive: plane {} (Motive's y is up; --plane to change){}",
+            "Motive: plane {} (Motive's y is up; --plane to change); {time_note}",
             plane.name(),
-            rate.map(|r| format!(", export rate {r} Hz"))
-                .unwrap_or_default()
         )],
         ..Parsed::default()
     })

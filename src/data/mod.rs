@@ -149,6 +149,7 @@ pub fn read_recording(paths: &[PathBuf], opts: &ReadOptions) -> Result<Recording
         });
     };
     let mut parsed: Option<Parsed> = None;
+    let mut per_file: Vec<(PathBuf, usize)> = Vec::new();
     let mut format = opts.format;
     let detected = format.is_none();
     for path in paths {
@@ -183,18 +184,25 @@ pub fn read_recording(paths: &[PathBuf], opts: &ReadOptions) -> Result<Recording
             }
             _ => csv_formats::read(path, f, opts)?,
         };
+        per_file.push((path.clone(), p.series.len()));
         parsed = Some(match parsed {
             None => p,
             Some(mut acc) => {
-                for s in p.series {
+                for mut s in p.series {
                     if acc.series.iter().any(|a| a.name == s.name) {
-                        return Err(DataError::Options {
-                            path: path.clone(),
-                            message: format!(
-                                "marker {:?} appears in more than one input file",
-                                s.name
-                            ),
-                        });
+                        // Tracker names every track mass_A by default: keep both, told apart
+                        // by their file.
+                        let file = path.file_name().unwrap_or_default().to_string_lossy();
+                        s.name = format!("{} ({file})", s.name);
+                        if acc.series.iter().any(|a| a.name == s.name) {
+                            return Err(DataError::Options {
+                                path: path.clone(),
+                                message: format!(
+                                    "marker {:?} appears twice: the same file given twice?",
+                                    s.name
+                                ),
+                            });
+                        }
                     }
                     acc.series.push(s);
                 }
@@ -204,13 +212,45 @@ pub fn read_recording(paths: &[PathBuf], opts: &ReadOptions) -> Result<Recording
             }
         });
     }
-    let parsed = parsed.expect("at least one path");
+    let mut parsed = parsed.expect("at least one path");
+    by_file_order(&mut parsed, &per_file, opts);
     let format = format.expect("format set with the first path");
     let mut rec = assemble(paths, format, detected, parsed, opts)?;
     if let Some((start, end)) = opts.time_window {
         crop(&mut rec, start, end, &paths_label(paths))?;
     }
     Ok(rec)
+}
+
+/// Two files of one track each (Tracker's single-track exports) whose names do not say which
+/// is which: the first file is the slider, the second the bob, with a notice. Names that do say
+/// (`slider`, `bob`) or the `--slider`/`--bob` flags take precedence.
+fn by_file_order(parsed: &mut Parsed, per_file: &[(PathBuf, usize)], opts: &ReadOptions) {
+    if per_file.len() != 2 || per_file.iter().any(|f| f.1 != 1) {
+        return;
+    }
+    if opts.slider.is_some() || opts.bob.is_some() {
+        return;
+    }
+    let names: Vec<String> = parsed
+        .series
+        .iter()
+        .map(|s| s.name.to_lowercase())
+        .collect();
+    let clear = names[0].contains("slider") && names[1].contains("bob")
+        || names[0].contains("bob") && names[1].contains("slider");
+    if clear {
+        return;
+    }
+    parsed.notes.push(format!(
+        "the tracks {:?} ({}) and {:?} ({}) do not say which marker they are: read in file order, the first as the slider, the second as the bob (--slider/--bob NAME to choose)",
+        parsed.series[0].name,
+        per_file[0].0.display(),
+        parsed.series[1].name,
+        per_file[1].0.display()
+    ));
+    parsed.series[0].name = "slider".into();
+    parsed.series[1].name = "bob".into();
 }
 
 /// Keep the frames inside [start, end] (seconds from the first frame) and re-zero the times.
@@ -519,18 +559,18 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     {
         return Ok(Format::Vicon);
     }
-    // Tracker: a lone track name, then a header starting with t.
-    if lines.len() >= 2 && c0.len() == 1 && !first.contains(' ') {
-        let c1: Vec<String> = lines[1]
-            .split(['\t', ',', ';', ' '])
-            .map(|c| c.trim().to_lowercase())
-            .collect();
-        if c1.first().is_some_and(|c| c == "t") && c1.contains(&"x".to_string()) {
-            return Ok(Format::Tracker);
-        }
-    }
     if csv_formats::long_columns(&c0).is_some() {
         return Ok(Format::Long);
+    }
+    // Tracker: `#multi:`, or a lone track name then `t x y`, or `t x y` itself.
+    if first.eq_ignore_ascii_case("#multi:")
+        || csv_formats::tracker_header_delimiter(first).is_some()
+        || (lines.len() >= 2
+            && c0.len() == 1
+            && !first.contains(' ')
+            && csv_formats::tracker_header_delimiter(lines[1]).is_some())
+    {
+        return Ok(Format::Tracker);
     }
     if csv_formats::time_column(&c0).is_some() && c0.iter().any(|c| c.ends_with("_x")) {
         return Ok(Format::Wide);
