@@ -8,7 +8,7 @@ use appell::data::{Format, Plane, ReadOptions};
 #[derive(Debug, Clone, Default, clap::Args)]
 pub struct RecordingArgs {
     /// Input format (default: detected from the header).
-    #[arg(long, value_parser = ["wide", "long", "tracker", "dlc", "motive", "vicon", "mcap"])]
+    #[arg(long, value_parser = ["wide", "long", "tracker", "dlc", "motive", "vicon", "sleap", "qualisys", "kinovea", "trex", "mcap"])]
     pub format: Option<String>,
     /// Marker name of the slider (default: the one name containing "slider").
     #[arg(long, value_name = "NAME")]

@@ -19,6 +19,17 @@ cdr with ros2msg schemas geometry_msgs/msg/PointStamped, PoseStamped, TransformS
 tf2_msgs/msg/TFMessage, protobuf (schema a FileDescriptorSet) foxglove.FrameTransform, \
 foxglove.PointsAnnotation; chunks uncompressed, zstd or lz4";
 
+/// JSON schemas (Foxglove's) whose x, y are not a position: skipped rather than read as
+/// markers.
+pub const NOT_POSITIONS: [&str; 6] = [
+    "foxglove.Vector3",
+    "foxglove.Vector2",
+    "foxglove.Quaternion",
+    "foxglove.LocationFix",
+    "foxglove.Battery",
+    "foxglove.Log",
+];
+
 /// Marker names given to the points of a `foxglove.PointsAnnotation`, which carries no names:
 /// identity is the index (point 0 the slider, point 1 the bob, further points `point2`, ...).
 pub const POINTS_NAMES: [&str; 2] = ["slider", "bob"];
@@ -271,8 +282,26 @@ fn compose_tf(acc: &mut Acc, plane: Option<Plane>) -> Result<Vec<String>, String
             frames.len()
         ));
     }
-    let mut roots: BTreeMap<String, usize> = BTreeMap::new();
+    // Each frame's root in the whole recording's tree: a frame is placed only once its chain
+    // reaches that root, so its positions never switch frames when a parent arrives late.
+    let mut parent_of: HashMap<&str, &str> = HashMap::new();
+    for t in &tf {
+        parent_of.insert(&t.child, &t.parent);
+    }
     let depth_limit = frames.len() + 1;
+    let root_of = |f: &str| -> Option<String> {
+        let mut f = f;
+        for _ in 0..=depth_limit {
+            match parent_of.get(f) {
+                Some(p) => f = p,
+                None => return Some(f.to_string()),
+            }
+        }
+        None
+    };
+    let final_root: HashMap<String, Option<String>> =
+        frames.keys().map(|f| (f.to_string(), root_of(f))).collect();
+    let mut roots: BTreeMap<String, usize> = BTreeMap::new();
     for group in dynamic.chunk_by(|a, b| a.ns == b.ns) {
         for t in group {
             current.insert(
@@ -292,6 +321,10 @@ fn compose_tf(acc: &mut Acc, plane: Option<Plane>) -> Result<Vec<String>, String
                 if depth > depth_limit {
                     return Err(format!("a /tf tree, found a cycle through frame {child:?}"));
                 }
+            }
+            if final_root.get(child).and_then(|r| r.as_deref()) != Some(frame) {
+                // The chain to the root is not complete yet at this stamp.
+                continue;
             }
             if p.iter().all(|v| v.is_finite()) {
                 *roots.entry(frame.to_string()).or_default() += 1;
@@ -333,6 +366,10 @@ fn decoder_for(
     schema_data: &[u8],
 ) -> Result<Decoder, Reject> {
     match encoding {
+        // Foxglove's JSON types that hold no position: a velocity in a Vector3 is not a marker.
+        "json" if NOT_POSITIONS.contains(&schema_name) => Err(Reject::Invalid(format!(
+            "{schema_name} holds no marker position"
+        ))),
         "json" => Ok(Decoder::Json),
         "cdr" => {
             if schema_encoding != "ros2msg" && schema_encoding != "ros2idl" {
@@ -804,7 +841,7 @@ pub(crate) fn read_from(
                 |c| matches!(&c.state, ChannelState::Ignored(w) if w.ends_with("not supported")),
             )
             .collect();
-        if !unsupported.is_empty() && unsupported.len() == channels.len() {
+        if unsupported.len() == 1 && channels.len() == 1 {
             let c = unsupported[0];
             let ChannelState::Ignored(why) = &c.state else {
                 unreachable!()

@@ -548,6 +548,27 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     if key == "format version" {
         return Ok(Format::Motive);
     }
+    if key.starts_with("#kinovea") {
+        return Ok(Format::Kinovea);
+    }
+    if [
+        "no_of_frames",
+        "no_of_cameras",
+        "no_of_markers",
+        "frequency",
+    ]
+    .contains(&key.as_str())
+    {
+        return Ok(Format::Qualisys);
+    }
+    if c0.contains(&"frame_idx".to_string()) && c0.iter().any(|c| c.ends_with(".x")) {
+        return Ok(Format::Sleap);
+    }
+    if c0.iter().any(|c| c == "x (cm)" || c == "x#wcentroid (cm)")
+        || (c0.contains(&"midline_x".to_string()) && c0.contains(&"timestamp".to_string()))
+    {
+        return Ok(Format::Trex);
+    }
     if [
         "trajectories",
         "devices",
@@ -572,7 +593,7 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     {
         return Ok(Format::Tracker);
     }
-    if csv_formats::time_column(&c0).is_some() && c0.iter().any(|c| c.ends_with("_x")) {
+    if !csv_formats::wide_markers(&c0).is_empty() {
         return Ok(Format::Wide);
     }
     Err(unknown())
