@@ -8,6 +8,7 @@ mod hardening;
 mod helpers;
 mod paradox;
 mod plan;
+mod real_files;
 mod recordings;
 mod regions;
 mod simulate_oracles;
