@@ -27,7 +27,7 @@ pub(crate) fn read_from(
     match f {
         Format::Wide => read_wide(input, path, opts),
         Format::Long => read_long(input, path, opts),
-        Format::Tracker => read_tracker(input, path),
+        Format::Tracker => read_tracker_any(input, path),
         Format::DeepLabCut => read_dlc(input, path, opts),
         Format::Motive => read_motive(input, path, opts),
         Format::Vicon => read_vicon(input, path, opts),
@@ -550,6 +550,32 @@ pub(crate) fn tracker_header_delimiter(line: &str) -> Option<u8> {
             && cells.iter().any(|c| c == "x")
             && cells.iter().any(|c| c == "y")
     })
+}
+
+/// A Tracker export, or (XML) a Tracker project.
+fn read_tracker_any(input: impl Read, path: &Path) -> Result<Parsed, DataError> {
+    let mut input = BufReader::new(input);
+    let head = input.fill_buf().map_err(|source| DataError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    let head = String::from_utf8_lossy(&head[..head.len().min(64)]);
+    if head
+        .trim_start_matches('\u{feff}')
+        .trim_start()
+        .starts_with("<?xml")
+    {
+        let mut bytes = Vec::new();
+        input
+            .take(super::tracker_project::MAX_TRK_BYTES as u64 + 1)
+            .read_to_end(&mut bytes)
+            .map_err(|source| DataError::Io {
+                path: path.to_owned(),
+                source,
+            })?;
+        return super::tracker_project::read(&bytes, path);
+    }
+    read_tracker(input, path)
 }
 
 fn read_tracker(input: impl Read, path: &Path) -> Result<Parsed, DataError> {

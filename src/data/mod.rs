@@ -12,6 +12,7 @@ pub mod mcap;
 mod recording;
 mod ros_cdr;
 pub mod synth;
+mod tracker_project;
 
 pub use error::DataError;
 pub use recording::{
@@ -287,6 +288,14 @@ fn assemble(
     opts: &ReadOptions,
 ) -> Result<Recording, DataError> {
     let label = paths_label(paths);
+    if parsed.series.len() == 1 {
+        return Err(DataError::MissingMarker {
+            path: label,
+            role: "bob",
+            wanted: "(a second marker: a recording needs the slider and the bob, and this input holds one track; give the other marker's file too)".into(),
+            available: format!("{:?}", parsed.series[0].name),
+        });
+    }
     let si = select(&label, &parsed.series, "slider", opts.slider.as_deref())?;
     let bi = select(&label, &parsed.series, "bob", opts.bob.as_deref())?;
     if si == bi {
@@ -522,6 +531,11 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     }
     let text = String::from_utf8_lossy(head);
     let text = text.trim_start_matches('\u{feff}');
+    if text.trim_start().starts_with("<?xml")
+        && text.contains("org.opensourcephysics.cabrillo.tracker")
+    {
+        return Ok(Format::Tracker);
+    }
     let lines: Vec<&str> = text.lines().take(8).collect();
     let first = lines.first().copied().unwrap_or("").trim();
     let unknown = || DataError::UnknownFormat {

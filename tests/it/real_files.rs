@@ -507,3 +507,59 @@ fn mcap_files_without_marker_data_say_so_and_list_their_channels() {
         assert!(e.to_string().contains(channel), "{e}");
     }
 }
+
+#[test]
+fn tracker_projects_give_point_mass_positions_or_say_a_model_has_no_data() {
+    // BallToss: one point mass (the ball), positions in metres through the project's
+    // coordinate system; one track cannot be both markers, so pair it with itself shifted.
+    let t = text("tracker_trk_BallToss.trk");
+    let pm = &t[t.find("PointMass").unwrap()..];
+    let values = |tag: &str| -> Vec<f64> {
+        pm.split(&format!("<property name=\"{tag}\" type=\"double\">"))
+            .skip(1)
+            .map(|s| s.split('<').next().unwrap().parse().unwrap())
+            .collect()
+    };
+    let (xs, ys) = (values("x"), values("y"));
+    assert_eq!(xs.len(), 11);
+    let e = read(&["tracker_trk_BallToss.trk"], ReadOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("holds one track"), "{e}");
+    let dir = tempfile::tempdir().unwrap();
+    let copy = dir.path().join("second.trk");
+    std::fs::write(
+        &copy,
+        t.replace(
+            "<property name=\"name\" type=\"string\">ball<",
+            "<property name=\"name\" type=\"string\">ball2<",
+        ),
+    )
+    .unwrap();
+    let rec = read_recording(
+        &[data("tracker_trk_BallToss.trk"), copy],
+        &ReadOptions::default(),
+    )
+    .unwrap();
+    // The coordinate system: origin (131.28, 207.86) px, angle 0.044 rad, 398.7 px per metre.
+    let (x0, y0, a, s): (f64, f64, f64, f64) = (
+        131.2767066180302,
+        207.85825951016153,
+        0.04401895816986783,
+        398.70891559670895,
+    );
+    let want: Vec<Row> = xs
+        .iter()
+        .zip(&ys)
+        .enumerate()
+        .map(|(k, (&x, &y))| {
+            let (dx, dy) = (x - x0, y - y0);
+            let p = [
+                (dx * a.cos() - dy * a.sin()) / s,
+                (-dx * a.sin() - dy * a.cos()) / s,
+            ];
+            (k as f64 * 0.066, Some(p), Some(p))
+        })
+        .collect();
+    check(&rec, &want);
+    let e = read(&["tracker_trk_asinewave.trk"], ReadOptions::default()).unwrap_err();
+    assert!(e.to_string().contains("formulas, not data"), "{e}");
+}
