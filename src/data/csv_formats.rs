@@ -31,7 +31,7 @@ pub(crate) fn read_from(
         Format::DeepLabCut => read_dlc(input, path, opts),
         Format::Motive => read_motive(input, path, opts),
         Format::Vicon => read_vicon(input, path, opts),
-        Format::Sleap => read_sleap_csv(input, path, opts),
+        Format::Sleap => read_sleap_any(input, path, opts),
         Format::Qualisys => read_qualisys(input, path, opts),
         Format::Kinovea => read_kinovea(input, path),
         Format::Trex => read_trex(input, path),
@@ -550,6 +550,37 @@ pub(crate) fn tracker_header_delimiter(line: &str) -> Option<u8> {
             && cells.iter().any(|c| c == "x")
             && cells.iter().any(|c| c == "y")
     })
+}
+
+/// A SLEAP analysis CSV, or (HDF5) a SLEAP analysis file.
+fn read_sleap_any(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {
+    let mut input = BufReader::new(input);
+    let io = |source| DataError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    if input
+        .fill_buf()
+        .map_err(io)?
+        .starts_with(super::sleap_h5::MAGIC)
+    {
+        let mut bytes = Vec::new();
+        input
+            .take(super::sleap_h5::MAX_H5_BYTES as u64 + 1)
+            .read_to_end(&mut bytes)
+            .map_err(io)?;
+        if bytes.len() > super::sleap_h5::MAX_H5_BYTES {
+            return Err(DataError::parse(
+                path,
+                "the HDF5 file",
+                "file",
+                format!("at most {} bytes", super::sleap_h5::MAX_H5_BYTES),
+                "more",
+            ));
+        }
+        return super::sleap_h5::read(bytes, path, opts);
+    }
+    read_sleap_csv(input, path, opts)
 }
 
 /// A Tracker export, or (XML) a Tracker project.

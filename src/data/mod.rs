@@ -11,6 +11,7 @@ mod error;
 pub mod mcap;
 mod recording;
 mod ros_cdr;
+mod sleap_h5;
 pub mod synth;
 mod tracker_project;
 
@@ -522,6 +523,9 @@ pub fn detect(path: &Path) -> Result<Format, DataError> {
 pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     if head.starts_with(::mcap::MAGIC) {
         return Ok(Format::Mcap);
+    }
+    if head.starts_with(sleap_h5::MAGIC) {
+        return Ok(Format::Sleap);
     }
     if head.is_empty() {
         return Err(DataError::Empty {

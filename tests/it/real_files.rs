@@ -563,3 +563,29 @@ fn tracker_projects_give_point_mass_positions_or_say_a_model_has_no_data() {
     let e = read(&["tracker_trk_asinewave.trk"], ReadOptions::default()).unwrap_err();
     assert!(e.to_string().contains("formulas, not data"), "{e}");
 }
+
+#[test]
+fn sleap_analysis_hdf5_matches_the_values_h5py_reads() {
+    // The reference was written by scripts/sleap_h5_reference.py with h5py (the HDF5 C
+    // library), independently of the pure-Rust reader.
+    let t = text("sleap_three-mice_Aeon.analysis.reference.csv");
+    let lines: Vec<&str> = t.lines().skip(1).collect();
+    let want = rows(
+        &lines,
+        ',',
+        |c, _| num(c[0]).unwrap() / 50.0,
+        [1, 2],
+        [3, 4],
+        |p| [p[0], -p[1]],
+    );
+    let rec = read(
+        &["sleap_three-mice_Aeon.analysis.h5"],
+        ReadOptions {
+            fps: Some(50.0),
+            ..px("AEON3B_NTP/centroid", "AEON3B_TP1/centroid")
+        },
+    )
+    .unwrap();
+    assert_eq!(rec.provenance.format, Some(Format::Sleap));
+    check(&rec, &want);
+}
