@@ -33,7 +33,7 @@ pub(crate) fn read_from(
         Format::Vicon => read_vicon(input, path, opts),
         Format::Sleap => read_sleap_any(input, path, opts),
         Format::Qualisys => read_qualisys(input, path, opts),
-        Format::Kinovea => read_kinovea(input, path),
+        Format::Kinovea => read_kinovea_any(input, path, opts),
         Format::Trex => read_trex(input, path),
         Format::Mcap => unreachable!("MCAP is not a CSV format"),
     }
@@ -581,6 +581,34 @@ fn read_sleap_any(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<P
         return super::sleap_h5::read(bytes, path, opts);
     }
     read_sleap_csv(input, path, opts)
+}
+
+/// A Kinovea text export, or (XML) its spreadsheet export.
+fn read_kinovea_any(
+    input: impl Read,
+    path: &Path,
+    opts: &ReadOptions,
+) -> Result<Parsed, DataError> {
+    let mut input = BufReader::new(input);
+    let io = |source| DataError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let head = input.fill_buf().map_err(io)?;
+    let head = String::from_utf8_lossy(&head[..head.len().min(64)]);
+    if head
+        .trim_start_matches('\u{feff}')
+        .trim_start()
+        .starts_with("<?xml")
+    {
+        let mut bytes = Vec::new();
+        input
+            .take(super::kinovea_xml::MAX_XML_BYTES as u64 + 1)
+            .read_to_end(&mut bytes)
+            .map_err(io)?;
+        return super::kinovea_xml::read(&bytes, path, opts);
+    }
+    read_kinovea(input, path)
 }
 
 /// A Tracker export, or (XML) a Tracker project.

@@ -8,6 +8,7 @@
 pub mod calibrate;
 mod csv_formats;
 mod error;
+mod kinovea_xml;
 pub mod mcap;
 mod recording;
 mod ros_cdr;
@@ -535,6 +536,9 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     }
     let text = String::from_utf8_lossy(head);
     let text = text.trim_start_matches('\u{feff}');
+    if text.trim_start().starts_with("<?xml") && text.contains("Excel.Sheet") {
+        return Ok(Format::Kinovea);
+    }
     if text.trim_start().starts_with("<?xml")
         && text.contains("org.opensourcephysics.cabrillo.tracker")
     {

@@ -589,3 +589,69 @@ fn sleap_analysis_hdf5_matches_the_values_h5py_reads() {
     assert_eq!(rec.provenance.format, Some(Format::Sleap));
     check(&rec, &want);
 }
+
+#[test]
+fn kinovea_spreadsheet_export_reads_its_tracks_with_rows_numbered_at_fps() {
+    let t = text("kinovea_excelxml_pariterre_box_jump.xml");
+    // Each <Row>'s <Data> texts, in order.
+    let rows: Vec<Vec<String>> = t
+        .split("<Row")
+        .skip(1)
+        .map(|r| {
+            r.split("<Data")
+                .skip(1)
+                .map(|d| {
+                    let (head, rest) = d.split_once('>').unwrap();
+                    if head.ends_with('/') {
+                        String::new()
+                    } else {
+                        rest.split("</Data>").next().unwrap().trim().to_string()
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let track = |name: &str| -> Vec<(f64, Option<[f64; 2]>)> {
+        let start = rows
+            .iter()
+            .position(|r| r.len() >= 2 && r[0] == "Label :" && r[1] == name)
+            .unwrap();
+        let hms = |s: &str| {
+            let p: Vec<f64> = s.split(':').map(|v| v.parse().unwrap()).collect();
+            p[0] * 3600.0 + p[1] * 60.0 + p[2] + p[3] / 100.0
+        };
+        let data: Vec<&Vec<String>> = rows[start + 3..]
+            .iter()
+            .take_while(|r| r.iter().any(|c| !c.is_empty()) && r[0] != "Track")
+            .collect();
+        let t0 = hms(&data[0][2]);
+        data.iter()
+            .enumerate()
+            .map(|(k, r)| {
+                (
+                    t0 + k as f64 / 24.0,
+                    pt(num(&r[0]), num(&r[1])).map(|p| [p[0] / 100.0, p[1] / 100.0]),
+                )
+            })
+            .collect()
+    };
+    let rec = read(
+        &["kinovea_excelxml_pariterre_box_jump.xml"],
+        ReadOptions {
+            fps: Some(24.0),
+            ..with("Hanche", "Genou")
+        },
+    )
+    .unwrap();
+    assert_eq!(rec.provenance.format, Some(Format::Kinovea));
+    let mut want = merge(&track("Hanche"), &track("Genou"));
+    t0(&mut want);
+    check(&rec, &want);
+    // Without --fps the rounded times repeat: the error says what to give.
+    let e = read(
+        &["kinovea_excelxml_pariterre_box_jump.xml"],
+        with("Hanche", "Genou"),
+    )
+    .unwrap_err();
+    assert!(e.to_string().contains("--fps"), "{e}");
+}
