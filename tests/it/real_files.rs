@@ -655,3 +655,25 @@ fn kinovea_spreadsheet_export_reads_its_tracks_with_rows_numbered_at_fps() {
     .unwrap_err();
     assert!(e.to_string().contains("--fps"), "{e}");
 }
+
+#[test]
+fn ros2_tf_is_composed_to_the_tree_root_as_an_independent_decoder_composes_it() {
+    // Reference: scripts/tf_reference.py (the official mcap-ros2-support decoder and numpy).
+    let t = text("mcap_ros2_evo_nav2_turtlebot_tf.reference.csv");
+    let lines: Vec<&str> = t.lines().skip(1).collect();
+    let want = rows(
+        &lines,
+        ',',
+        |c, _| num(c[0]).unwrap(),
+        [1, 2],
+        [3, 4],
+        |p| p,
+    );
+    let rec = read(
+        &["mcap_ros2_evo_nav2_turtlebot_tf.mcap"],
+        with("base_link", "front_caster_link"),
+    )
+    .unwrap();
+    assert!(rec.provenance.notes.iter().any(|n| n.contains("\"map\"")));
+    check(&rec, &want);
+}
