@@ -3,7 +3,7 @@
 //! marker frames.
 
 use super::{ros_cdr, DataError, Parsed, Plane, ReadOptions, Recording, Series};
-use ::mcap::records::{MessageHeader, Metadata, Record};
+use ::mcap::records::{op, MessageHeader, Metadata, Record};
 use ::mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use ::mcap::McapError;
 use prost_reflect::{DescriptorPool, DynamicMessage, MessageDescriptor, ReflectMessage, Value};
@@ -588,6 +588,75 @@ pub fn decompressed_limit(size: Option<u64>) -> u64 {
         .saturating_add(64 << 20)
 }
 
+/// Check that every length field of a Schema, Channel, Message or Metadata record fits in
+/// the record, so parsing it allocates no more than the record holds.
+fn check_lengths(opcode: u8, data: &[u8]) -> Result<(), String> {
+    struct Cur<'a> {
+        d: &'a [u8],
+        at: usize,
+    }
+    impl Cur<'_> {
+        fn skip(&mut self, n: usize, what: &str) -> Result<(), String> {
+            match self.at.checked_add(n) {
+                Some(end) if end <= self.d.len() => {
+                    self.at = end;
+                    Ok(())
+                }
+                _ => Err(format!(
+                    "{what}: {n} byte(s) at offset {}, beyond the record's {} bytes",
+                    self.at,
+                    self.d.len()
+                )),
+            }
+        }
+        fn len(&mut self, what: &str) -> Result<usize, String> {
+            let start = self.at;
+            self.skip(4, what)?;
+            let b: [u8; 4] = self.d[start..start + 4].try_into().expect("4 bytes");
+            Ok(u32::from_le_bytes(b) as usize)
+        }
+        fn string(&mut self, what: &str) -> Result<(), String> {
+            let n = self.len(what)?;
+            self.skip(n, what)
+        }
+        fn map(&mut self, what: &str) -> Result<(), String> {
+            let n = self.len(what)?;
+            let end = self.at;
+            self.skip(n, what)?;
+            let mut inner = Cur {
+                d: &self.d[end..end + n],
+                at: 0,
+            };
+            while inner.at < n {
+                inner.string(what)?;
+                inner.string(what)?;
+            }
+            Ok(())
+        }
+    }
+    let mut c = Cur { d: data, at: 0 };
+    match opcode {
+        op::SCHEMA => {
+            c.skip(2, "schema id")?;
+            c.string("schema name")?;
+            c.string("schema encoding")?;
+            c.string("schema data")
+        }
+        op::CHANNEL => {
+            c.skip(4, "channel ids")?;
+            c.string("topic")?;
+            c.string("message encoding")?;
+            c.map("channel metadata")
+        }
+        op::MESSAGE => c.skip(22, "message header"),
+        op::METADATA => {
+            c.string("metadata name")?;
+            c.map("metadata")
+        }
+        _ => Ok(()),
+    }
+}
+
 /// The first line of an mcap error, without terminal escape codes (binrw's errors carry a
 /// coloured backtrace).
 fn plain(err: &McapError) -> String {
@@ -677,6 +746,15 @@ pub(crate) fn read_from(
                     damage = Some(format!(
                         "records decompress to more than {budget} bytes (1024 times the file plus 64 MiB)"
                     ));
+                    break;
+                }
+                // Only these records are used; the mcap crate sizes strings from their length
+                // fields before checking them, so their lengths are checked here first.
+                if ![op::SCHEMA, op::CHANNEL, op::MESSAGE, op::METADATA].contains(&opcode) {
+                    continue;
+                }
+                if let Err(why) = check_lengths(opcode, data) {
+                    damage = Some(format!("record {records} (opcode {opcode:#04x}): {why}"));
                     break;
                 }
                 let record = match ::mcap::parse_record(opcode, data) {

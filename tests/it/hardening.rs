@@ -437,3 +437,19 @@ fn plan_searches_too_large_to_finish_and_zero_frame_cameras_are_refused() {
     assert_eq!(o.status.code(), Some(2), "{}", stderr(&o));
     assert!(stderr(&o).contains("camera.duration"), "{}", stderr(&o));
 }
+
+#[test]
+fn mcap_record_string_length_beyond_the_record_is_an_error_not_a_2_7_gb_allocation() {
+    // Found by cargo fuzz (mcap target): a record whose string length field says 2.7 GB; the
+    // mcap crate reserved it before checking it against the record.
+    let bytes = std::fs::read(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/fuzz/mcap_record_string_length_beyond_the_record.mcap"),
+    )
+    .unwrap();
+    let start = Instant::now();
+    let r = read_recording_bytes(&bytes, Path::new("oom.mcap"), &mcap_opts());
+    assert!(start.elapsed() < Duration::from_secs(2));
+    let e = r.unwrap_err();
+    assert!(!e.to_string().contains('\n'), "{e}");
+}
