@@ -453,3 +453,21 @@ fn mcap_record_string_length_beyond_the_record_is_an_error_not_a_2_7_gb_allocati
     let e = r.unwrap_err();
     assert!(!e.to_string().contains('\n'), "{e}");
 }
+
+/// Found by cargo fuzz (mcap target): a record inside an uncompressed chunk that claims more
+/// bytes than the chunk has left. The mcap crate (0.26, sans_io linear reader) subtracts
+/// without a check: with overflow checks on (debug builds, fuzzing) it panics inside the
+/// crate; in release builds, what users run, the length is caught by the record limit and the
+/// file ends in a clear error, which this pins.
+#[cfg(not(debug_assertions))]
+#[test]
+fn mcap_uncompressed_chunk_record_longer_than_its_chunk_is_a_clear_error_in_release() {
+    let bytes = std::fs::read(
+        Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("tests/data/fuzz/mcap_uncompressed_chunk_record_longer_than_its_chunk.mcap"),
+    )
+    .unwrap();
+    let e = read_recording_bytes(&bytes, Path::new("chunk.mcap"), &mcap_opts()).unwrap_err();
+    assert!(matches!(e, DataError::Mcap { .. }), "{e}");
+    assert!(e.to_string().contains("limit"), "{e}");
+}
