@@ -236,6 +236,79 @@ impl Scene {
     }
 }
 
+/// The most frames a sampled trajectory or synthetic recording may hold (duration times
+/// frame rate): 10^7, about 0.5 GB of output.
+pub const MAX_FRAMES: f64 = 1e7;
+
+/// The largest magnitude of an initial position, angle or rate: beyond it, the simulation's
+/// numbers (energies, forces) leave the range where f64 keeps them meaningful.
+pub const MAX_INITIAL: f64 = 1e6;
+
+/// Masses (kg), rod length (m) and gravity (m/s^2) must lie in [RIG_MIN, RIG_MAX] (gravity
+/// may be 0), and mu at most RIG_MAX: wider ranges make mass ratios and mu* overflow.
+pub const RIG_MIN: f64 = 1e-9;
+/// See [`RIG_MIN`].
+pub const RIG_MAX: f64 = 1e9;
+
+/// Check that the rig's values stay where the model's arithmetic is finite.
+fn check_rig_range(path: &Path, r: &RigSpec) -> Result<(), SceneError> {
+    let within = |v: f64| (RIG_MIN..=RIG_MAX).contains(&v);
+    let range = format!("between {RIG_MIN:e} and {RIG_MAX:e}");
+    check(
+        path,
+        within(r.slider_mass),
+        "rig.slider_mass",
+        &range,
+        r.slider_mass,
+    )?;
+    check(path, within(r.bob_mass), "rig.bob_mass", &range, r.bob_mass)?;
+    check(
+        path,
+        within(r.rod_length),
+        "rig.rod_length",
+        &range,
+        r.rod_length,
+    )?;
+    check(
+        path,
+        r.gravity == 0.0 || within(r.gravity.abs()),
+        "rig.gravity",
+        &format!("0 or of magnitude {range}"),
+        r.gravity,
+    )?;
+    for (key, mu) in [
+        ("rig.mu_kinetic", r.mu_kinetic),
+        ("rig.mu_static", r.mu_static),
+    ] {
+        if let Some(mu) = mu {
+            check(
+                path,
+                mu <= RIG_MAX,
+                key,
+                &format!("at most {RIG_MAX:e}"),
+                mu,
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// Check that `duration` at `rate` frames per second stays within [`MAX_FRAMES`]; `key` names
+/// the rate in the message.
+pub fn check_frames(path: &Path, duration: f64, rate: f64, key: &str) -> Result<(), SceneError> {
+    let frames = duration * rate;
+    check(
+        path,
+        frames.is_finite() && frames <= MAX_FRAMES,
+        key,
+        &format!(
+            "a rate that gives at most {MAX_FRAMES:e} frames over the duration {duration} s (that is at most {} Hz)",
+            MAX_FRAMES / duration
+        ),
+        rate,
+    )
+}
+
 impl SceneFile {
     /// Check every value, naming the first bad key.
     pub fn validate(&self, path: &Path) -> Result<Scene, SceneError> {
@@ -243,6 +316,7 @@ impl SceneFile {
             path: path.to_owned(),
             message: e.to_string(),
         })?;
+        check_rig_range(path, &self.rig)?;
         let i = &self.initial;
         for (key, v) in [
             ("initial.x", i.x),
@@ -250,7 +324,13 @@ impl SceneFile {
             ("initial.x_dot", i.x_dot),
             ("initial.theta_dot", i.theta_dot),
         ] {
-            check(path, v.is_finite(), key, "a finite number", v)?;
+            check(
+                path,
+                v.is_finite() && v.abs() <= MAX_INITIAL,
+                key,
+                &format!("a finite number within +-{MAX_INITIAL:e}"),
+                v,
+            )?;
         }
         let r = &self.run;
         check(
@@ -285,6 +365,7 @@ impl SceneFile {
                 "a finite number > 0 (Hz)",
                 fr,
             )?;
+            check_frames(path, r.duration, fr, "output.frame_rate")?;
         }
         Ok(Scene {
             rig,
@@ -354,20 +435,25 @@ impl RigFile {
     /// left out).
     pub fn load_for_fit(path: &Path, mu_guess: f64) -> Result<Rig<f64>, SceneError> {
         let file: RigFile = parse_toml(&read_text(path)?, path)?;
-        file.rig
+        let rig = file
+            .rig
             .rig_or_guess(mu_guess)
             .map_err(|e| SceneError::Invalid {
                 path: path.to_owned(),
                 message: e.to_string(),
-            })
+            })?;
+        check_rig_range(path, &file.rig)?;
+        Ok(rig)
     }
 
     /// Parse and validate rig-file text; `path` only labels errors.
     pub fn parse(text: &str, path: &Path) -> Result<Rig<f64>, SceneError> {
         let file: RigFile = parse_toml(text, path)?;
-        file.rig.rig().map_err(|e| SceneError::Invalid {
+        let rig = file.rig.rig().map_err(|e| SceneError::Invalid {
             path: path.to_owned(),
             message: e.to_string(),
-        })
+        })?;
+        check_rig_range(path, &file.rig)?;
+        Ok(rig)
     }
 }

@@ -1,9 +1,9 @@
 //! Fuzz format detection plus whichever reader it picks.
 #![no_main]
 
-use appell::data::{read_recording_from, ReadOptions};
+use appell::data::{read_recording_bytes, ReadOptions};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    let _ = read_recording_from(data, std::path::Path::new("fuzz-input"), &ReadOptions::default());
+    let _ = read_recording_bytes(data, std::path::Path::new("fuzz-input"), &ReadOptions::default());
 });

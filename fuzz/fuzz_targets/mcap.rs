@@ -1,7 +1,7 @@
 //! Fuzz the mcap reader: any bytes give a recording or an error, never a panic.
 #![no_main]
 
-use appell::data::{read_recording_from, Format, ReadOptions};
+use appell::data::{read_recording_bytes, Format, ReadOptions};
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
@@ -11,5 +11,5 @@ fuzz_target!(|data: &[u8]| {
         scale: Some(1.0),
         ..ReadOptions::default()
     };
-    let _ = read_recording_from(data, std::path::Path::new("fuzz-input"), &opts);
+    let _ = read_recording_bytes(data, std::path::Path::new("fuzz-input"), &opts);
 });

@@ -27,10 +27,12 @@ pub fn run(args: Args) -> Result<(), Failure> {
         .resolve()
         .map_err(|e| Failure::Input(anyhow!(e)))?;
     let (output, inputs) = (&args.output, &args.inputs);
-    if inputs.contains(output) {
+    let out = appell::report::canonical(output);
+    if let Some(input) = inputs.iter().find(|i| appell::report::canonical(i) == out) {
         return Err(Failure::Input(anyhow!(
-            "the output {} is also an input",
-            output.display()
+            "the output {} is the input {}: refusing to overwrite an input",
+            output.display(),
+            input.display()
         )));
     }
     let rec = read_recording(inputs, &opts).map_err(|e| Failure::Input(e.into()))?;

@@ -8,7 +8,7 @@ use appell::data::{Format, Plane, ReadOptions};
 #[derive(Debug, Clone, Default, clap::Args)]
 pub struct RecordingArgs {
     /// Input format (default: detected from the header).
-    #[arg(long, value_parser = ["wide", "long", "tracker", "dlc", "motive", "vicon", "mcap"])]
+    #[arg(long, value_parser = ["wide", "long", "tracker", "dlc", "motive", "vicon", "sleap", "qualisys", "kinovea", "trex", "mcap"])]
     pub format: Option<String>,
     /// Marker name of the slider (default: the one name containing "slider").
     #[arg(long, value_name = "NAME")]
@@ -49,6 +49,9 @@ pub struct RecordingArgs {
     /// Keep frames up to this time (s from the first frame); MCAP is not decoded past it.
     #[arg(long, value_name = "S")]
     pub t_end: Option<f64>,
+    /// MCAP: read only this channel (repeat for several; default: every marker channel).
+    #[arg(long, value_name = "TOPIC")]
+    pub topic: Vec<String>,
 }
 
 impl RecordingArgs {
@@ -96,6 +99,7 @@ impl RecordingArgs {
                     Some((s, e))
                 }
             },
+            topics: self.topic.clone(),
         })
     }
 }

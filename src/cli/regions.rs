@@ -29,6 +29,9 @@ pub struct Args {
     duration: f64,
 }
 
+/// The most phase-portrait trajectories one run draws.
+const MAX_TRAJECTORIES: usize = 1000;
+
 pub fn run(args: Args) -> Result<(), Failure> {
     // Validate every value before any work.
     if let Some(path) = &args.plot {
@@ -38,6 +41,12 @@ pub fn run(args: Args) -> Result<(), Failure> {
         return Err(Failure::Input(anyhow!(
             "--duration must be in (0, 600] s, got {}",
             args.duration
+        )));
+    }
+    if args.trajectories > MAX_TRAJECTORIES {
+        return Err(Failure::Input(anyhow!(
+            "--trajectories must be at most {MAX_TRAJECTORIES}, got {}",
+            args.trajectories
         )));
     }
     let rig = RigFile::load(&args.rig).map_err(|e| Failure::Input(e.into()))?;

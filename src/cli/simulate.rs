@@ -26,6 +26,8 @@ pub fn run(args: Args) -> Result<(), Failure> {
     if args.out.is_some() && scene.output.frame_rate.is_none() {
         // A trajectory was asked for on the command line: sample at a sensible default.
         scene.output.frame_rate = Some(1000.0);
+        appell::scene::check_frames(&args.scene, scene.duration, 1000.0, "--out's 1000 Hz")
+            .map_err(|e| Failure::Input(e.into()))?;
     }
     let sol = simulate(
         &scene.rig,

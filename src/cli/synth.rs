@@ -48,7 +48,20 @@ pub fn run(args: Args) -> Result<(), Failure> {
         seed: args.seed,
     };
     opts.validate().map_err(|e| Failure::Input(anyhow!(e)))?;
+    if appell::report::canonical(&args.output) == appell::report::canonical(&args.scene) {
+        return Err(Failure::Input(anyhow!(
+            "the output {} is the scene file: refusing to overwrite an input",
+            args.output.display()
+        )));
+    }
     let scene = Scene::from_path(&args.scene).map_err(|e| Failure::Input(e.into()))?;
+    appell::scene::check_frames(
+        &args.scene,
+        opts.duration.unwrap_or(scene.duration),
+        opts.fps,
+        "--fps",
+    )
+    .map_err(|e| Failure::Input(e.into()))?;
     let syn = synth::synthesize(&scene, &opts).map_err(|e| {
         Failure::Run(anyhow!(e).context(format!("simulating {}", args.scene.display())))
     })?;

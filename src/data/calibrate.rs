@@ -3,6 +3,10 @@
 
 use super::{Calibration, Geometry, ReadOptions, Recording};
 
+/// The largest coordinate (metres) a calibrated recording may hold: far beyond any rig, small
+/// enough that distances and their squares stay finite.
+pub const MAX_METRES: f64 = 1e12;
+
 /// Scale, flip and (with `opts.rail_frame`) rotate and shift a recording in file units into the
 /// rail frame, then check the slider-bob distance. `file_scale` is the file's own metres per
 /// unit, when it says. Errors are messages naming the flag that would fix them.
@@ -43,6 +47,17 @@ pub fn calibrate(
         } else {
             [p[0] * scale, flip * p[1] * scale]
         };
+    }
+    for (role, track) in [("slider", &rec.slider), ("bob", &rec.bob)] {
+        if let Some((i, p)) = track.iter().enumerate().find_map(|(i, p)| {
+            p.filter(|p| !p.iter().all(|v| v.abs() <= MAX_METRES))
+                .map(|p| (i, p))
+        }) {
+            return Err(format!(
+                "{role} position ({}, {}) m at t = {} s (frame {}, after scaling by {scale}): expected coordinates within +-{MAX_METRES:e} m",
+                p[0], p[1], rec.times[i], i + 1
+            ));
+        }
     }
     let mut cal = Calibration {
         scale,

@@ -27,10 +27,14 @@ pub(crate) fn read_from(
     match f {
         Format::Wide => read_wide(input, path, opts),
         Format::Long => read_long(input, path, opts),
-        Format::Tracker => read_tracker(input, path),
+        Format::Tracker => read_tracker_any(input, path),
         Format::DeepLabCut => read_dlc(input, path, opts),
         Format::Motive => read_motive(input, path, opts),
         Format::Vicon => read_vicon(input, path, opts),
+        Format::Sleap => read_sleap_any(input, path, opts),
+        Format::Qualisys => read_qualisys(input, path, opts),
+        Format::Kinovea => read_kinovea_any(input, path, opts),
+        Format::Trex => read_trex(input, path),
         Format::Mcap => unreachable!("MCAP is not a CSV format"),
     }
 }
@@ -41,6 +45,8 @@ struct Rows<R: Read> {
     rec: StringRecord,
     path: std::path::PathBuf,
     line: u64,
+    /// Whether a `nan` cell means a missing value (pandas and idtracker.ai write it so).
+    nan_missing: bool,
 }
 
 impl<R: Read> Rows<R> {
@@ -54,6 +60,7 @@ impl<R: Read> Rows<R> {
             rec: StringRecord::new(),
             path: path.to_owned(),
             line: 0,
+            nan_missing: false,
         }
     }
 
@@ -114,7 +121,7 @@ impl<R: Read> Rows<R> {
     /// A number cell: empty is `None`; text, NaN and infinities are errors.
     fn num(&self, i: usize, field: &str, decimal_comma: bool) -> Result<Option<f64>, DataError> {
         let raw = self.cell(i).trim();
-        if raw.is_empty() {
+        if raw.is_empty() || (self.nan_missing && raw.eq_ignore_ascii_case("nan")) {
             return Ok(None);
         }
         let fixed;
@@ -179,6 +186,10 @@ impl<R: Read> Rows<R> {
     }
 }
 
+/// The largest time (seconds from the first frame) a recording may hold: about 32 years, far
+/// beyond any recording, and small enough that differences of times stay exact to 1e-7 s.
+pub(crate) const MAX_SECONDS: f64 = 1e9;
+
 /// Checks that one track's times increase.
 #[derive(Default)]
 struct Clock {
@@ -187,6 +198,15 @@ struct Clock {
 
 impl Clock {
     fn check(&mut self, path: &Path, at: &str, t: f64) -> Result<(), DataError> {
+        if !(t.is_finite() && t.abs() < MAX_SECONDS) {
+            return Err(DataError::parse(
+                path,
+                at,
+                "time",
+                format!("a time within +-{MAX_SECONDS:e} s of the first frame"),
+                t.to_string(),
+            ));
+        }
         if let Some(prev) = self.prev {
             if t <= prev {
                 return Err(DataError::Time {
@@ -239,6 +259,7 @@ pub(crate) fn time_column(header: &[String]) -> Option<(usize, TimeUnit)> {
     }
     find(&[
         "frame",
+        "fnum",
         "frame_idx",
         "frame_index",
         "frame index",
@@ -301,7 +322,7 @@ impl TimeReader {
             if let Ok(ns) = raw.parse::<i64>() {
                 let base = *self.base_ns.get_or_insert(ns);
                 self.base.get_or_insert(base as f64 * 1e-9);
-                return Ok((ns - base) as f64 * 1e-9);
+                return Ok((ns as i128 - base as i128) as f64 * 1e-9);
             }
         }
         let v = rows.req(self.col, "time", false)?;
@@ -318,31 +339,36 @@ fn lower(h: &[String]) -> Vec<String> {
     h.iter().map(|c| c.to_lowercase()).collect()
 }
 
+/// The marker columns of a lower-cased wide header: `NAME_x,NAME_y[,NAME_z]` (Anipose and
+/// DeepLabCut 3-D add `_z`) or idtracker.ai's `x1,y1,x2,y2,...`; each as (name as written, x,
+/// y, z).
+pub(crate) fn wide_markers(header: &[String]) -> Vec<(String, usize, usize, Option<usize>)> {
+    let low = lower(header);
+    let find = |want: &str| low.iter().position(|c| c == want);
+    let mut out = Vec::new();
+    for (i, h) in low.iter().enumerate() {
+        if let Some(stem) = h.strip_suffix("_x") {
+            if let Some(j) = find(&format!("{stem}_y")) {
+                let z = find(&format!("{stem}_z"));
+                out.push((header[i][..header[i].len() - 2].to_string(), i, j, z));
+            }
+        } else if let Some(n) = h.strip_prefix('x') {
+            if !n.is_empty() && n.bytes().all(|b| b.is_ascii_digit()) {
+                if let Some(j) = find(&format!("y{n}")) {
+                    out.push((n.to_string(), i, j, None));
+                }
+            }
+        }
+    }
+    out
+}
+
 fn read_wide(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {
     let mut rows = Rows::new(input, path, b',');
     let header = rows.header("a header t,slider_x,slider_y,bob_x,bob_y")?;
     let low = lower(&header);
-    let (tcol, unit) = time_column(&low).ok_or_else(|| {
-        rows.err(
-            "header",
-            "a time column (t, time, t_ms, t_ns, or frame with --fps)",
-            format!("{:?}", header.join(",")),
-        )
-    })?;
-    let mut pairs = Vec::new();
-    for (i, h) in low.iter().enumerate() {
-        if let Some(stem) = h.strip_suffix("_x") {
-            let want = format!("{stem}_y");
-            let j = low.iter().position(|c| *c == want).ok_or_else(|| {
-                rows.err(
-                    "header",
-                    format!("a column {want} beside {h}"),
-                    format!("{:?}", header.join(",")),
-                )
-            })?;
-            pairs.push((header[i][..header[i].len() - 2].to_string(), i, j));
-        }
-    }
+    let time = time_column(&low);
+    let pairs = wide_markers(&header);
     if pairs.is_empty() {
         return Err(rows.err(
             "header",
@@ -350,20 +376,51 @@ fn read_wide(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed
             format!("{:?}", header.join(",")),
         ));
     }
-    let mut time = TimeReader::new(path, tcol, unit, opts)?;
+    // Without a time column (Anipose writes its frame number last, some files none at all),
+    // frames are numbered by row and need --fps.
+    let (tcol, unit) = match time {
+        Some(t) => (Some(t.0), t.1),
+        None if opts.fps.is_some() => (None, TimeUnit::Frame),
+        None => {
+            return Err(rows.err(
+                "header",
+                "a time column (t, time, seconds, t_ms, t_ns, or frame/fnum with --fps; or --fps to number the rows)",
+                format!("{:?}", header.join(",")),
+            ))
+        }
+    };
+    let plane = opts.plane.unwrap_or(Plane::Xy);
+    let mut time = TimeReader::new(path, tcol.unwrap_or(usize::MAX), unit, opts)?;
     let mut times = Vec::new();
     let mut tracks: Vec<Vec<Option<[f64; 2]>>> = vec![Vec::new(); pairs.len()];
     let mut clock = Clock::default();
+    let mut row_number = 0u64;
+    // idtracker.ai and Anipose write `nan` for a lost marker; in the canonical CSV it is an
+    // error (missing is an empty cell).
+    let foreign = pairs
+        .iter()
+        .any(|p| p.3.is_some() || p.0.bytes().all(|b| b.is_ascii_digit()));
+    rows.nan_missing = foreign;
     while rows.next()? {
         if rows.is_blank() {
             continue;
         }
         rows.width(header.len())?;
-        let t = time.read(&rows)?;
+        let t = match tcol {
+            Some(_) => time.read(&rows)?,
+            None => row_number as f64 / opts.fps.expect("checked above"),
+        };
+        row_number += 1;
         clock.check(path, &rows.at(), t)?;
         times.push(t);
-        for (k, (name, i, j)) in pairs.iter().enumerate() {
-            tracks[k].push(rows.point([*i, *j], name, false)?);
+        for (k, (name, i, j, z)) in pairs.iter().enumerate() {
+            let p = match z {
+                Some(z) => rows
+                    .point([*i, *j, *z], name, false)?
+                    .map(|p| plane.project(p)),
+                None => rows.point([*i, *j], name, false)?,
+            };
+            tracks[k].push(p);
         }
     }
     if times.is_empty() {
@@ -372,10 +429,24 @@ fn read_wide(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed
             what: "a header".into(),
         });
     }
+    let three_d = pairs.iter().any(|p| p.3.is_some());
+    let mut notes = Vec::new();
+    if three_d {
+        notes.push(format!(
+            "3-D columns NAME_x, NAME_y, NAME_z: plane {} (--plane to change)",
+            plane.name()
+        ));
+    }
+    if tcol.is_none() {
+        notes.push(format!(
+            "no time column: rows numbered from 0 at --fps {} Hz",
+            opts.fps.unwrap_or_default()
+        ));
+    }
     let series = pairs
         .into_iter()
         .zip(tracks)
-        .map(|((name, _, _), points)| Series {
+        .map(|((name, ..), points)| Series {
             name,
             times: times.clone(),
             points,
@@ -383,11 +454,15 @@ fn read_wide(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed
         .collect();
     Ok(Parsed {
         series,
-        scale: opts
-            .scale
-            .is_none()
-            .then(|| (1.0, "metres, as the wide CSV is".to_string())),
+        // Canonical wide CSV is metres; 3-D tables (Anipose, DeepLabCut 3-D) and idtracker.ai
+        // carry the calibration's or the camera's units.
+        scale: (opts.scale.is_none()
+            && !three_d
+            && !header.iter().any(|h| h.eq_ignore_ascii_case("x1")))
+        .then(|| (1.0, "metres, as the wide CSV is".to_string())),
+        y_down: header.iter().any(|h| h.eq_ignore_ascii_case("x1")),
         time_base: time.base.unwrap_or(0.0),
+        notes,
         ..Parsed::default()
     })
 }
@@ -454,94 +529,274 @@ fn read_long(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed
     })
 }
 
-fn read_tracker(input: impl Read, path: &Path) -> Result<Parsed, DataError> {
+/// A Tracker column name without its subscript (`x_{1}` is `x`), trimmed and lower-cased.
+pub(crate) fn tracker_column(cell: &str) -> String {
+    let c = cell.trim().trim_matches('"').to_lowercase();
+    match c.find("_{") {
+        Some(i) if c.ends_with('}') => c[..i].to_string(),
+        _ => c,
+    }
+}
+
+/// The delimiter of a Tracker column-name line (`t x y`), if it is one: the first of tab,
+/// semicolon, comma and space that splits it into cells with t, x and y.
+pub(crate) fn tracker_header_delimiter(line: &str) -> Option<u8> {
+    let line = line
+        .trim_start_matches('\u{feff}')
+        .trim_end_matches(['\r', '\n']);
+    [b'\t', b';', b',', b' '].into_iter().find(|&d| {
+        let cells: Vec<String> = line.split(d as char).map(tracker_column).collect();
+        cells.first().is_some_and(|c| c == "t")
+            && cells.iter().any(|c| c == "x")
+            && cells.iter().any(|c| c == "y")
+    })
+}
+
+/// A SLEAP analysis CSV, or (HDF5) a SLEAP analysis file.
+fn read_sleap_any(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {
     let mut input = BufReader::new(input);
-    let mut line1 = String::new();
-    let mut line2 = String::new();
     let io = |source| DataError::Io {
         path: path.to_owned(),
         source,
     };
-    input.read_line(&mut line1).map_err(io)?;
-    if line1.trim().is_empty() {
-        return Err(DataError::Empty {
-            path: path.to_owned(),
-            expected: "a Tracker export (track name, then t x y)".into(),
-        });
-    }
-    input.read_line(&mut line2).map_err(io)?;
-    let name = line1
-        .trim()
-        .trim_start_matches('\u{feff}')
-        .trim_matches('"')
-        .to_string();
-    let delim = [b'\t', b';', b',', b' ']
-        .into_iter()
-        .find(|&d| line2.trim().bytes().filter(|&b| b == d).count() >= 2)
-        .ok_or_else(|| {
-            DataError::parse(
+    if input
+        .fill_buf()
+        .map_err(io)?
+        .starts_with(super::sleap_h5::MAGIC)
+    {
+        let mut bytes = Vec::new();
+        input
+            .take(super::sleap_h5::MAX_H5_BYTES as u64 + 1)
+            .read_to_end(&mut bytes)
+            .map_err(io)?;
+        if bytes.len() > super::sleap_h5::MAX_H5_BYTES {
+            return Err(DataError::parse(
                 path,
-                "line 2",
-                "header",
-                "column names t, x, y separated by tab, comma, semicolon or space",
-                format!("{:?}", line2.trim()),
-            )
-        })?;
-    let cols: Vec<String> = line2
-        .trim()
+                "the HDF5 file",
+                "file",
+                format!("at most {} bytes", super::sleap_h5::MAX_H5_BYTES),
+                "more",
+            ));
+        }
+        return super::sleap_h5::read(bytes, path, opts);
+    }
+    read_sleap_csv(input, path, opts)
+}
+
+/// A Kinovea text export, or (XML) its spreadsheet export.
+fn read_kinovea_any(
+    input: impl Read,
+    path: &Path,
+    opts: &ReadOptions,
+) -> Result<Parsed, DataError> {
+    let mut input = BufReader::new(input);
+    let io = |source| DataError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    let head = input.fill_buf().map_err(io)?;
+    let head = String::from_utf8_lossy(&head[..head.len().min(64)]);
+    if head
+        .trim_start_matches('\u{feff}')
+        .trim_start()
+        .starts_with("<?xml")
+    {
+        let mut bytes = Vec::new();
+        input
+            .take(super::kinovea_xml::MAX_XML_BYTES as u64 + 1)
+            .read_to_end(&mut bytes)
+            .map_err(io)?;
+        return super::kinovea_xml::read(&bytes, path, opts);
+    }
+    read_kinovea(input, path)
+}
+
+/// A Tracker export, or (XML) a Tracker project.
+fn read_tracker_any(input: impl Read, path: &Path) -> Result<Parsed, DataError> {
+    let mut input = BufReader::new(input);
+    let head = input.fill_buf().map_err(|source| DataError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    let head = String::from_utf8_lossy(&head[..head.len().min(64)]);
+    if head
+        .trim_start_matches('\u{feff}')
+        .trim_start()
+        .starts_with("<?xml")
+    {
+        let mut bytes = Vec::new();
+        input
+            .take(super::tracker_project::MAX_TRK_BYTES as u64 + 1)
+            .read_to_end(&mut bytes)
+            .map_err(|source| DataError::Io {
+                path: path.to_owned(),
+                source,
+            })?;
+        return super::tracker_project::read(&bytes, path);
+    }
+    read_tracker(input, path)
+}
+
+fn read_tracker(input: impl Read, path: &Path) -> Result<Parsed, DataError> {
+    let mut input = BufReader::new(input);
+    let io = |source| DataError::Io {
+        path: path.to_owned(),
+        source,
+    };
+    // Up to three lines before the data: `#multi:`, a name row, the column names.
+    let mut head: Vec<String> = Vec::new();
+    let (delim, names_row) = loop {
+        let mut line = String::new();
+        if input.read_line(&mut line).map_err(io)? == 0 || head.len() == 3 {
+            return Err(if head.iter().all(|l| l.trim().is_empty()) {
+                DataError::Empty {
+                    path: path.to_owned(),
+                    expected: "a Tracker export (track name, then t x y)".into(),
+                }
+            } else {
+                DataError::parse(
+                    path,
+                    format!("line {}", head.len().max(1)),
+                    "header",
+                    "column names t, x, y separated by tab, comma, semicolon or space (after an optional track name or #multi: line)",
+                    format!("{:?}", head.last().map(|l| l.trim()).unwrap_or("")),
+                )
+            });
+        }
+        if let Some(d) = tracker_header_delimiter(&line) {
+            let names = head
+                .iter()
+                .rev()
+                .find(|l| {
+                    !l.trim().is_empty() && !l.trim_start_matches('\u{feff}').starts_with("#multi")
+                })
+                .cloned();
+            head.push(line);
+            break (d, names);
+        }
+        head.push(line);
+    };
+    let header_line = head.len() as u64;
+    let clean = |l: &str| {
+        l.trim_start_matches('\u{feff}')
+            .trim_end_matches(['\r', '\n'])
+            .to_string()
+    };
+    let cols: Vec<String> = clean(&head[head.len() - 1])
         .split(delim as char)
-        .map(|c| c.trim().trim_matches('"').to_lowercase())
+        .map(tracker_column)
         .collect();
-    let find = |n: &str| cols.iter().position(|c| c == n);
-    let (Some(tc), Some(xc), Some(yc)) = (find("t"), find("x"), find("y")) else {
+    let multi = head.first().is_some_and(|l| {
+        l.trim_start_matches('\u{feff}')
+            .trim()
+            .eq_ignore_ascii_case("#multi:")
+    });
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "track".into());
+    // One group per x column: its y is the next y, its t the nearest t before it, its name the
+    // nearest name above it or before it in a multi-track name row.
+    let name_cells: Vec<String> = match &names_row {
+        Some(l) if multi => clean(l)
+            .split(delim as char)
+            .map(|c| c.trim().trim_matches('"').to_string())
+            .collect(),
+        _ => Vec::new(),
+    };
+    let single_name = match &names_row {
+        Some(l) if !multi => clean(l).trim().trim_matches('"').to_string(),
+        _ => stem.clone(),
+    };
+    let mut groups: Vec<(String, usize, usize, usize)> = Vec::new();
+    for (xc, c) in cols.iter().enumerate() {
+        if c != "x" {
+            continue;
+        }
+        let Some(yc) = (xc + 1..cols.len()).find(|&j| cols[j] == "y") else {
+            continue;
+        };
+        let Some(tc) = (0..xc).rev().find(|&j| cols[j] == "t") else {
+            continue;
+        };
+        let name = if multi {
+            (0..=xc.min(name_cells.len().saturating_sub(1)))
+                .rev()
+                .find(|&j| name_cells.get(j).is_some_and(|n| !n.is_empty()))
+                .map(|j| name_cells[j].clone())
+                .unwrap_or_else(|| format!("{stem} {}", groups.len() + 1))
+        } else if groups.is_empty() {
+            single_name.clone()
+        } else {
+            format!("{single_name} {}", groups.len() + 1)
+        };
+        groups.push((name, tc, xc, yc));
+    }
+    if groups.is_empty() {
         return Err(DataError::parse(
             path,
-            "line 2",
+            format!("line {header_line}"),
             "header",
             "columns t, x and y",
-            format!("{:?}", line2.trim()),
+            format!("{:?}", cols.join(" ")),
         ));
-    };
+    }
     let decimal_comma = delim != b',';
     let mut rows = Rows::new(input, path, delim);
-    let mut s = Series {
-        name,
-        ..Series::default()
-    };
-    let mut clock = Clock::default();
+    let mut series: Vec<Series> = groups
+        .iter()
+        .map(|(name, ..)| Series {
+            name: name.clone(),
+            ..Series::default()
+        })
+        .collect();
+    let mut clocks: Vec<Clock> = groups.iter().map(|_| Clock::default()).collect();
     while rows.next()? {
         if rows.is_blank() {
             continue;
         }
-        rows.line += 2;
-        let t = match rows.num(tc, "t", decimal_comma)? {
-            Some(t) => t,
-            None if rows.point([xc, yc], "point", decimal_comma)?.is_none() => continue,
-            None => return Err(rows.err("t", "a time", "an empty cell")),
-        };
-        clock.check(path, &rows.at(), t)?;
-        s.times.push(t);
-        s.points.push(rows.point([xc, yc], &s.name, decimal_comma)?);
+        rows.line += header_line;
+        for (k, (name, tc, xc, yc)) in groups.iter().enumerate() {
+            let p = rows.point([*xc, *yc], name, decimal_comma)?;
+            let t = match rows.num(*tc, "t", decimal_comma)? {
+                Some(t) => t,
+                None if p.is_none() => continue,
+                None => return Err(rows.err("t", "a time", "an empty cell")),
+            };
+            clocks[k].check(path, &rows.at(), t)?;
+            series[k].times.push(t);
+            series[k].points.push(p);
+        }
     }
-    if s.times.is_empty() {
+    if series.iter().all(|s| s.times.is_empty()) {
         return Err(DataError::NoFrames {
             path: path.to_owned(),
             what: "a track name and a header".into(),
         });
     }
+    series.retain(|s| !s.times.is_empty());
     let notes = vec![format!(
-        "Tracker file {}: track {:?}, delimiter {:?}{}",
+        "Tracker file {}: {} {}, delimiter {:?}{}",
         path.display(),
-        s.name,
-        delim as char,
-        if decimal_comma {
-            ", decimal comma accepted"
+        if multi {
+            "multi-track export, tracks"
         } else {
-            ""
+            "track"
+        },
+        series
+            .iter()
+            .map(|s| format!("{:?}", s.name))
+            .collect::<Vec<_>>()
+            .join(", "),
+        delim as char,
+        match (&names_row, multi) {
+            (None, _) => ", no name row (named after the file)",
+            _ if decimal_comma => ", decimal comma accepted",
+            _ => "",
         }
     )];
     Ok(Parsed {
-        series: vec![s],
+        series,
         scale: Some((
             1.0,
             "metres assumed: Tracker writes no units (use --scale if calibrated otherwise)".into(),
@@ -587,9 +842,14 @@ fn read_dlc(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed,
         message: "DeepLabCut files have no time column: give the video's frame rate with --fps HZ"
             .into(),
     })?;
-    // name -> [x, y, likelihood] columns
-    let mut markers: Vec<(String, [Option<usize>; 3])> = Vec::new();
-    for j in 1..coords.len() {
+    // Index columns come first: the frame number, or (labelled data) the image path, in one
+    // column or three.
+    let first_data = (1..coords.len())
+        .find(|&j| ["x", "y", "z", "likelihood"].contains(&coords[j].to_lowercase().as_str()))
+        .unwrap_or(1);
+    // name -> [x, y, likelihood, z] columns
+    let mut markers: Vec<(String, [Option<usize>; 4])> = Vec::new();
+    for j in first_data..coords.len() {
         let part = bodyparts.get(j).cloned().unwrap_or_default();
         let name = match &individuals {
             Some(ind) if !ind.get(j).is_none_or(|i| i.is_empty() || i == "single") => {
@@ -600,7 +860,7 @@ fn read_dlc(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed,
         let k = match markers.iter().position(|(n, _)| *n == name) {
             Some(k) => k,
             None => {
-                markers.push((name, [None; 3]));
+                markers.push((name, [None; 4]));
                 markers.len() - 1
             }
         };
@@ -608,10 +868,11 @@ fn read_dlc(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed,
             "x" => 0,
             "y" => 1,
             "likelihood" => 2,
+            "z" => 3,
             other => {
                 return Err(rows.err(
                     format!("coords column {}", j + 1),
-                    "x, y or likelihood",
+                    "x, y, z or likelihood",
                     format!("{other:?}"),
                 ))
             }
@@ -619,7 +880,7 @@ fn read_dlc(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed,
         markers[k].1[slot] = Some(j);
     }
     let mut cols = Vec::new();
-    for (name, [x, y, l]) in &markers {
+    for (name, [x, y, l, z]) in &markers {
         let (Some(x), Some(y)) = (x, y) else {
             return Err(rows.err(
                 "coords",
@@ -627,8 +888,10 @@ fn read_dlc(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed,
                 "only some",
             ));
         };
-        cols.push((*x, *y, *l));
+        cols.push((*x, *y, *l, *z));
     }
+    let three_d = cols.iter().any(|c| c.3.is_some());
+    let plane = opts.plane.unwrap_or(Plane::Xy);
     let mut series: Vec<Series> = markers
         .iter()
         .map(|(n, _)| Series {
@@ -644,12 +907,22 @@ fn read_dlc(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed,
             continue;
         }
         rows.width(coords.len())?;
-        let frame = rows.req(0, "frame index", false)?;
+        // Labelled data index rows by image path: number them instead.
+        let frame = if first_data == 1 && rows.num(0, "frame index", false).is_ok() {
+            rows.req(0, "frame index", false)?
+        } else {
+            times.len() as f64
+        };
         let t = frame / fps;
         clock.check(path, &rows.at(), t)?;
         times.push(t);
-        for (k, &(x, y, l)) in cols.iter().enumerate() {
-            let mut p = rows.point([x, y], &series[k].name, false)?;
+        for (k, &(x, y, l, z)) in cols.iter().enumerate() {
+            let mut p = match z {
+                Some(z) => rows
+                    .point([x, y, z], &series[k].name, false)?
+                    .map(|p| plane.project(p)),
+                None => rows.point([x, y], &series[k].name, false)?,
+            };
             if let (Some(_), Some(l)) = (p, l) {
                 if rows.num(l, "likelihood", false)?.unwrap_or(0.0) < opts.min_likelihood {
                     p = None;
@@ -671,7 +944,8 @@ fn read_dlc(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed,
     Ok(Parsed {
         series,
         scale: None,
-        y_down: true,
+        // 3-D triangulations are in the calibration's frame, not image pixels.
+        y_down: !three_d,
         notes: vec![format!(
             "DeepLabCut: pixels with y down, t = frame / {fps} Hz; {dropped} point(s) under likelihood {} counted as missing",
             opts.min_likelihood
@@ -792,7 +1066,11 @@ fn read_motive(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Pars
             }
         }
     }
-    let mut names: Option<Vec<String>> = None;
+    // Header rows between the metadata and `Frame,Time`: labelled `,Type`, `,Name`, `,ID`,
+    // `,Parent` (1.23 on), or unlabelled in that order (1.21); the row of `Position` and
+    // `Rotation` comes last.
+    let mut labelled: HashMap<String, Vec<String>> = HashMap::new();
+    let mut unlabelled: Vec<Vec<String>> = Vec::new();
     let mut kinds: Vec<String> = Vec::new();
     let header = loop {
         if !rows.next()? {
@@ -805,14 +1083,41 @@ fn read_motive(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Pars
         if row.first().is_some_and(|c| c.eq_ignore_ascii_case("frame")) {
             break row;
         }
-        if row.get(1).is_some_and(|c| c == "Name") {
-            names = Some(row);
-        } else if !rows.is_blank() {
+        if rows.is_blank() {
+            continue;
+        }
+        let label = row.get(1).map(|c| c.to_lowercase()).unwrap_or_default();
+        if ["type", "name", "id", "parent"].contains(&label.as_str()) {
+            labelled.insert(label, row);
+        } else if row
+            .iter()
+            .skip(2)
+            .any(|c| c.eq_ignore_ascii_case("position") || c.eq_ignore_ascii_case("rotation"))
+        {
             kinds = row;
+        } else {
+            unlabelled.push(row);
         }
     };
-    let names =
-        names.ok_or_else(|| rows.err("header", "a ,Name row before the Frame row", "none"))?;
+    let names = labelled
+        .remove("name")
+        .or_else(|| unlabelled.get(1).cloned())
+        .or_else(|| unlabelled.first().cloned());
+    if header.len() <= 2
+        || names
+            .as_ref()
+            .is_none_or(|n| n.iter().skip(2).all(|c| c.is_empty()))
+    {
+        return Err(rows.err(
+            "header",
+            "marker position columns X, Y, Z after Frame and Time",
+            format!(
+                "{:?}: this export holds no marker data (export again with markers or rigid bodies ticked)",
+                header.join(",")
+            ),
+        ));
+    }
+    let names = names.expect("checked above");
     let groups = group_xyz(
         (2..header.len()).filter_map(|j| {
             let kind = kinds.get(j).map(String::as_str).unwrap_or("");
@@ -827,19 +1132,40 @@ fn read_motive(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Pars
     )?;
     let plane = opts.plane.unwrap_or(Plane::Xy);
     let scale = units.as_deref().and_then(unit_scale);
+    // Time from the frame number and the export rate: the Time column is rounded (to the
+    // millisecond in 1.23 exports).
+    let rate_hz = rate
+        .as_deref()
+        .and_then(|r| r.parse::<f64>().ok())
+        .filter(|r| r.is_finite() && *r > 0.0);
     let mut base = None;
     let series = read_xyz_rows(
         &mut rows,
         path,
         &markers,
         plane,
-        |r| {
-            let t = r.req(1, "Time (Seconds)", false)?;
-            let b = *base.get_or_insert(t);
-            Ok(t - b)
+        |r| match rate_hz {
+            Some(hz) => {
+                let f = r.req(0, "Frame", false)?;
+                let b = *base.get_or_insert(f);
+                Ok((f - b) / hz)
+            }
+            None => {
+                let t = r.req(1, "Time (Seconds)", false)?;
+                let b = *base.get_or_insert(t);
+                Ok(t - b)
+            }
         },
         false,
     )?;
+    let time_note = match rate_hz {
+        Some(hz) => format!("t = (Frame - first frame) / Export Frame Rate {hz} Hz from the header (the Time column is rounded)"),
+        None => "t from the Time column (no Export Frame Rate in the header)".to_string(),
+    };
+    let base = match rate_hz {
+        Some(hz) => base.map(|f| f / hz),
+        None => base,
+    };
     Ok(Parsed {
         series,
         scale: Some(match scale {
@@ -851,10 +1177,8 @@ fn read_motive(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Pars
         }),
         time_base: base.unwrap_or(0.0),
         notes: vec![format!(
-            "Motive: plane {} (Motive's y is up; --plane to change){}",
+            "Motive: plane {} (Motive's y is up; --plane to change); {time_note}",
             plane.name(),
-            rate.map(|r| format!(", export rate {r} Hz"))
-                .unwrap_or_default()
         )],
         ..Parsed::default()
     })
@@ -951,6 +1275,372 @@ fn read_vicon(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parse
         notes: vec![format!(
             "Vicon: {rate} Hz, t = (frame - first frame) / rate; plane {} (Vicon's z is up; --plane to change)",
             plane.name()
+        )],
+        ..Parsed::default()
+    })
+}
+
+/// SLEAP's analysis CSV: `track,frame_idx,instance.score,NODE.x,NODE.y,NODE.score,...`, one
+/// row per instance per frame with a prediction (frames without one are left out); pixels, y
+/// down. Markers are `NODE`, or `TRACK/NODE` when the track has a name.
+fn read_sleap_csv(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {
+    let mut rows = Rows::new(input, path, b',');
+    rows.nan_missing = true;
+    let header = rows.header("a SLEAP header track,frame_idx,instance.score,NODE.x,NODE.y,...")?;
+    let low = lower(&header);
+    let find = |n: &str| low.iter().position(|c| c == n);
+    let (Some(track_col), Some(frame_col)) = (find("track"), find("frame_idx")) else {
+        return Err(rows.err(
+            "header",
+            "columns track and frame_idx",
+            format!("{:?}", header.join(",")),
+        ));
+    };
+    let nodes: Vec<(String, usize, usize)> = low
+        .iter()
+        .enumerate()
+        .filter_map(|(i, h)| {
+            let stem = h.strip_suffix(".x")?;
+            let j = find(&format!("{stem}.y"))?;
+            Some((header[i][..header[i].len() - 2].to_string(), i, j))
+        })
+        .collect();
+    if nodes.is_empty() {
+        return Err(rows.err(
+            "header",
+            "NODE.x,NODE.y column pairs",
+            format!("{:?}", header.join(",")),
+        ));
+    }
+    let fps = opts.fps.ok_or_else(|| DataError::Options {
+        path: path.to_owned(),
+        message:
+            "SLEAP files store frame numbers, not times: give the video's frame rate with --fps HZ"
+                .into(),
+    })?;
+    let mut index: HashMap<String, usize> = HashMap::new();
+    let mut series: Vec<Series> = Vec::new();
+    let mut clocks: Vec<Clock> = Vec::new();
+    while rows.next()? {
+        if rows.is_blank() {
+            continue;
+        }
+        rows.width(header.len())?;
+        let t = rows.req(frame_col, "frame_idx", false)? / fps;
+        let track = rows.cell(track_col).trim().to_string();
+        for (node, x, y) in &nodes {
+            let name = if track.is_empty() {
+                node.clone()
+            } else {
+                format!("{track}/{node}")
+            };
+            let k = *index.entry(name.clone()).or_insert_with(|| {
+                series.push(Series {
+                    name: name.clone(),
+                    ..Series::default()
+                });
+                clocks.push(Clock::default());
+                series.len() - 1
+            });
+            clocks[k].check(path, &format!("{} (marker {name:?})", rows.at()), t)?;
+            series[k].times.push(t);
+            series[k].points.push(rows.point([*x, *y], &name, false)?);
+        }
+    }
+    if series.is_empty() {
+        return Err(DataError::NoFrames {
+            path: path.to_owned(),
+            what: "a SLEAP header".into(),
+        });
+    }
+    Ok(Parsed {
+        series,
+        y_down: true,
+        notes: vec![format!(
+            "SLEAP analysis CSV: pixels with y down, t = frame_idx / {fps} Hz"
+        )],
+        ..Parsed::default()
+    })
+}
+
+/// Qualisys QTM's TSV export: `KEY<tab>value` lines (`FREQUENCY`, `MARKER_NAMES`, ...), then
+/// `Frame Time NAME X NAME Y NAME Z ...`; millimetres, z up.
+fn read_qualisys(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {
+    let mut rows = Rows::new(input, path, b'\t');
+    let mut meta: HashMap<String, String> = HashMap::new();
+    let header = loop {
+        if !rows.next()? {
+            return Err(DataError::NoFrames {
+                path: path.to_owned(),
+                what: "a QTM header without a Frame/Time column row and".into(),
+            });
+        }
+        let row: Vec<String> = rows.rec.iter().map(|c| c.trim().to_string()).collect();
+        let key = row.first().cloned().unwrap_or_default();
+        if key.eq_ignore_ascii_case("frame") {
+            break row;
+        }
+        // Old exports have no Frame/Time columns: their first numeric row is data.
+        if key.parse::<f64>().is_ok() {
+            return Err(rows.err(
+                "header",
+                "a row Frame, Time, NAME X, NAME Y, NAME Z (export with the column header option)",
+                format!("{key:?}"),
+            ));
+        }
+        meta.insert(key.to_uppercase(), row.get(1).cloned().unwrap_or_default());
+    };
+    let rate = meta
+        .get("FREQUENCY")
+        .and_then(|f| f.parse::<f64>().ok())
+        .filter(|f| f.is_finite() && *f > 0.0);
+    let axis: Vec<String> = header
+        .iter()
+        .map(|h| h.rsplit(' ').next().unwrap_or("").to_string())
+        .collect();
+    let groups = group_xyz(
+        (2..header.len()).filter_map(|j| {
+            let h = &header[j];
+            let (name, _) = h.rsplit_once(' ')?;
+            Some((j, name.to_string()))
+        }),
+        &axis,
+    );
+    let markers = complete(
+        |e| rows.err("header", e, format!("{:?}", header.join(" "))),
+        groups,
+    )?;
+    let time_col = header.iter().position(|h| h.eq_ignore_ascii_case("time"));
+    let plane = opts.plane.unwrap_or(Plane::Xz);
+    let mut first = None;
+    let series = read_xyz_rows(
+        &mut rows,
+        path,
+        &markers,
+        plane,
+        |r| match (rate, time_col) {
+            (Some(hz), _) => {
+                let f = r.req(0, "Frame", false)?;
+                let f0 = *first.get_or_insert(f);
+                Ok((f - f0) / hz)
+            }
+            (None, Some(tc)) => {
+                let t = r.req(tc, "Time", false)?;
+                let t0 = *first.get_or_insert(t);
+                Ok(t - t0)
+            }
+            (None, None) => Err(r.err("FREQUENCY", "a frame rate in the header", "none")),
+        },
+        false,
+    )?;
+    let unit = meta.get("UNITS").cloned().unwrap_or_else(|| "mm".into());
+    Ok(Parsed {
+        series,
+        scale: Some(match unit_scale(&unit) {
+            Some(s) => (s, format!("QTM units {unit}")),
+            None => (0.001, "millimetres (QTM's unit)".into()),
+        }),
+        notes: vec![format!(
+            "Qualisys QTM TSV: {}; plane {} (QTM's z is up; --plane to change)",
+            match rate {
+                Some(hz) => format!("t = (Frame - first frame) / FREQUENCY {hz} Hz"),
+                None => "t from the Time column".into(),
+            },
+            plane.name()
+        )],
+        ..Parsed::default()
+    })
+}
+
+/// Kinovea's trajectory text export (gnuplot style): `#Kinovea Trajectory data export`,
+/// `#T X Y`, then per trajectory a `# NAME` line and rows `t x y` (space-separated, the
+/// locale's decimal separator), blocks separated by blank lines. Units are the calibration's.
+fn read_kinovea(input: impl Read, path: &Path) -> Result<Parsed, DataError> {
+    let mut series: Vec<Series> = Vec::new();
+    let mut clocks: Vec<Clock> = Vec::new();
+    let mut saw_header = false;
+    let reader = BufReader::new(input);
+    for (k, line) in reader.split(b'\n').enumerate() {
+        let line = line.map_err(|source| DataError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+        let line = String::from_utf8_lossy(&line);
+        let line = line.trim_start_matches('\u{feff}').trim();
+        let at = format!("line {}", k + 1);
+        if line.is_empty() {
+            continue;
+        }
+        if let Some(c) = line.strip_prefix('#') {
+            let c = c.trim();
+            if c.to_lowercase().starts_with("kinovea") {
+                saw_header = true;
+            } else if !c.eq_ignore_ascii_case("t x y") {
+                series.push(Series {
+                    name: c.to_string(),
+                    ..Series::default()
+                });
+                clocks.push(Clock::default());
+            }
+            continue;
+        }
+        if !saw_header {
+            return Err(DataError::parse(
+                path,
+                at,
+                "header",
+                "#Kinovea Trajectory data export",
+                format!("{:?}", line.chars().take(60).collect::<String>()),
+            ));
+        }
+        let Some(s) = series.last_mut() else {
+            return Err(DataError::parse(
+                path,
+                at,
+                "trajectory",
+                "a '# NAME' line before the rows",
+                format!("{line:?}"),
+            ));
+        };
+        let cells: Vec<&str> = line.split_whitespace().collect();
+        let num = |i: usize, field: &str| -> Result<f64, DataError> {
+            let raw = cells.get(i).copied().unwrap_or("");
+            raw.replace(',', ".")
+                .parse::<f64>()
+                .ok()
+                .filter(|v| v.is_finite())
+                .ok_or_else(|| {
+                    DataError::parse(path, &at, field, "a finite number", format!("{raw:?}"))
+                })
+        };
+        if cells.len() < 3 {
+            return Err(DataError::parse(
+                path,
+                &at,
+                "row",
+                "three cells t x y",
+                format!("{line:?}"),
+            ));
+        }
+        let t = num(0, "t")?;
+        clocks
+            .last_mut()
+            .expect("one per series")
+            .check(path, &at, t)?;
+        s.times.push(t);
+        s.points.push(Some([num(1, "x")?, num(2, "y")?]));
+    }
+    series.retain(|s| !s.times.is_empty());
+    if series.is_empty() {
+        return Err(DataError::NoFrames {
+            path: path.to_owned(),
+            what: "a Kinovea header".into(),
+        });
+    }
+    Ok(Parsed {
+        series,
+        notes: vec![
+            "Kinovea trajectory export: times as written, positions in the calibration's units (y up)"
+                .into(),
+        ],
+        ..Parsed::default()
+    })
+}
+
+/// TRex's per-individual CSV: `frame`, `time`, `timestamp` (microseconds), `X (cm)`, `Y (cm)`,
+/// `X#wcentroid (cm)`, ..., `midline_x`, `midline_y`, `missing`. Markers: `centroid`,
+/// `wcentroid`, `midline`; centimetres when the columns say so, y down.
+fn read_trex(input: impl Read, path: &Path) -> Result<Parsed, DataError> {
+    let mut rows = Rows::new(input, path, b',');
+    rows.nan_missing = true;
+    let header = rows.header("a TRex header frame,...,X (cm),Y (cm),...")?;
+    let low = lower(&header);
+    let find = |n: &str| low.iter().position(|c| c == n);
+    let pairs: Vec<(&str, usize, usize)> = [
+        ("centroid", ["x (cm)", "x"], ["y (cm)", "y"]),
+        (
+            "wcentroid",
+            ["x#wcentroid (cm)", "x#wcentroid"],
+            ["y#wcentroid (cm)", "y#wcentroid"],
+        ),
+        (
+            "midline",
+            ["midline_x", "midline_x"],
+            ["midline_y", "midline_y"],
+        ),
+    ]
+    .into_iter()
+    .filter_map(|(n, xs, ys)| {
+        let x = xs.iter().find_map(|c| find(c))?;
+        let y = ys.iter().find_map(|c| find(c))?;
+        Some((n, x, y))
+    })
+    .collect();
+    if pairs.is_empty() {
+        return Err(rows.err(
+            "header",
+            "TRex position columns X (cm), Y (cm)",
+            format!("{:?}", header.join(",")),
+        ));
+    }
+    let cm = low.iter().any(|c| c == "x (cm)");
+    let (tcol, factor, what) = if let Some(i) = find("timestamp") {
+        (i, 1e-6, "timestamp (microseconds)")
+    } else if let Some(i) = find("time") {
+        (i, 1.0, "time (seconds)")
+    } else {
+        return Err(rows.err(
+            "header",
+            "a timestamp or time column",
+            format!("{:?}", header.join(",")),
+        ));
+    };
+    let missing = find("missing");
+    let mut series: Vec<Series> = pairs
+        .iter()
+        .map(|(n, ..)| Series {
+            name: n.to_string(),
+            ..Series::default()
+        })
+        .collect();
+    let mut clock = Clock::default();
+    let mut base = None;
+    let mut times = Vec::new();
+    while rows.next()? {
+        if rows.is_blank() {
+            continue;
+        }
+        rows.width(header.len())?;
+        let raw = rows.req(tcol, what, false)? * factor;
+        let b = *base.get_or_insert(raw);
+        let t = raw - b;
+        clock.check(path, &rows.at(), t)?;
+        times.push(t);
+        let lost = match missing {
+            Some(m) => rows.num(m, "missing", false)?.is_some_and(|v| v != 0.0),
+            None => false,
+        };
+        for (k, (n, x, y)) in pairs.iter().enumerate() {
+            let p = rows.point([*x, *y], n, false)?;
+            series[k].points.push(if lost { None } else { p });
+        }
+    }
+    if times.is_empty() {
+        return Err(DataError::NoFrames {
+            path: path.to_owned(),
+            what: "a TRex header".into(),
+        });
+    }
+    for s in &mut series {
+        s.times = times.clone();
+    }
+    Ok(Parsed {
+        series,
+        scale: cm.then(|| (0.01, "centimetres (TRex's X (cm), Y (cm))".to_string())),
+        y_down: true,
+        time_base: base.unwrap_or(0.0),
+        notes: vec![format!(
+            "TRex: t from {what}; rows marked missing count as missing; y down (image axes)"
         )],
         ..Parsed::default()
     })

@@ -121,14 +121,14 @@ pub enum DataError {
         expected: String,
     },
     /// An MCAP file damaged before any frame could be read.
-    #[error("{path}: {at}: damaged MCAP file: {source}")]
+    #[error("{path}: {at}: damaged MCAP file: {message}")]
     Mcap {
         /// The file.
         path: PathBuf,
         /// The record where reading stopped.
         at: String,
-        /// The mcap crate's error.
-        source: mcap::McapError,
+        /// What is wrong (one line: the mcap crate's error without its backtrace).
+        message: String,
     },
     /// Options that do not fit the input (e.g. a frame rate missing for a format without times).
     #[error("{path}: {message}")]

@@ -2,9 +2,9 @@
 //! decoding JSON, ROS 2 CDR and protobuf (Foxglove) marker messages, and a writer of JSON
 //! marker frames.
 
-use super::{DataError, Parsed, Plane, ReadOptions, Recording, Series};
-use ::mcap::records::{MessageHeader, Metadata, Record};
-use ::mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader};
+use super::{ros_cdr, DataError, Parsed, Plane, ReadOptions, Recording, Series};
+use ::mcap::records::{op, MessageHeader, Metadata, Record};
+use ::mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use ::mcap::McapError;
 use prost_reflect::{DescriptorPool, DynamicMessage, MessageDescriptor, ReflectMessage, Value};
 use serde::{Deserialize, Serialize};
@@ -19,6 +19,17 @@ cdr with ros2msg schemas geometry_msgs/msg/PointStamped, PoseStamped, TransformS
 tf2_msgs/msg/TFMessage, protobuf (schema a FileDescriptorSet) foxglove.FrameTransform, \
 foxglove.PointsAnnotation; chunks uncompressed, zstd or lz4";
 
+/// JSON schemas (Foxglove's) whose x, y are not a position: skipped rather than read as
+/// markers.
+pub const NOT_POSITIONS: [&str; 6] = [
+    "foxglove.Vector3",
+    "foxglove.Vector2",
+    "foxglove.Quaternion",
+    "foxglove.LocationFix",
+    "foxglove.Battery",
+    "foxglove.Log",
+];
+
 /// Marker names given to the points of a `foxglove.PointsAnnotation`, which carries no names:
 /// identity is the index (point 0 the slider, point 1 the bob, further points `point2`, ...).
 pub const POINTS_NAMES: [&str; 2] = ["slider", "bob"];
@@ -29,14 +40,53 @@ pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError>
         path: path.to_owned(),
         source,
     })?;
-    read_from(file, path, opts)
+    let size = file
+        .metadata()
+        .ok()
+        .filter(|m| m.is_file())
+        .map(|m| m.len());
+    read_from(file, path, opts, size)
 }
 
+/// A JSON time stamp: `{"sec", "nsec"}` (also `nanosec`, `nanos`) or, as Foxglove tools
+/// write it, a float of seconds.
 #[derive(Deserialize)]
-struct JStamp {
-    sec: i64,
-    #[serde(default, alias = "nanosec", alias = "nanos")]
-    nsec: i64,
+#[serde(untagged)]
+enum JStamp {
+    Parts {
+        sec: i64,
+        #[serde(default, alias = "nanosec", alias = "nanos")]
+        nsec: i64,
+    },
+    Seconds(f64),
+}
+
+impl JStamp {
+    /// Nanoseconds, or what was expected when the stamp does not fit in i64 nanoseconds.
+    fn ns(&self) -> Result<i64, String> {
+        match *self {
+            JStamp::Parts { sec, nsec } => sec
+                .checked_mul(1_000_000_000)
+                .and_then(|s| s.checked_add(nsec))
+                .ok_or_else(|| {
+                    format!("a timestamp within +-292 years of 1970, found sec {sec}, nsec {nsec}")
+                }),
+            JStamp::Seconds(s) => seconds_to_ns(s),
+        }
+    }
+}
+
+/// Float seconds as nanoseconds, when they fit.
+fn seconds_to_ns(s: f64) -> Result<i64, String> {
+    if s.is_finite() && s.abs() < 9.2e9 {
+        // Whole seconds and the fraction apart: 1.7e9 s times 1e9 would round to 256 ns.
+        let whole = s.floor();
+        Ok(whole as i64 * 1_000_000_000 + ((s - whole) * 1e9).round() as i64)
+    } else {
+        Err(format!(
+            "a timestamp in seconds within +-9.2e9 (292 years), found {s}"
+        ))
+    }
 }
 
 #[derive(Deserialize)]
@@ -70,73 +120,6 @@ struct JMsg {
     z: Option<f64>,
     point: Option<JPoint>,
     position: Option<JPoint>,
-}
-
-#[derive(Deserialize)]
-struct RosTime {
-    sec: i32,
-    nanosec: u32,
-}
-
-#[derive(Deserialize)]
-struct RosHeader {
-    stamp: RosTime,
-    #[allow(dead_code)]
-    frame_id: String,
-}
-
-#[derive(Deserialize)]
-struct Vec3 {
-    x: f64,
-    y: f64,
-    z: f64,
-}
-
-#[derive(Deserialize)]
-#[allow(dead_code)]
-struct Quat {
-    x: f64,
-    y: f64,
-    z: f64,
-    w: f64,
-}
-
-#[derive(Deserialize)]
-struct PointStamped {
-    header: RosHeader,
-    point: Vec3,
-}
-
-#[derive(Deserialize)]
-#[allow(dead_code)]
-struct Pose {
-    position: Vec3,
-    orientation: Quat,
-}
-
-#[derive(Deserialize)]
-struct PoseStamped {
-    header: RosHeader,
-    pose: Pose,
-}
-
-#[derive(Deserialize)]
-#[allow(dead_code)]
-struct Transform {
-    translation: Vec3,
-    rotation: Quat,
-}
-
-#[derive(Deserialize)]
-struct TransformStamped {
-    header: RosHeader,
-    child_frame_id: String,
-    transform: Transform,
-}
-
-#[derive(Deserialize)]
-struct TfMessage {
-    transforms: Vec<TransformStamped>,
 }
 
 /// How a channel's messages are decoded. The protobuf ones carry the message descriptor built
@@ -187,32 +170,185 @@ struct Channel {
     decoded: usize,
 }
 
-fn ros_ns(t: &RosTime) -> i64 {
-    t.sec as i64 * 1_000_000_000 + t.nanosec as i64
-}
-
 /// One marker's samples with nanosecond stamps.
 type Stamped = Vec<(i64, Option<[f64; 2]>)>;
 
-/// Accumulates marker samples with nanosecond stamps.
+/// One transform of a `/tf` tree: the child frame's pose in its parent frame.
+struct Tf {
+    ns: i64,
+    parent: String,
+    child: String,
+    translation: [f64; 3],
+    rotation: [f64; 4],
+    /// From `/tf_static`: holds for the whole recording.
+    fixed: bool,
+}
+
+/// Accumulates marker samples with nanosecond stamps, per channel (topic) and marker name,
+/// and the transforms of `/tf` trees to compose at the end.
 #[derive(Default)]
 struct Acc {
-    index: HashMap<String, usize>,
-    series: Vec<(String, Stamped)>,
+    index: HashMap<(String, String), usize>,
+    /// Topic, marker name, samples; in the order markers were first seen.
+    series: Vec<(String, String, Stamped)>,
+    tf: Vec<Tf>,
 }
 
 impl Acc {
-    fn push(&mut self, name: &str, ns: i64, p: Option<[f64; 2]>) {
-        let k = match self.index.get(name) {
+    fn push(&mut self, topic: &str, name: &str, ns: i64, p: Option<[f64; 2]>) {
+        let key = (topic.to_string(), name.to_string());
+        let k = match self.index.get(&key) {
             Some(&k) => k,
             None => {
-                self.index.insert(name.to_string(), self.series.len());
-                self.series.push((name.to_string(), Vec::new()));
+                self.index.insert(key, self.series.len());
+                self.series
+                    .push((topic.to_string(), name.to_string(), Vec::new()));
                 self.series.len() - 1
             }
         };
-        self.series[k].1.push((ns, p));
+        self.series[k].2.push((ns, p));
     }
+
+    fn push_tf(&mut self, t: ros_cdr::TransformStamped, fixed: bool) {
+        self.tf.push(Tf {
+            ns: t.header.stamp.ns(),
+            parent: t.header.frame_id,
+            child: t.child_frame_id,
+            translation: t.translation,
+            rotation: t.rotation,
+            fixed,
+        });
+    }
+
+    fn is_empty(&self) -> bool {
+        self.series.is_empty() && self.tf.is_empty()
+    }
+}
+
+/// Rotate `v` by the quaternion `q` (x, y, z, w; normalised here).
+fn rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
+    let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+    if !(n.is_finite() && n > 0.0) {
+        return v;
+    }
+    let (x, y, z, w) = (q[0] / n, q[1] / n, q[2] / n, q[3] / n);
+    // v' = v + 2 w (u x v) + 2 u x (u x v), u = (x, y, z)
+    let c = [
+        y * v[2] - z * v[1],
+        z * v[0] - x * v[2],
+        x * v[1] - y * v[0],
+    ];
+    let cc = [
+        y * c[2] - z * c[1],
+        z * c[0] - x * c[2],
+        x * c[1] - y * c[0],
+    ];
+    [
+        v[0] + 2.0 * (w * c[0] + cc[0]),
+        v[1] + 2.0 * (w * c[1] + cc[1]),
+        v[2] + 2.0 * (w * c[2] + cc[2]),
+    ]
+}
+
+/// The most samples a `/tf` tree may expand into (frames times distinct stamps).
+pub const TF_SAMPLE_LIMIT: usize = 20_000_000;
+
+/// Compose `/tf` transforms to their tree's root: at every stamp of a dynamic transform, every
+/// frame's origin in the root frame. Static transforms hold for the whole recording. The samples
+/// go to `acc` under the topic `/tf`; returns notes on the roots used.
+fn compose_tf(acc: &mut Acc, plane: Option<Plane>) -> Result<Vec<String>, String> {
+    let tf = std::mem::take(&mut acc.tf);
+    let mut current: BTreeMap<String, (String, [f64; 3], [f64; 4])> = BTreeMap::new();
+    let mut dynamic: Vec<&Tf> = Vec::new();
+    for t in &tf {
+        if t.fixed {
+            current.insert(
+                t.child.clone(),
+                (t.parent.clone(), t.translation, t.rotation),
+            );
+        } else {
+            dynamic.push(t);
+        }
+    }
+    dynamic.sort_by_key(|t| t.ns);
+    let mut frames: BTreeMap<&str, ()> = BTreeMap::new();
+    for t in &tf {
+        frames.insert(&t.child, ());
+    }
+    let stamps = dynamic.chunk_by(|a, b| a.ns == b.ns).count();
+    if stamps.saturating_mul(frames.len()) > TF_SAMPLE_LIMIT {
+        return Err(format!(
+            "a /tf tree of at most {TF_SAMPLE_LIMIT} frame samples, found {} frames at {stamps} stamps",
+            frames.len()
+        ));
+    }
+    // Each frame's root in the whole recording's tree: a frame is placed only once its chain
+    // reaches that root, so its positions never switch frames when a parent arrives late.
+    let mut parent_of: HashMap<&str, &str> = HashMap::new();
+    for t in &tf {
+        parent_of.insert(&t.child, &t.parent);
+    }
+    let depth_limit = frames.len() + 1;
+    let root_of = |f: &str| -> Option<String> {
+        let mut f = f;
+        for _ in 0..=depth_limit {
+            match parent_of.get(f) {
+                Some(p) => f = p,
+                None => return Some(f.to_string()),
+            }
+        }
+        None
+    };
+    let final_root: HashMap<String, Option<String>> =
+        frames.keys().map(|f| (f.to_string(), root_of(f))).collect();
+    let mut roots: BTreeMap<String, usize> = BTreeMap::new();
+    for group in dynamic.chunk_by(|a, b| a.ns == b.ns) {
+        for t in group {
+            current.insert(
+                t.child.clone(),
+                (t.parent.clone(), t.translation, t.rotation),
+            );
+        }
+        let ns = group[0].ns;
+        for child in current.keys() {
+            let (mut frame, mut p) = (child.as_str(), [0.0; 3]);
+            let mut depth = 0;
+            while let Some((parent, tr, q)) = current.get(frame) {
+                let r = rotate(*q, p);
+                p = [r[0] + tr[0], r[1] + tr[1], r[2] + tr[2]];
+                frame = parent;
+                depth += 1;
+                if depth > depth_limit {
+                    return Err(format!("a /tf tree, found a cycle through frame {child:?}"));
+                }
+            }
+            if final_root.get(child).and_then(|r| r.as_deref()) != Some(frame) {
+                // The chain to the root is not complete yet at this stamp.
+                continue;
+            }
+            if p.iter().all(|v| v.is_finite()) {
+                *roots.entry(frame.to_string()).or_default() += 1;
+                let xy = match plane {
+                    Some(pl) => pl.project(p),
+                    None => [p[0], p[1]],
+                };
+                acc.push("/tf", child, ns, Some(xy));
+            } else {
+                acc.push("/tf", child, ns, None);
+            }
+        }
+    }
+    let mut notes = Vec::new();
+    if !tf.is_empty() {
+        let statics = tf.iter().filter(|t| t.fixed).count();
+        notes.push(format!(
+            "/tf: {} transform(s) ({statics} static, held for the whole recording) composed to the root frame{} {} at {stamps} stamp(s)",
+            tf.len(),
+            if roots.len() == 1 { "" } else { "s" },
+            roots.keys().map(|r| format!("{r:?}")).collect::<Vec<_>>().join(", ")
+        ));
+    }
+    Ok(notes)
 }
 
 fn xy(x: Option<f64>, y: Option<f64>, z: Option<f64>, plane: Option<Plane>) -> Option<[f64; 2]> {
@@ -230,6 +366,10 @@ fn decoder_for(
     schema_data: &[u8],
 ) -> Result<Decoder, Reject> {
     match encoding {
+        // Foxglove's JSON types that hold no position: a velocity in a Vector3 is not a marker.
+        "json" if NOT_POSITIONS.contains(&schema_name) => Err(Reject::Invalid(format!(
+            "{schema_name} holds no marker position"
+        ))),
         "json" => Ok(Decoder::Json),
         "cdr" => {
             if schema_encoding != "ros2msg" && schema_encoding != "ros2idl" {
@@ -321,9 +461,8 @@ fn pb_stamp(m: &DynamicMessage) -> Result<Option<i64>, String> {
     let ts = v
         .as_message()
         .ok_or("a google.protobuf.Timestamp message in timestamp")?;
-    Ok(Some(
-        pb_int(ts, "seconds")? * 1_000_000_000 + pb_int(ts, "nanos")?,
-    ))
+    let (sec, nanos) = (pb_int(ts, "seconds")?, pb_int(ts, "nanos")?);
+    JStamp::Parts { sec, nsec: nanos }.ns().map(Some)
 }
 
 /// Decode a protobuf message against its descriptor.
@@ -341,72 +480,52 @@ fn decode(
     plane: Option<Plane>,
     acc: &mut Acc,
 ) -> Result<usize, String> {
+    let p3 = |p: [f64; 3]| xy(Some(p[0]), Some(p[1]), Some(p[2]), plane);
     match dec {
         Decoder::Json => {
             let m: JMsg = serde_json::from_slice(data).map_err(|e| format!("JSON: {e}"))?;
-            let stamp = m
-                .timestamp
-                .or(m.header.and_then(|h| h.stamp))
-                .map_or(log_time, |s| s.sec * 1_000_000_000 + s.nsec);
+            let stamp = match m.timestamp.or(m.header.and_then(|h| h.stamp)) {
+                Some(s) => s.ns()?,
+                None => log_time,
+            };
             if let Some(markers) = m.markers {
                 let n = markers.len();
                 for mk in markers {
-                    acc.push(&mk.id, stamp, xy(mk.x, mk.y, mk.z, plane));
+                    acc.push(topic, &mk.id, stamp, xy(mk.x, mk.y, mk.z, plane));
                 }
                 Ok(n)
             } else if let Some(p) = m.point.or(m.position) {
-                acc.push(topic, stamp, xy(p.x, p.y, p.z, plane));
+                acc.push(topic, topic, stamp, xy(p.x, p.y, p.z, plane));
                 Ok(1)
             } else if m.x.is_some() || m.y.is_some() {
-                acc.push(topic, stamp, xy(m.x, m.y, m.z, plane));
+                acc.push(topic, topic, stamp, xy(m.x, m.y, m.z, plane));
                 Ok(1)
             } else {
                 Err("a JSON object with a \"markers\" array, a \"point\", or x and y".into())
             }
         }
-        Decoder::PointStamped => {
-            let m: PointStamped =
-                cdr::deserialize(data).map_err(|e| format!("CDR PointStamped: {e}"))?;
-            let p = &m.point;
-            acc.push(
-                topic,
-                ros_ns(&m.header.stamp),
-                xy(Some(p.x), Some(p.y), Some(p.z), plane),
-            );
-            Ok(1)
-        }
-        Decoder::PoseStamped => {
-            let m: PoseStamped =
-                cdr::deserialize(data).map_err(|e| format!("CDR PoseStamped: {e}"))?;
-            let p = &m.pose.position;
-            acc.push(
-                topic,
-                ros_ns(&m.header.stamp),
-                xy(Some(p.x), Some(p.y), Some(p.z), plane),
-            );
+        Decoder::PointStamped | Decoder::PoseStamped => {
+            let pose = matches!(dec, Decoder::PoseStamped);
+            let (h, p) = ros_cdr::point_stamped(data, pose).map_err(|e| {
+                format!(
+                    "CDR {}: {e}",
+                    if pose { "PoseStamped" } else { "PointStamped" }
+                )
+            })?;
+            acc.push(topic, topic, h.stamp.ns(), p3(p));
             Ok(1)
         }
         Decoder::TransformStamped => {
-            let m: TransformStamped =
-                cdr::deserialize(data).map_err(|e| format!("CDR TransformStamped: {e}"))?;
-            let p = &m.transform.translation;
-            acc.push(
-                &m.child_frame_id,
-                ros_ns(&m.header.stamp),
-                xy(Some(p.x), Some(p.y), Some(p.z), plane),
-            );
+            let t = ros_cdr::transform_stamped(data)
+                .map_err(|e| format!("CDR TransformStamped: {e}"))?;
+            acc.push_tf(t, topic.ends_with("tf_static"));
             Ok(1)
         }
         Decoder::TfMessage => {
-            let m: TfMessage = cdr::deserialize(data).map_err(|e| format!("CDR TFMessage: {e}"))?;
-            let n = m.transforms.len();
-            for t in m.transforms {
-                let p = &t.transform.translation;
-                acc.push(
-                    &t.child_frame_id,
-                    ros_ns(&t.header.stamp),
-                    xy(Some(p.x), Some(p.y), Some(p.z), plane),
-                );
+            let ts = ros_cdr::tf_message(data).map_err(|e| format!("CDR TFMessage: {e}"))?;
+            let n = ts.len();
+            for t in ts {
+                acc.push_tf(t, topic.ends_with("tf_static"));
             }
             Ok(n)
         }
@@ -422,16 +541,11 @@ fn decode(
             let p = if m.has_field_by_name("translation") {
                 let v = pb_field(&m, "translation")?;
                 let t = v.as_message().ok_or("a foxglove.Vector3 in translation")?;
-                xy(
-                    Some(pb_f64(t, "x")?),
-                    Some(pb_f64(t, "y")?),
-                    Some(pb_f64(t, "z")?),
-                    plane,
-                )
+                p3([pb_f64(t, "x")?, pb_f64(t, "y")?, pb_f64(t, "z")?])
             } else {
                 None
             };
-            acc.push(name, stamp, p);
+            acc.push(topic, name, stamp, p);
             Ok(1)
         }
         Decoder::PointsAnnotation(desc) => {
@@ -447,31 +561,149 @@ fn decode(
             // Identity by index; the two roles get a sample every frame so a short list reads
             // as missing markers rather than shifting the others.
             for (k, name) in POINTS_NAMES.iter().enumerate() {
-                acc.push(name, stamp, xys.get(k).copied());
+                acc.push(topic, name, stamp, xys.get(k).copied());
             }
             for (k, p) in xys.iter().enumerate().skip(POINTS_NAMES.len()) {
-                acc.push(&format!("point{k}"), stamp, Some(*p));
+                acc.push(topic, &format!("point{k}"), stamp, Some(*p));
             }
             Ok(xys.len())
         }
     }
 }
 
-/// Read MCAP bytes from any reader, streaming; `path` labels errors.
+/// The largest record (or decompressed chunk record) read from a file of `size` bytes: 256
+/// times the file (compressed chunks may hold records larger than the file), at least 1 MiB,
+/// at most 256 MiB; 256 MiB when the size is unknown.
+pub fn record_limit(size: Option<u64>) -> usize {
+    const MIB: u64 = 1 << 20;
+    let limit = size.map_or(256 * MIB, |s| s.saturating_mul(256).clamp(MIB, 256 * MIB));
+    limit as usize
+}
+
+/// The most bytes the records of a file of `size` bytes may decompress to, in all: 1024 times
+/// the file plus 64 MiB (a bomb of zeros stops here instead of running for minutes).
+pub fn decompressed_limit(size: Option<u64>) -> u64 {
+    size.unwrap_or(1 << 30)
+        .saturating_mul(1024)
+        .saturating_add(64 << 20)
+}
+
+/// Check that every length field of a Schema, Channel, Message or Metadata record fits in
+/// the record, so parsing it allocates no more than the record holds.
+fn check_lengths(opcode: u8, data: &[u8]) -> Result<(), String> {
+    struct Cur<'a> {
+        d: &'a [u8],
+        at: usize,
+    }
+    impl Cur<'_> {
+        fn skip(&mut self, n: usize, what: &str) -> Result<(), String> {
+            match self.at.checked_add(n) {
+                Some(end) if end <= self.d.len() => {
+                    self.at = end;
+                    Ok(())
+                }
+                _ => Err(format!(
+                    "{what}: {n} byte(s) at offset {}, beyond the record's {} bytes",
+                    self.at,
+                    self.d.len()
+                )),
+            }
+        }
+        fn len(&mut self, what: &str) -> Result<usize, String> {
+            let start = self.at;
+            self.skip(4, what)?;
+            let b: [u8; 4] = self.d[start..start + 4].try_into().expect("4 bytes");
+            Ok(u32::from_le_bytes(b) as usize)
+        }
+        fn string(&mut self, what: &str) -> Result<(), String> {
+            let n = self.len(what)?;
+            self.skip(n, what)
+        }
+        fn map(&mut self, what: &str) -> Result<(), String> {
+            let n = self.len(what)?;
+            let end = self.at;
+            self.skip(n, what)?;
+            let mut inner = Cur {
+                d: &self.d[end..end + n],
+                at: 0,
+            };
+            while inner.at < n {
+                inner.string(what)?;
+                inner.string(what)?;
+            }
+            Ok(())
+        }
+    }
+    let mut c = Cur { d: data, at: 0 };
+    match opcode {
+        op::SCHEMA => {
+            c.skip(2, "schema id")?;
+            c.string("schema name")?;
+            c.string("schema encoding")?;
+            c.string("schema data")
+        }
+        op::CHANNEL => {
+            c.skip(4, "channel ids")?;
+            c.string("topic")?;
+            c.string("message encoding")?;
+            c.map("channel metadata")
+        }
+        op::MESSAGE => c.skip(22, "message header"),
+        op::METADATA => {
+            c.string("metadata name")?;
+            c.map("metadata")
+        }
+        _ => Ok(()),
+    }
+}
+
+/// The first line of an mcap error, without terminal escape codes (binrw's errors carry a
+/// coloured backtrace).
+fn plain(err: &McapError) -> String {
+    let text = err.to_string();
+    let mut out = String::new();
+    let mut chars = text.lines().next().unwrap_or("").chars().peekable();
+    while let Some(c) = chars.next() {
+        if c == '\u{1b}' {
+            // CSI: ESC [ params final-byte
+            if chars.peek() == Some(&'[') {
+                chars.next();
+                for d in chars.by_ref() {
+                    if ('@'..='~').contains(&d) {
+                        break;
+                    }
+                }
+            }
+        } else if !c.is_control() {
+            out.push(c);
+        }
+    }
+    out.trim().trim_end_matches(':').to_string()
+}
+
+/// Read MCAP bytes from any reader, streaming; `path` labels errors; `size` (the file's
+/// length, when known) bounds every length the file declares.
 pub(crate) fn read_from(
     mut input: impl Read,
     path: &Path,
     opts: &ReadOptions,
+    size: Option<u64>,
 ) -> Result<Parsed, DataError> {
-    let mut reader = LinearReader::new();
+    let limit = record_limit(size);
+    let budget = decompressed_limit(size);
+    let mut reader = LinearReader::new_with_options(
+        LinearReaderOptions::default().with_record_length_limit(limit),
+    );
     let mut schemas: HashMap<u16, (String, String, Vec<u8>)> = HashMap::new();
-    let mut channels: HashMap<u16, Channel> = HashMap::new();
+    let mut channels: BTreeMap<u16, Channel> = BTreeMap::new();
     let mut acc = Acc::default();
     let mut parsed = Parsed::default();
     let mut records = 0u64;
     let mut messages = 0u64;
     let mut bytes = 0u64;
-    let mut damage: Option<McapError> = None;
+    let mut record_bytes = 0u64;
+    let mut damage: Option<String> = None;
+    let mut unsupported_compression: Option<String> = None;
     // With a time window, reading stops once marker messages are past its end (by log_time,
     // with a second of margin for stamps that differ from it): the rest is never decoded.
     let window_end = opts.time_window.map(|(_, end)| end + 1.0);
@@ -481,7 +713,18 @@ pub(crate) fn read_from(
         let event = match event {
             Ok(e) => e,
             Err(e) => {
-                damage = Some(e);
+                if let McapError::UnsupportedCompression(c) = &e {
+                    unsupported_compression = Some(c.clone());
+                }
+                damage = Some(match e {
+                    McapError::RecordTooLarge { opcode, len } => format!(
+                        "record (opcode {opcode:#04x}) of {len} bytes: more than the {limit}-byte limit for a file of this size"
+                    ),
+                    McapError::ChunkTooLarge(len) => format!(
+                        "chunk of {len} bytes: more than the {limit}-byte limit for a file of this size"
+                    ),
+                    other => plain(&other),
+                });
                 break;
             }
         };
@@ -498,10 +741,26 @@ pub(crate) fn read_from(
             }
             LinearReadEvent::Record { opcode, data } => {
                 records += 1;
+                record_bytes += data.len() as u64;
+                if record_bytes > budget {
+                    damage = Some(format!(
+                        "records decompress to more than {budget} bytes (1024 times the file plus 64 MiB)"
+                    ));
+                    break;
+                }
+                // Only these records are used; the mcap crate sizes strings from their length
+                // fields before checking them, so their lengths are checked here first.
+                if ![op::SCHEMA, op::CHANNEL, op::MESSAGE, op::METADATA].contains(&opcode) {
+                    continue;
+                }
+                if let Err(why) = check_lengths(opcode, data) {
+                    damage = Some(format!("record {records} (opcode {opcode:#04x}): {why}"));
+                    break;
+                }
                 let record = match ::mcap::parse_record(opcode, data) {
                     Ok(r) => r,
                     Err(e) => {
-                        damage = Some(e);
+                        damage = Some(plain(&e));
                         break;
                     }
                 };
@@ -520,12 +779,16 @@ pub(crate) fn read_from(
                             .get(&c.schema_id)
                             .map(|(n, e, d)| (n.as_str(), e.as_str(), d.as_slice()))
                             .unwrap_or_default();
-                        let state = match decoder_for(&c.message_encoding, sname, senc, sdata) {
-                            Ok(d) => ChannelState::Markers(d),
-                            Err(Reject::Unsupported(why)) => {
-                                ChannelState::Ignored(format!("{why} is not supported"))
+                        let state = if !opts.topics.is_empty() && !opts.topics.contains(&c.topic) {
+                            ChannelState::Ignored("not chosen by --topic".into())
+                        } else {
+                            match decoder_for(&c.message_encoding, sname, senc, sdata) {
+                                Ok(d) => ChannelState::Markers(d),
+                                Err(Reject::Unsupported(why)) => {
+                                    ChannelState::Ignored(format!("{why} is not supported"))
+                                }
+                                Err(Reject::Invalid(why)) => ChannelState::Ignored(why),
                             }
-                            Err(Reject::Invalid(why)) => ChannelState::Ignored(why),
                         };
                         channels.entry(c.id).or_insert(Channel {
                             topic: c.topic,
@@ -555,14 +818,16 @@ pub(crate) fn read_from(
                                 break 'records;
                             }
                         }
-                        match decode(
-                            dec,
-                            &ch.topic,
-                            &data,
-                            header.log_time as i64,
-                            opts.plane,
-                            &mut acc,
-                        ) {
+                        let result = match i64::try_from(header.log_time) {
+                            Ok(log_time) => {
+                                decode(dec, &ch.topic, &data, log_time, opts.plane, &mut acc)
+                            }
+                            Err(_) => Err(format!(
+                                "a log_time below 2^63 ns (year 2262), found {}",
+                                header.log_time
+                            )),
+                        };
+                        match result {
                             Ok(_) => ch.decoded += 1,
                             Err(why) if ch.decoded == 0 => {
                                 ch.state = ChannelState::Ignored(format!(
@@ -608,25 +873,33 @@ pub(crate) fn read_from(
             format!("channels {}", v.join("; "))
         }
     };
+    for t in &opts.topics {
+        if !channels.values().any(|c| c.topic == *t) && damage.is_none() {
+            return Err(DataError::Options {
+                path: path.to_owned(),
+                message: format!("--topic {t}: no such channel; {}", channel_list()),
+            });
+        }
+    }
     if let Some(t) = stopped_at {
         parsed.notes.push(format!(
             "stopped reading at {t:.3} s: past the time window, the rest of the file is not decoded"
         ));
     }
+    if let Some(c) = unsupported_compression {
+        return Err(DataError::Unsupported {
+            path: path.to_owned(),
+            what: "chunk compression".into(),
+            found: c,
+            supported: "none, zstd, lz4".into(),
+        });
+    }
     if let Some(err) = damage {
-        if let McapError::UnsupportedCompression(c) = &err {
-            return Err(DataError::Unsupported {
-                path: path.to_owned(),
-                what: "chunk compression".into(),
-                found: c.clone(),
-                supported: "none, zstd, lz4".into(),
-            });
-        }
-        if acc.series.is_empty() {
+        if acc.is_empty() {
             return Err(DataError::Mcap {
                 path: path.to_owned(),
                 at: format!("after {records} record(s), {bytes} byte(s)"),
-                source: err,
+                message: err,
             });
         }
         parsed.warnings.push(format!(
@@ -635,14 +908,18 @@ pub(crate) fn read_from(
             path.display()
         ));
     }
+    let tf_notes = compose_tf(&mut acc, opts.plane)
+        .map_err(|why| DataError::parse(path, "the /tf messages", "transforms", why, "more"))?;
+    parsed.notes.extend(tf_notes);
     if acc.series.is_empty() {
+        // Channels in id order, so the same file gives the same message on every run.
         let unsupported: Vec<&Channel> = channels
             .values()
             .filter(
                 |c| matches!(&c.state, ChannelState::Ignored(w) if w.ends_with("not supported")),
             )
             .collect();
-        if !unsupported.is_empty() && unsupported.len() == channels.len() {
+        if unsupported.len() == 1 && channels.len() == 1 {
             let c = unsupported[0];
             let ChannelState::Ignored(why) = &c.state else {
                 unreachable!()
@@ -673,28 +950,44 @@ pub(crate) fn read_from(
                 .push(format!("channel {} skipped: {why}", c.topic));
         }
     }
+    // A marker on several channels (the same motion as points and as transforms): the first
+    // channel it appeared on is read, the others are named in a note.
+    let mut chosen: HashMap<String, String> = HashMap::new();
+    let mut series = Vec::new();
+    for (topic, name, s) in std::mem::take(&mut acc.series) {
+        match chosen.get(&name) {
+            Some(first) => parsed.notes.push(format!(
+                "marker {name:?} is also on channel {topic}: read from {first} (--topic to choose)"
+            )),
+            None => {
+                chosen.insert(name.clone(), topic);
+                series.push((name, s));
+            }
+        }
+    }
     // Sort, check duplicates, convert to seconds from the earliest stamp (exact integer
-    // differences first).
+    // differences first, in i128 so no pair of i64 stamps overflows).
     let mut t0 = i64::MAX;
-    for (_, s) in &mut acc.series {
+    for (_, s) in &mut series {
         if !s.is_sorted_by_key(|x| x.0) {
             s.sort_by_key(|x| x.0);
         }
         t0 = t0.min(s[0].0);
     }
-    for (name, s) in acc.series {
+    let secs = |ns: i64| (ns as i128 - t0 as i128) as f64 / 1e9;
+    for (name, s) in series {
         if let Some(w) = s.windows(2).find(|w| w[0].0 == w[1].0) {
             return Err(DataError::Time {
                 path: path.to_owned(),
                 at: format!("marker {name:?}"),
-                time: (w[1].0 - t0) as f64 * 1e-9,
-                previous: (w[0].0 - t0) as f64 * 1e-9,
+                time: secs(w[1].0),
+                previous: secs(w[0].0),
                 problem: "is repeated",
             });
         }
         parsed.series.push(Series {
             name,
-            times: s.iter().map(|x| (x.0 - t0) as f64 / 1e9).collect(),
+            times: s.iter().map(|x| secs(x.0)).collect(),
             points: s.iter().map(|x| x.1).collect(),
         });
     }

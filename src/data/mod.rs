@@ -8,9 +8,13 @@
 pub mod calibrate;
 mod csv_formats;
 mod error;
+mod kinovea_xml;
 pub mod mcap;
 mod recording;
+mod ros_cdr;
+mod sleap_h5;
 pub mod synth;
+mod tracker_project;
 
 pub use error::DataError;
 pub use recording::{
@@ -90,6 +94,8 @@ pub struct ReadOptions {
     /// Keep only frames with start <= t <= end (seconds from the first frame), re-zeroed to
     /// start at 0; MCAP files are not decoded past the window.
     pub time_window: Option<(f64, f64)>,
+    /// MCAP channels (topics) to read; empty reads every channel that carries markers.
+    pub topics: Vec<String>,
 }
 
 impl Default for ReadOptions {
@@ -107,6 +113,7 @@ impl Default for ReadOptions {
             min_likelihood: 0.6,
             drop_outliers: false,
             time_window: None,
+            topics: Vec::new(),
         }
     }
 }
@@ -145,6 +152,7 @@ pub fn read_recording(paths: &[PathBuf], opts: &ReadOptions) -> Result<Recording
         });
     };
     let mut parsed: Option<Parsed> = None;
+    let mut per_file: Vec<(PathBuf, usize)> = Vec::new();
     let mut format = opts.format;
     let detected = format.is_none();
     for path in paths {
@@ -179,18 +187,25 @@ pub fn read_recording(paths: &[PathBuf], opts: &ReadOptions) -> Result<Recording
             }
             _ => csv_formats::read(path, f, opts)?,
         };
+        per_file.push((path.clone(), p.series.len()));
         parsed = Some(match parsed {
             None => p,
             Some(mut acc) => {
-                for s in p.series {
+                for mut s in p.series {
                     if acc.series.iter().any(|a| a.name == s.name) {
-                        return Err(DataError::Options {
-                            path: path.clone(),
-                            message: format!(
-                                "marker {:?} appears in more than one input file",
-                                s.name
-                            ),
-                        });
+                        // Tracker names every track mass_A by default: keep both, told apart
+                        // by their file.
+                        let file = path.file_name().unwrap_or_default().to_string_lossy();
+                        s.name = format!("{} ({file})", s.name);
+                        if acc.series.iter().any(|a| a.name == s.name) {
+                            return Err(DataError::Options {
+                                path: path.clone(),
+                                message: format!(
+                                    "marker {:?} appears twice: the same file given twice?",
+                                    s.name
+                                ),
+                            });
+                        }
                     }
                     acc.series.push(s);
                 }
@@ -200,13 +215,45 @@ pub fn read_recording(paths: &[PathBuf], opts: &ReadOptions) -> Result<Recording
             }
         });
     }
-    let parsed = parsed.expect("at least one path");
+    let mut parsed = parsed.expect("at least one path");
+    by_file_order(&mut parsed, &per_file, opts);
     let format = format.expect("format set with the first path");
     let mut rec = assemble(paths, format, detected, parsed, opts)?;
     if let Some((start, end)) = opts.time_window {
         crop(&mut rec, start, end, &paths_label(paths))?;
     }
     Ok(rec)
+}
+
+/// Two files of one track each (Tracker's single-track exports) whose names do not say which
+/// is which: the first file is the slider, the second the bob, with a notice. Names that do say
+/// (`slider`, `bob`) or the `--slider`/`--bob` flags take precedence.
+fn by_file_order(parsed: &mut Parsed, per_file: &[(PathBuf, usize)], opts: &ReadOptions) {
+    if per_file.len() != 2 || per_file.iter().any(|f| f.1 != 1) {
+        return;
+    }
+    if opts.slider.is_some() || opts.bob.is_some() {
+        return;
+    }
+    let names: Vec<String> = parsed
+        .series
+        .iter()
+        .map(|s| s.name.to_lowercase())
+        .collect();
+    let clear = names[0].contains("slider") && names[1].contains("bob")
+        || names[0].contains("bob") && names[1].contains("slider");
+    if clear {
+        return;
+    }
+    parsed.notes.push(format!(
+        "the tracks {:?} ({}) and {:?} ({}) do not say which marker they are: read in file order, the first as the slider, the second as the bob (--slider/--bob NAME to choose)",
+        parsed.series[0].name,
+        per_file[0].0.display(),
+        parsed.series[1].name,
+        per_file[1].0.display()
+    ));
+    parsed.series[0].name = "slider".into();
+    parsed.series[1].name = "bob".into();
 }
 
 /// Keep the frames inside [start, end] (seconds from the first frame) and re-zero the times.
@@ -243,6 +290,14 @@ fn assemble(
     opts: &ReadOptions,
 ) -> Result<Recording, DataError> {
     let label = paths_label(paths);
+    if parsed.series.len() == 1 {
+        return Err(DataError::MissingMarker {
+            path: label,
+            role: "bob",
+            wanted: "(a second marker: a recording needs the slider and the bob, and this input holds one track; give the other marker's file too)".into(),
+            available: format!("{:?}", parsed.series[0].name),
+        });
+    }
     let si = select(&label, &parsed.series, "slider", opts.slider.as_deref())?;
     let bi = select(&label, &parsed.series, "bob", opts.bob.as_deref())?;
     if si == bi {
@@ -409,9 +464,27 @@ fn align(a: Series, b: Series) -> (Vec<f64>, Track, Track) {
 /// Read one recording from any reader (a file or bytes in memory); `label` names it in
 /// errors and provenance. The format is detected from the first bytes unless given.
 pub fn read_recording_from(
+    input: impl Read,
+    label: &Path,
+    opts: &ReadOptions,
+) -> Result<Recording, DataError> {
+    read_sized(input, label, opts, None)
+}
+
+/// Read one recording held in memory; its length bounds every length the input declares.
+pub fn read_recording_bytes(
+    bytes: &[u8],
+    label: &Path,
+    opts: &ReadOptions,
+) -> Result<Recording, DataError> {
+    read_sized(bytes, label, opts, Some(bytes.len() as u64))
+}
+
+fn read_sized(
     mut input: impl Read,
     label: &Path,
     opts: &ReadOptions,
+    size: Option<u64>,
 ) -> Result<Recording, DataError> {
     let mut head = Vec::with_capacity(4096);
     input
@@ -429,7 +502,7 @@ pub fn read_recording_from(
     };
     let chained = head.as_slice().chain(input);
     let parsed = match format {
-        Format::Mcap => mcap::read_from(chained, label, opts)?,
+        Format::Mcap => mcap::read_from(chained, label, opts, size)?,
         f => csv_formats::read_from(chained, label, f, opts)?,
     };
     assemble(&[label.to_owned()], format, detected, parsed, opts)
@@ -452,6 +525,9 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     if head.starts_with(::mcap::MAGIC) {
         return Ok(Format::Mcap);
     }
+    if head.starts_with(sleap_h5::MAGIC) {
+        return Ok(Format::Sleap);
+    }
     if head.is_empty() {
         return Err(DataError::Empty {
             path: path.to_owned(),
@@ -460,6 +536,14 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     }
     let text = String::from_utf8_lossy(head);
     let text = text.trim_start_matches('\u{feff}');
+    if text.trim_start().starts_with("<?xml") && text.contains("Excel.Sheet") {
+        return Ok(Format::Kinovea);
+    }
+    if text.trim_start().starts_with("<?xml")
+        && text.contains("org.opensourcephysics.cabrillo.tracker")
+    {
+        return Ok(Format::Tracker);
+    }
     let lines: Vec<&str> = text.lines().take(8).collect();
     let first = lines.first().copied().unwrap_or("").trim();
     let unknown = || DataError::UnknownFormat {
@@ -486,6 +570,27 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     if key == "format version" {
         return Ok(Format::Motive);
     }
+    if key.starts_with("#kinovea") {
+        return Ok(Format::Kinovea);
+    }
+    if [
+        "no_of_frames",
+        "no_of_cameras",
+        "no_of_markers",
+        "frequency",
+    ]
+    .contains(&key.as_str())
+    {
+        return Ok(Format::Qualisys);
+    }
+    if c0.contains(&"frame_idx".to_string()) && c0.iter().any(|c| c.ends_with(".x")) {
+        return Ok(Format::Sleap);
+    }
+    if c0.iter().any(|c| c == "x (cm)" || c == "x#wcentroid (cm)")
+        || (c0.contains(&"midline_x".to_string()) && c0.contains(&"timestamp".to_string()))
+    {
+        return Ok(Format::Trex);
+    }
     if [
         "trajectories",
         "devices",
@@ -497,20 +602,20 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     {
         return Ok(Format::Vicon);
     }
-    // Tracker: a lone track name, then a header starting with t.
-    if lines.len() >= 2 && c0.len() == 1 && !first.contains(' ') {
-        let c1: Vec<String> = lines[1]
-            .split(['\t', ',', ';', ' '])
-            .map(|c| c.trim().to_lowercase())
-            .collect();
-        if c1.first().is_some_and(|c| c == "t") && c1.contains(&"x".to_string()) {
-            return Ok(Format::Tracker);
-        }
-    }
     if csv_formats::long_columns(&c0).is_some() {
         return Ok(Format::Long);
     }
-    if csv_formats::time_column(&c0).is_some() && c0.iter().any(|c| c.ends_with("_x")) {
+    // Tracker: `#multi:`, or a lone track name then `t x y`, or `t x y` itself.
+    if first.eq_ignore_ascii_case("#multi:")
+        || csv_formats::tracker_header_delimiter(first).is_some()
+        || (lines.len() >= 2
+            && c0.len() == 1
+            && !first.contains(' ')
+            && csv_formats::tracker_header_delimiter(lines[1]).is_some())
+    {
+        return Ok(Format::Tracker);
+    }
+    if !csv_formats::wide_markers(&c0).is_empty() {
         return Ok(Format::Wide);
     }
     Err(unknown())

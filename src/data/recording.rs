@@ -24,19 +24,31 @@ pub enum Format {
     Motive,
     /// Vicon Nexus CSV (Trajectories section).
     Vicon,
+    /// SLEAP analysis CSV or HDF5 (`track,frame_idx,...,NODE.x,NODE.y`).
+    Sleap,
+    /// Qualisys QTM TSV export (`NAME X`, `NAME Y`, `NAME Z` columns, millimetres).
+    Qualisys,
+    /// Kinovea trajectory text export (`#Kinovea Trajectory data export`).
+    Kinovea,
+    /// TRex per-individual CSV (`X (cm)`, `Y (cm)`, `timestamp`).
+    Trex,
     /// MCAP (JSON, ROS 2 CDR messages).
     Mcap,
 }
 
 impl Format {
     /// Every format, in the order detection tries them.
-    pub const ALL: [Format; 7] = [
+    pub const ALL: [Format; 11] = [
         Format::Wide,
         Format::Long,
         Format::Tracker,
         Format::DeepLabCut,
         Format::Motive,
         Format::Vicon,
+        Format::Sleap,
+        Format::Qualisys,
+        Format::Kinovea,
+        Format::Trex,
         Format::Mcap,
     ];
 
@@ -49,6 +61,10 @@ impl Format {
             Format::DeepLabCut => "dlc",
             Format::Motive => "motive",
             Format::Vicon => "vicon",
+            Format::Sleap => "sleap",
+            Format::Qualisys => "qualisys",
+            Format::Kinovea => "kinovea",
+            Format::Trex => "trex",
             Format::Mcap => "mcap",
         }
     }

@@ -123,6 +123,10 @@ fn default_min_slide_px() -> f64 {
 fn default_min_frames() -> f64 {
     10.0
 }
+/// The most simulations a plan's search may ask for (grid releases x (1 + draws) + top x
+/// verify_draws): about a minute of work on one core.
+pub const MAX_PLAN_RUNS: f64 = 1e6;
+
 fn default_edge_frames() -> f64 {
     10.0
 }
@@ -491,6 +495,17 @@ impl PlanFile {
             duration: positive(path, "camera.duration", c.duration)?,
             field_of_view: range(path, "camera.field_of_view", c.field_of_view)?,
         };
+        if camera.duration * camera.frame_rate < 2.0 {
+            return Err(invalid(
+                path,
+                "camera.duration",
+                &format!(
+                    "at least 2 frames long (2 / camera.frame_rate = {} s)",
+                    2.0 / camera.frame_rate
+                ),
+                c.duration,
+            ));
+        }
         if camera.duration * camera.frame_rate > 1e6 {
             return Err(invalid(
                 path,
@@ -576,6 +591,26 @@ impl PlanFile {
             if v < lo || v > 100_000 {
                 return Err(invalid(path, key, &format!("in {lo}..=100000"), v));
             }
+        }
+        // The work the search will do, bounded before it starts: grid releases times their
+        // draws, plus the fresh checks of the proposals.
+        let axis = |r: [f64; 2], n: usize| if r[1] <= r[0] { 1 } else { n.max(2) };
+        let n = s.grid_points;
+        let grid = axis([release.theta[0], release.theta[1]], n)
+            * axis(release.theta_dot, n.div_ceil(3) * 2 - 1)
+            * axis(release.x_dot, n.div_ceil(2));
+        let runs =
+            (grid as f64) * (1.0 + s.draws as f64) + (s.top as f64) * (s.verify_draws as f64);
+        if runs > MAX_PLAN_RUNS {
+            return Err(invalid(
+                path,
+                "search",
+                &format!(
+                    "at most {MAX_PLAN_RUNS:e} simulations (grid releases x (1 + draws) + top x verify_draws; here {grid} x (1 + {}) + {} x {})",
+                    s.draws, s.top, s.verify_draws
+                ),
+                runs,
+            ));
         }
         Ok(PlanSpec {
             rig,

@@ -151,15 +151,18 @@ fn sweep(seeds: u64, rate: f64) -> Vec<(&'static str, usize, usize, f64, f64)> {
                 if !ok {
                     eprintln!(
                         "{} seed {seed}: {:?} nuisances {:?} limited {:?}",
-                        c.name,
-                        rep.mu_kinetic,
-                        rep.nuisances,
-                        rep.adequacy.limited_by_model
+                        c.name, rep.mu_kinetic, rep.nuisances, rep.adequacy.limited_by_model
                     );
                 }
             }
             halves.sort_by(f64::total_cmp);
-            let line = (c.name, hits, seeds as usize, halves[halves.len() / 2], worst);
+            let line = (
+                c.name,
+                hits,
+                seeds as usize,
+                halves[halves.len() / 2],
+                worst,
+            );
             eprintln!("{line:?}");
             line
         })
@@ -182,7 +185,9 @@ fn every_misspecification_is_covered_on_one_seed() {
 #[ignore]
 fn misspecification_sweep_ten_seeds() {
     for (name, hits, n, half, worst) in sweep(10, 1000.0) {
-        eprintln!("SWEEP {name}: {hits}/{n} covered, median half-width {half:.4}, worst |z| {worst:.1}");
+        eprintln!(
+            "SWEEP {name}: {hits}/{n} covered, median half-width {half:.4}, worst |z| {worst:.1}"
+        );
     }
 }
 
@@ -269,9 +274,7 @@ fn chi_square_against_measured_noise_reveals_a_misfit() {
     // With the nuisance search on, tilt is chosen and the chi-square passes.
     let rep = fit(obs, &example_rig(0.3), &FitSettings::default()).unwrap();
     assert!(
-        rep.nuisances
-            .iter()
-            .any(|n| *n == appell::fit::Nuisance::RailTilt),
+        rep.nuisances.contains(&appell::fit::Nuisance::RailTilt),
         "{:?}",
         rep.nuisances
     );

@@ -364,7 +364,8 @@ Frame,Time (Seconds),X,Y,Z,X,Y,Z\n\
     let rec = read1(&motive).unwrap();
     assert_eq!(rec.provenance.format, Some(Format::Motive));
     assert_eq!(rec.provenance.slider_name, "Rig:slider");
-    assert_eq!(rec.times, vec![0.0, 0.008333]);
+    // Frame / Export Frame Rate, not the rounded Time column.
+    assert_eq!(rec.times, vec![0.0, 1.0 / 120.0]);
     assert_eq!(rec.slider[0], Some([0.1, 0.2]));
     assert_eq!(rec.bob, vec![None, Some([0.4, -0.1])]);
 
