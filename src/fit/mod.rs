@@ -388,6 +388,8 @@ struct Base {
     mu_s_data: Option<f64>,
     /// Whether the onset estimate says mu_static exceeds mu_kinetic (`None`: no onset seen).
     static_evidence: Option<bool>,
+    /// The initial state guessed from the first frames (the start of every fit).
+    y0_guess: State<f64>,
 }
 
 /// Step 3: the base model (mu_kinetic and the initial state; released from rest or moving;
@@ -574,6 +576,7 @@ fn base_fit(
         iterations,
         mu_s_data,
         static_evidence,
+        y0_guess: y0,
     })
 }
 
@@ -978,33 +981,20 @@ pub fn fit(
             speeds.iter().cloned().fold(0.0, f64::max),
         ]
     });
-    let all_params = [
-        Param::MuKinetic,
-        Param::MuStatic,
-        Param::X,
-        Param::Theta,
-        Param::XDot,
-        Param::ThetaDot,
-        Param::RodLength,
-        Param::RailTilt,
-        Param::PivotDamping,
-        Param::ViscousFriction,
-        Param::ScaleError,
-        Param::BobAlong,
-        Param::BobAcross,
-        Param::SliderDx,
-        Param::SliderDy,
-        Param::Lag,
-    ];
-    let fixed = all_params
+    let fixed = Param::ALL
         .into_iter()
+        // The Stribeck speed means nothing under Coulomb's law.
+        .filter(|q| {
+            *q != Param::StribeckVelocity
+                || problem.rig.friction_law == crate::model::FrictionLaw::Stribeck
+        })
         .filter(|q| !problem.free.contains(q))
         .map(|q| (q, problem.get(q)))
         .collect();
     let start_problem = TrajectoryProblem::new(
         obs.clone(),
         *rig_guess,
-        problem.initial,
+        base.y0_guess,
         problem.free.clone(),
         settings.options,
     );

@@ -63,6 +63,27 @@ pub enum Param {
 }
 
 impl Param {
+    /// Every parameter, in report order.
+    pub const ALL: [Param; 17] = [
+        Param::MuKinetic,
+        Param::MuStatic,
+        Param::X,
+        Param::Theta,
+        Param::XDot,
+        Param::ThetaDot,
+        Param::RodLength,
+        Param::RailTilt,
+        Param::PivotDamping,
+        Param::ViscousFriction,
+        Param::StribeckVelocity,
+        Param::ScaleError,
+        Param::BobAlong,
+        Param::BobAcross,
+        Param::SliderDx,
+        Param::SliderDy,
+        Param::Lag,
+    ];
+
     /// Name in reports and JSON.
     pub fn name(self) -> &'static str {
         match self {

@@ -56,10 +56,10 @@ impl<T: Scalar> Shorthands<T> {
         let (gx, gy) = rig.gravity_components();
         // The ideal rig's forms, which keep full precision for a light slider (b never
         // subtracts (m1 + m2) g from m2 g cos^2), plus the drive of tilt and damping.
-        let e = rig.extra_drive(sin, w).unwrap_or_else(T::zero);
+        let e = rig.extra_drive(sin, w, gx).unwrap_or_else(T::zero);
         let b = -(m1 * gy + m2 * sin * (gy * sin + lw2)) + m2 * cos * e;
         let c = m2 * cos * (gy * sin + lw2) + m2 * sin * e + (m1 + m2) * gx;
-        let q = rig.normal_numerator_sc(sin, cos, w);
+        let q = rig.normal_numerator_sc(sin, cos, w, gy);
         Shorthands {
             d,
             a,
@@ -132,12 +132,13 @@ impl<T: Scalar> Rig<T> {
     #[inline]
     pub fn normal_numerator(&self, y: &[T]) -> T {
         let (theta, w) = (y[THETA], y[THETA_DOT]);
+        let gy = self.gravity_components().1;
         if self.pivot_damping.is_zero() && self.viscous_friction.is_zero() {
             // Only sin(theta) is needed: half the trigonometry.
-            return self.normal_numerator_sc(theta.sin(), T::zero(), w);
+            return self.normal_numerator_sc(theta.sin(), T::zero(), w, gy);
         }
         let (sin, cos) = theta.sin_cos();
-        let q = self.normal_numerator_sc(sin, cos, w);
+        let q = self.normal_numerator_sc(sin, cos, w, gy);
         if self.viscous_friction.is_zero() {
             q
         } else {
@@ -147,9 +148,8 @@ impl<T: Scalar> Rig<T> {
 
     /// Q from sin and cos of theta (cos is unused on a rig without pivot damping).
     #[inline(always)]
-    fn normal_numerator_sc(&self, sin: T, cos: T, w: T) -> T {
+    fn normal_numerator_sc(&self, sin: T, cos: T, w: T, gy: T) -> T {
         let (m1, m2) = (self.slider_mass, self.bob_mass);
-        let (_, gy) = self.gravity_components();
         let q = -m1 * ((m1 + m2) * gy + m2 * self.rod_length * w * w * sin);
         if self.pivot_damping.is_zero() {
             q
@@ -161,7 +161,7 @@ impl<T: Scalar> Rig<T> {
     /// The part of A = g_y cos(theta) - g_x sin(theta) - c_p w / (m2 l) that a level, undamped
     /// rail lacks: -g_x sin(theta) - c_p w / (m2 l); `None` on such a rail.
     #[inline(always)]
-    fn extra_drive(&self, sin: T, w: T) -> Option<T> {
+    fn extra_drive(&self, sin: T, w: T, gx: T) -> Option<T> {
         let tilt = !self.rail_tilt.is_zero();
         let damped = !self.pivot_damping.is_zero();
         if !(tilt || damped) {
@@ -169,7 +169,7 @@ impl<T: Scalar> Rig<T> {
         }
         let mut e = T::zero();
         if tilt {
-            e -= self.gravity_components().0 * sin;
+            e -= gx * sin;
         }
         if damped {
             e -= self.pivot_damping * w / (self.bob_mass * self.rod_length);
@@ -185,8 +185,8 @@ impl<T: Scalar> Rig<T> {
             return self.gravity * theta.cos() / self.rod_length;
         }
         let (sin, cos) = theta.sin_cos();
-        let (_, gy) = self.gravity_components();
-        let extra = self.extra_drive(sin, w).unwrap_or_else(T::zero);
+        let (gx, gy) = self.gravity_components();
+        let extra = self.extra_drive(sin, w, gx).unwrap_or_else(T::zero);
         (gy * cos + extra) / self.rod_length
     }
 

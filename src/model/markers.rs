@@ -80,7 +80,8 @@ pub fn observed_markers<T: Scalar>(
     let across = lb * sin + e * cos; // by (y down); d(by)/d(theta) = along
     let mut bx = y[X] + along;
     let mut by = across;
-    if camera.lag.re() != 0.0 || camera.lag.eps_is_nonzero() {
+    // A lag that is zero but being differentiated must still take the Taylor path.
+    if !camera.lag.is_zero() {
         let (x_dd, th_dd) = rig.accelerations(mode, y);
         let w = y[THETA_DOT];
         let vx = y[X_DOT] - across * w;
@@ -98,16 +99,4 @@ pub fn observed_markers<T: Scalar>(
         k * bx,
         -(k * by),
     ]
-}
-
-/// Whether a scalar carries a nonzero derivative part (a lag that is zero but being
-/// differentiated must still take the Taylor path).
-trait EpsNonzero {
-    fn eps_is_nonzero(&self) -> bool;
-}
-
-impl<T: Scalar> EpsNonzero for T {
-    fn eps_is_nonzero(&self) -> bool {
-        !(*self - T::from(self.re())).is_zero()
-    }
 }
