@@ -390,6 +390,8 @@ struct Base {
     static_evidence: Option<bool>,
     /// The initial state guessed from the first frames (the start of every fit).
     y0_guess: State<f64>,
+    /// mu_kinetic from the data (the main start).
+    mu0: f64,
 }
 
 /// Step 3: the base model (mu_kinetic and the initial state; released from rest or moving;
@@ -577,6 +579,7 @@ fn base_fit(
         mu_s_data,
         static_evidence,
         y0_guess: y0,
+        mu0,
     })
 }
 
@@ -1002,10 +1005,11 @@ pub fn fit(
         .free
         .iter()
         .map(|&q| {
-            let v = starts
-                .first()
-                .filter(|_| q == Param::MuKinetic)
-                .map_or_else(|| start_problem.get(q), |s| s.mu_start);
+            let v = if q == Param::MuKinetic {
+                base.mu0
+            } else {
+                start_problem.get(q)
+            };
             (q, v)
         })
         .collect();
