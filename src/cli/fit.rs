@@ -5,7 +5,7 @@ use super::recording_args::RecordingArgs;
 use super::Failure;
 use anyhow::anyhow;
 use appell::data::{read_recording, ReadOptions};
-use appell::fit::{fit, FitReport, FitSettings, Loss, Observations, StaticMode};
+use appell::fit::{fit, FitReport, FitSettings, Loss, Nuisance, Observations, StaticMode};
 use appell::report::fit::{fit_json, fit_text, FitFigure};
 use appell::report::plot::render;
 use appell::scene::RigFile;
@@ -53,8 +53,24 @@ pub struct Args {
     /// (faster; the chi-square against the measured noise still shows a misfit).
     #[arg(long)]
     plain: bool,
+    /// Put these nuisances in the model whatever the data say (e.g. a rail known to be
+    /// tilted): mu_static, stribeck, rail_tilt, pivot_damping, viscous_friction, camera_scale,
+    /// bob_marker_offset, slider_marker_offset, marker_lag. With --plain, only these.
+    #[arg(long, value_delimiter = ',', value_name = "NUISANCE,...", value_parser = nuisance)]
+    with: Vec<Nuisance>,
     #[command(flatten)]
     recording: RecordingArgs,
+}
+
+/// Parse one `--with` name.
+fn nuisance(name: &str) -> Result<Nuisance, String> {
+    Nuisance::ALL
+        .into_iter()
+        .find(|n| n.name() == name)
+        .ok_or_else(|| {
+            let names: Vec<&str> = Nuisance::ALL.iter().map(|n| n.name()).collect();
+            format!("expected one of {}", names.join(", "))
+        })
 }
 
 /// Parse `--noise`: metres, or pixels (`px` suffix) times the recording's --scale.
@@ -118,6 +134,7 @@ fn settings(args: &Args) -> Result<FitSettings, String> {
         noise: noise(args)?,
         nuisances: !args.plain,
         windows: !args.plain,
+        with: args.with.clone(),
         ..FitSettings::default()
     })
 }

@@ -78,6 +78,9 @@ pub struct FitSettings {
     pub nuisances: bool,
     /// Fit the recording's thirds and widen the interval when they disagree.
     pub windows: bool,
+    /// Nuisances put in the model whatever the data say (a rail known to be tilted); the
+    /// selection adds others on top.
+    pub with: Vec<Nuisance>,
 }
 
 impl Default for FitSettings {
@@ -97,6 +100,7 @@ impl Default for FitSettings {
             noise: None,
             nuisances: true,
             windows: true,
+            with: Vec::new(),
         }
     }
 }
@@ -720,24 +724,24 @@ pub fn fit(
     // Step 5: the nuisances the data ask for.
     let mut models = Vec::new();
     let mut nuisances = Vec::new();
-    if slides && settings.nuisances {
+    if slides && (settings.nuisances || !settings.with.is_empty()) {
         let chi2 = problem
             .residuals(&p)
             .map(|r| r.norm_squared())
             .unwrap_or(f64::INFINITY);
         let mu_k = p[0];
         let opts = select::SelectOptions {
-            friction_candidates: settings.mu_static == StaticMode::Auto
-                && onset
-                && !problem.free.contains(&Param::MuStatic),
+            friction_candidates: settings.mu_static == StaticMode::Auto && onset,
             mu_static_start: base.mu_s_data.unwrap_or(1.15 * mu_k).max(1.05 * mu_k),
-            max_added: 3,
+            max_added: if settings.nuisances { 3 } else { 0 },
             max_iters: settings.max_iters,
             already: if problem.free.contains(&Param::MuStatic) {
                 vec![Nuisance::StaticFriction]
             } else {
                 Vec::new()
             },
+            fresh_start: Some((base.y0_guess, base.mu0)),
+            forced: settings.with.clone(),
         };
         let sel = select::forward(problem, p, chi2, &opts);
         iterations += sel.iterations;

@@ -389,7 +389,9 @@ impl TrajectoryProblem {
         &self,
         p: &DVector<f64>,
     ) -> Result<(DVector<f64>, DMatrix<f64>), SimError> {
-        let seeded: Vec<DualSVec64<N>> = (0..N)
+        // Width N >= k = p.len(): slots k.. carry no seed and are not read back.
+        let k = p.len();
+        let seeded: Vec<DualSVec64<N>> = (0..k)
             .map(|i| {
                 DualSVec64::<N>::new(
                     p[i],
@@ -398,14 +400,14 @@ impl TrajectoryProblem {
             })
             .collect();
         let n = self.rows.len();
-        let mut jac = DMatrix::zeros(n, N);
+        let mut jac = DMatrix::zeros(n, k);
         let mut res = DVector::zeros(n);
         self.for_each_residual(&seeded, |row, r, d| {
             let v = d * (self.row_weights[row] / self.sigma[r.marker]);
             res[row] = v.re;
             let e = v.eps.unwrap_generic(nalgebra::Const::<N>, U1);
-            for k in 0..N {
-                jac[(row, k)] = e[k];
+            for c in 0..k {
+                jac[(row, c)] = e[c];
             }
         })?;
         Ok((res, jac))
@@ -427,17 +429,16 @@ impl LeastSquares for TrajectoryProblem {
     /// differentiated implicitly at every mode switch.
     fn residuals_jacobian(&self, p: &DVector<f64>) -> Result<(DVector<f64>, DMatrix<f64>), Error> {
         self.counters.jacobians.fetch_add(1, Ordering::Relaxed);
+        // Each dual width is a full copy of the simulator in the binary: widths 3, 4, 5, 6,
+        // 8 and 10 serve every size (a few derivative slots stay unused) and keep the build
+        // time down.
         match p.len() {
-            1 => self.jacobian_n::<1>(p),
-            2 => self.jacobian_n::<2>(p),
-            3 => self.jacobian_n::<3>(p),
+            0..=3 => self.jacobian_n::<3>(p),
             4 => self.jacobian_n::<4>(p),
             5 => self.jacobian_n::<5>(p),
             6 => self.jacobian_n::<6>(p),
-            7 => self.jacobian_n::<7>(p),
-            8 => self.jacobian_n::<8>(p),
-            9 => self.jacobian_n::<9>(p),
-            10 => self.jacobian_n::<10>(p),
+            7 | 8 => self.jacobian_n::<8>(p),
+            9 | 10 => self.jacobian_n::<10>(p),
             n => {
                 return Err(Error::msg(format!(
                     "at most {MAX_FREE} free parameters, got {n}"

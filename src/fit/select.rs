@@ -6,7 +6,7 @@
 use super::lm::LeastSquares;
 use super::problem::{Param, TrajectoryProblem, MAX_FREE};
 use super::{solve, Solved};
-use crate::model::FrictionLaw;
+use crate::model::{FrictionLaw, State};
 use nalgebra::DVector;
 use rayon::prelude::*;
 
@@ -85,17 +85,40 @@ impl Nuisance {
         !matches!(self, Nuisance::StaticFriction | Nuisance::Stribeck)
     }
 
-    /// Candidates it cannot join: camera scale and the bob marker's distance along the rod
-    /// act through their product; Stribeck contains mu_static.
+    /// Whether a model holding `self` cannot take `other`: camera scale and the bob marker's
+    /// distance along the rod act through their product; Stribeck contains mu_static, so
+    /// mu_static is not offered on top of it (Stribeck on top of mu_static replaces it:
+    /// [`Nuisance::supersedes`]).
     fn conflicts(self, other: Nuisance) -> bool {
         use Nuisance::*;
         matches!(
             (self, other),
-            (CameraScale, BobOffset)
-                | (BobOffset, CameraScale)
-                | (Stribeck, StaticFriction)
-                | (StaticFriction, Stribeck)
+            (CameraScale, BobOffset) | (BobOffset, CameraScale) | (Stribeck, StaticFriction)
         )
+    }
+
+    /// The nuisance this one replaces when added: Stribeck friction generalises mu_static.
+    fn supersedes(self) -> Option<Nuisance> {
+        (self == Nuisance::Stribeck).then_some(Nuisance::StaticFriction)
+    }
+
+    /// Parameters it adds to `problem` (those not free already).
+    fn new_params(self, problem: &TrajectoryProblem) -> usize {
+        self.params()
+            .iter()
+            .filter(|q| !problem.free.contains(q))
+            .count()
+    }
+
+    /// `chosen` with this nuisance added (and what it supersedes removed).
+    fn join(self, chosen: &[Nuisance]) -> Vec<Nuisance> {
+        let mut out: Vec<Nuisance> = chosen
+            .iter()
+            .copied()
+            .filter(|&c| Some(c) != self.supersedes())
+            .collect();
+        out.push(self);
+        out
     }
 
     /// `problem` with this nuisance added at its neutral value (mu_static from `mu_static`).
@@ -110,7 +133,7 @@ impl Nuisance {
                 m.free.push(q);
             }
         }
-        if self.params().contains(&Param::MuStatic) {
+        if self.params().contains(&Param::MuStatic) && !problem.free.contains(&Param::MuStatic) {
             m.tie_static = false;
             m.rig.mu_static = mu_static.max(m.rig.mu_kinetic * 1.02);
         }
@@ -225,6 +248,60 @@ pub struct SelectOptions {
     pub max_iters: u64,
     /// Nuisances the model holds already (not offered again).
     pub already: Vec<Nuisance>,
+    /// A second start for each candidate, used while the current model misfits: the data's
+    /// initial state and mu_kinetic. A misfitting model's optimum is often a compromise far
+    /// from the truth (a drift fitted by a push), from which the right nuisance alone does
+    /// not lead back.
+    pub fresh_start: Option<(State<f64>, f64)>,
+    /// Nuisances the user put in the model (`--with`): added first, whatever they cost.
+    pub forced: Vec<Nuisance>,
+}
+
+/// Whether chi-square is far beyond its degrees of freedom (5 standard deviations): the
+/// model misfits, so the linear screening and the current optimum are not to be trusted.
+pub fn misfits(chi2: f64, dof: f64) -> bool {
+    let dof = dof.max(1.0);
+    chi2 > dof + 5.0 * (2.0 * dof).sqrt()
+}
+
+/// `m` restarted from the data's initial state and mu_kinetic (parameters the start does
+/// not name keep their values).
+fn restarted(m: &TrajectoryProblem, (y0, mu0): (State<f64>, f64)) -> TrajectoryProblem {
+    let mut f = m.clone();
+    let keep_x_dot = !f.free.contains(&Param::XDot);
+    for (i, (v, &guess)) in f.initial.iter_mut().zip(&y0).enumerate() {
+        // A release from rest keeps x'(0) = 0.
+        if !(i == 2 && keep_x_dot) {
+            *v = guess;
+        }
+    }
+    f.rig.mu_kinetic = mu0;
+    if f.free.contains(&Param::MuStatic) {
+        f.rig.mu_static = f.rig.mu_static.max(mu0 * 1.02);
+    } else if f.tie_static {
+        f.rig.mu_static = mu0;
+    }
+    f
+}
+
+/// Solve `m` from its values and, when `fresh` is given, also from a restart; the lower
+/// cost wins. Iterations of both count.
+fn solve_starts(m: &TrajectoryProblem, fresh: Option<(State<f64>, f64)>, max_iters: u64) -> Solved {
+    let a = solve(m, m.values(), max_iters);
+    let Some(start) = fresh else {
+        return a;
+    };
+    let f = restarted(m, start);
+    let b = solve(&f, f.values(), max_iters);
+    match (a, b) {
+        (Ok(x), Ok(y)) => {
+            let iters = x.2 + y.2;
+            let (p, c) = if y.1 < x.1 { (y.0, y.1) } else { (x.0, x.1) };
+            Ok((p, c, iters))
+        }
+        (Ok(x), Err(_)) => Ok(x),
+        (Err(_), b) => b,
+    }
 }
 
 /// Forward selection from the base model `problem` at its optimum `p` (chi-square `chi2`).
@@ -255,12 +332,26 @@ pub fn forward(
     let mut current = (problem, p, chi2);
     let mut rows = vec![row(&chosen, &current.0, chi2)];
     let mut iterations = 0;
+    for &nu in &opts.forced {
+        if chosen.contains(&nu) || chosen.iter().any(|c| c.conflicts(nu)) {
+            continue;
+        }
+        let m = nu.add_to(&current.0, opts.mu_static_start);
+        if let Ok((q, cost, iters)) = solve_starts(&m, opts.fresh_start, opts.max_iters) {
+            iterations += iters;
+            let mut m = m;
+            m.set_values(&q);
+            chosen = nu.join(&chosen);
+            rows.push(row(&chosen, &m, chi2_of(cost)));
+            current = (m, q, chi2_of(cost));
+        }
+    }
     for _ in 0..opts.max_added {
         let (cur_problem, cur_p, cur_chi2) = &current;
         let open: Vec<Nuisance> = Nuisance::ALL
             .into_iter()
             .filter(|n| !chosen.contains(n) && !chosen.iter().any(|c| c.conflicts(*n)))
-            .filter(|n| cur_problem.free.len() + n.params().len() <= MAX_FREE)
+            .filter(|n| cur_problem.free.len() + n.new_params(cur_problem) <= MAX_FREE)
             .filter(|n| n.screened() || opts.friction_candidates)
             .collect();
         if open.is_empty() {
@@ -270,11 +361,14 @@ pub fn forward(
         let mut drops = score_drops(cur_problem, cur_p, &screened);
         drops.sort_by(|a, b| b.1.total_cmp(&a.1));
         // Fit the two most promising screened candidates whose predicted drop pays their BIC
-        // penalty, and the friction candidates outright.
+        // penalty, and the friction candidates outright. A misfitting model's linearisation
+        // ranks poorly: then every screened candidate is fitted, from two starts.
+        let misfit = misfits(*cur_chi2, n - cur_problem.free.len() as f64);
+        let fresh = opts.fresh_start.filter(|_| misfit);
         let mut to_fit: Vec<Nuisance> = drops
             .iter()
-            .filter(|(nu, d)| *d > nu.params().len() as f64 * n.ln())
-            .take(2)
+            .filter(|(nu, d)| misfit || *d > nu.params().len() as f64 * n.ln())
+            .take(if misfit { usize::MAX } else { 2 })
             .map(|(n, _)| *n)
             .collect();
         to_fit.extend(open.iter().copied().filter(|n| !n.screened()));
@@ -286,8 +380,7 @@ pub fn forward(
             .with_max_len(1)
             .map(|&nu| {
                 let m = nu.add_to(cur_problem, opts.mu_static_start);
-                let p0 = m.values();
-                let solved = solve(&m, p0, opts.max_iters);
+                let solved = solve_starts(&m, fresh, opts.max_iters);
                 (nu, m, solved)
             })
             .collect();
@@ -298,9 +391,7 @@ pub fn forward(
             };
             iterations += iters;
             let c2 = chi2_of(cost);
-            let mut with = chosen.clone();
-            with.push(nu);
-            rows.push(row(&with, &m, c2));
+            rows.push(row(&nu.join(&chosen), &m, c2));
             if best
                 .as_ref()
                 .is_none_or(|b| bic(m.free.len(), c2) < bic(b.1.free.len(), b.3))
@@ -314,7 +405,7 @@ pub fn forward(
         // Positive evidence (Kass and Raftery): a BIC lower by more than 2.
         if bic(m.free.len(), c2) < bic(cur_problem.free.len(), *cur_chi2) - 2.0 {
             m.set_values(&q);
-            chosen.push(nu);
+            chosen = nu.join(&chosen);
             current = (m, q, c2);
         } else {
             break;

@@ -34,12 +34,20 @@ impl<T: Scalar> Shorthands<T> {
     /// Evaluate the shorthands at angle `theta` and angular velocity `w`.
     #[inline(always)]
     pub fn new(rig: &Rig<T>, theta: T, w: T) -> Self {
+        Self::new_on(rig, theta, w, false)
+    }
+
+    /// [`Shorthands::new`] for a caller that already knows whether the rig is plain
+    /// ([`Rig::is_plain`]): `plain = true` skips the per-call tests of tilt and damping, which
+    /// the simulator's inner loop would otherwise repeat on every right-hand side.
+    #[inline(always)]
+    pub fn new_on(rig: &Rig<T>, theta: T, w: T, plain: bool) -> Self {
         let (sin, cos) = theta.sin_cos();
         let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);
         let lw2 = l * w * w;
         let d = m1 + m2 * cos * cos;
         let a = m2 * sin * cos;
-        if rig.rail_tilt.is_zero() && rig.pivot_damping.is_zero() {
+        if plain || (rig.rail_tilt.is_exact_zero() && rig.pivot_damping.is_exact_zero()) {
             // The ideal rig: the paper's forms, one test for the whole evaluation.
             let g = rig.gravity;
             return Shorthands {
@@ -131,15 +139,25 @@ impl<T: Scalar> Rig<T> {
     /// N's sign evaluates it every step).
     #[inline]
     pub fn normal_numerator(&self, y: &[T]) -> T {
+        self.normal_numerator_on(y, false)
+    }
+
+    /// [`Rig::normal_numerator`] with the plain-rig tests hoisted out (`plain = true` only on
+    /// a [`Rig::is_plain`] rig).
+    #[inline(always)]
+    pub fn normal_numerator_on(&self, y: &[T], plain: bool) -> T {
         let (theta, w) = (y[THETA], y[THETA_DOT]);
+        if plain {
+            return self.normal_numerator_sc(theta.sin(), T::zero(), w, self.gravity);
+        }
         let gy = self.gravity_components().1;
-        if self.pivot_damping.is_zero() && self.viscous_friction.is_zero() {
+        if self.pivot_damping.is_exact_zero() && self.viscous_friction.is_exact_zero() {
             // Only sin(theta) is needed: half the trigonometry.
             return self.normal_numerator_sc(theta.sin(), T::zero(), w, gy);
         }
         let (sin, cos) = theta.sin_cos();
         let q = self.normal_numerator_sc(sin, cos, w, gy);
-        if self.viscous_friction.is_zero() {
+        if self.viscous_friction.is_exact_zero() {
             q
         } else {
             q - self.bob_mass * sin * cos * self.viscous_friction * y[X_DOT]
@@ -151,7 +169,7 @@ impl<T: Scalar> Rig<T> {
     fn normal_numerator_sc(&self, sin: T, cos: T, w: T, gy: T) -> T {
         let (m1, m2) = (self.slider_mass, self.bob_mass);
         let q = -m1 * ((m1 + m2) * gy + m2 * self.rod_length * w * w * sin);
-        if self.pivot_damping.is_zero() {
+        if self.pivot_damping.is_exact_zero() {
             q
         } else {
             q - (m1 + m2) * self.pivot_damping * w * cos / self.rod_length
@@ -162,8 +180,8 @@ impl<T: Scalar> Rig<T> {
     /// rail lacks: -g_x sin(theta) - c_p w / (m2 l); `None` on such a rail.
     #[inline(always)]
     fn extra_drive(&self, sin: T, w: T, gx: T) -> Option<T> {
-        let tilt = !self.rail_tilt.is_zero();
-        let damped = !self.pivot_damping.is_zero();
+        let tilt = !self.rail_tilt.is_exact_zero();
+        let damped = !self.pivot_damping.is_exact_zero();
         if !(tilt || damped) {
             return None;
         }
@@ -181,7 +199,14 @@ impl<T: Scalar> Rig<T> {
     /// other shorthands (the stick phase's right-hand side needs nothing else).
     #[inline(always)]
     pub fn stick_angular_acceleration(&self, theta: T, w: T) -> T {
-        if self.rail_tilt.is_zero() && self.pivot_damping.is_zero() {
+        self.stick_angular_acceleration_on(theta, w, false)
+    }
+
+    /// [`Rig::stick_angular_acceleration`] with the plain-rig test hoisted out
+    /// (`plain = true` only on a [`Rig::is_plain`] rig).
+    #[inline(always)]
+    pub fn stick_angular_acceleration_on(&self, theta: T, w: T, plain: bool) -> T {
+        if plain || (self.rail_tilt.is_exact_zero() && self.pivot_damping.is_exact_zero()) {
             return self.gravity * theta.cos() / self.rod_length;
         }
         let (sin, cos) = theta.sin_cos();
@@ -202,14 +227,31 @@ impl<T: Scalar> Rig<T> {
     /// = (Q - a c_v x') / (same), l theta'' = A + sin(theta) x''.
     #[inline(always)]
     pub fn slide(&self, sh: &Shorthands<T>, s: f64, sigma: f64, x_dot: T) -> SlideDynamics<T> {
-        let mu = self.friction_mu(x_dot * s);
+        self.slide_on(sh, (s, sigma), x_dot, false)
+    }
+
+    /// [`Rig::slide`] with the plain-rig tests hoisted out: `plain = true` (only on a
+    /// [`Rig::is_plain`] rig) skips the friction law and the viscous term.
+    #[inline(always)]
+    pub fn slide_on(
+        &self,
+        sh: &Shorthands<T>,
+        (s, sigma): (f64, f64),
+        x_dot: T,
+        plain: bool,
+    ) -> SlideDynamics<T> {
+        let mu = if plain {
+            self.mu_kinetic
+        } else {
+            self.friction_mu(x_dot * s)
+        };
         let ms = mu * (s * sigma);
         let delta = sh.d + ms * sh.a;
         let l_delta = self.rod_length * delta;
         // One division for both accelerations: x'' = num / delta, theta'' = (...) / l.
         let mut num = sh.c - ms * sh.b;
         let mut q = sh.q;
-        if !self.viscous_friction.is_zero() {
+        if !plain && !self.viscous_friction.is_exact_zero() {
             let drag = self.viscous_friction * x_dot;
             num -= drag;
             q -= sh.a * drag;
@@ -264,7 +306,7 @@ impl<T: Scalar> Rig<T> {
     #[inline]
     pub fn friction_power(&self, dynamics: &SlideDynamics<T>, x_dot: T, s: f64, sigma: f64) -> T {
         let coulomb = -(dynamics.mu * dynamics.normal * x_dot) * (s * sigma);
-        if self.viscous_friction.is_zero() {
+        if self.viscous_friction.is_exact_zero() {
             coulomb
         } else {
             coulomb - self.viscous_friction * x_dot * x_dot

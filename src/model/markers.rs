@@ -81,7 +81,7 @@ pub fn observed_markers<T: Scalar>(
     let mut bx = y[X] + along;
     let mut by = across;
     // A lag that is zero but being differentiated must still take the Taylor path.
-    if !camera.lag.is_zero() {
+    if !camera.lag.is_exact_zero() {
         let (x_dd, th_dd) = rig.accelerations(mode, y);
         let w = y[THETA_DOT];
         let vx = y[X_DOT] - across * w;

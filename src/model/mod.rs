@@ -20,8 +20,38 @@ use num_dual::DualNum;
 
 /// A scalar the physics can be evaluated in: `f64`, or a dual number when the fit
 /// differentiates a run with respect to its parameters.
-pub trait Scalar: DualNum<f64> + Copy + Send + Sync {}
-impl<T: DualNum<f64> + Copy + Send + Sync> Scalar for T {}
+pub trait Scalar: DualNum<f64> + Copy + Send + Sync {
+    /// Zero in value and in every derivative. A real-rig term whose coefficient is exactly
+    /// zero is skipped for speed, but a fit that frees the coefficient at zero needs its
+    /// derivative: num-dual's `is_zero` looks at the value only, so it must not decide.
+    fn is_exact_zero(&self) -> bool;
+}
+
+impl Scalar for f64 {
+    #[inline(always)]
+    fn is_exact_zero(&self) -> bool {
+        *self == 0.0
+    }
+}
+
+impl Scalar for num_dual::Dual64 {
+    #[inline]
+    fn is_exact_zero(&self) -> bool {
+        self.re == 0.0 && self.eps == 0.0
+    }
+}
+
+impl<const N: usize> Scalar for num_dual::DualSVec64<N> {
+    #[inline]
+    fn is_exact_zero(&self) -> bool {
+        self.re == 0.0
+            && self
+                .eps
+                .unwrap_generic(nalgebra::Const::<N>, nalgebra::U1)
+                .iter()
+                .all(|&d| d == 0.0)
+    }
+}
 
 /// The state (x, theta, x', theta') in the paper's convention (y down, radians).
 pub type State<T> = [T; 4];

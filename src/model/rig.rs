@@ -250,17 +250,28 @@ impl<T: Scalar> Rig<T> {
     /// with no speed dependence): the closed forms that assume it (the conservative pendulum,
     /// mirror symmetry) hold only then.
     pub fn is_ideal(&self) -> bool {
-        self.rail_tilt.is_zero()
-            && self.pivot_damping.is_zero()
-            && self.viscous_friction.is_zero()
+        self.rail_tilt.is_exact_zero()
+            && self.pivot_damping.is_exact_zero()
+            && self.viscous_friction.is_exact_zero()
             && (self.friction_law == FrictionLaw::Coulomb || self.mu_static == self.mu_kinetic)
+    }
+
+    /// True on the seed paper's rig: level rail, no pivot damping, Coulomb friction without a
+    /// viscous part. Unlike [`Rig::is_ideal`] a Stribeck law with mu_s = mu_k is not plain,
+    /// because its derivative with respect to mu_s is not zero. The simulator tests this once
+    /// per mode, not on every right-hand side.
+    pub fn is_plain(&self) -> bool {
+        self.rail_tilt.is_exact_zero()
+            && self.pivot_damping.is_exact_zero()
+            && self.viscous_friction.is_exact_zero()
+            && self.friction_law == FrictionLaw::Coulomb
     }
 
     /// Gravity's components (g_x, g_y) in the rail frame: (g sin alpha, g cos alpha). A level
     /// rail skips the trigonometry (and keeps its results bit for bit).
     #[inline(always)]
     pub fn gravity_components(&self) -> (T, T) {
-        if self.rail_tilt.is_zero() {
+        if self.rail_tilt.is_exact_zero() {
             (T::zero(), self.gravity)
         } else {
             let (s, c) = self.rail_tilt.sin_cos();

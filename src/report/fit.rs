@@ -1,7 +1,7 @@
 //! Output of `appell fit`: the readable report, the JSON object and the figure (data, fit,
 //! residuals and mode bands).
 
-use super::plot::{data_range, Figure, PlotError};
+use super::plot::{data_range, draw_side_legend, Figure, PlotError, Swatch};
 use crate::fit::{Estimate, FitReport, Observations, Param, StaticResult};
 use crate::model::{observed_markers, Mode};
 use crate::sim::{simulate, Options, Request};
@@ -307,27 +307,100 @@ pub struct FitFigure<'a> {
     pub report: &'a FitReport,
 }
 
-/// Points of one coordinate: data, fit and residuals, each (t, value).
-type Panel = (Vec<(f64, f64)>, Vec<(f64, f64)>, Vec<(f64, f64)>);
+/// The four observed coordinates in drawing order, each with the one colour it has in every
+/// panel and the legend: slider x, slider y, bob x, bob y.
+const COORDS: [(&str, RGBColor); 4] = [
+    ("slider x", RGBColor(0, 90, 200)),
+    ("slider y", RGBColor(130, 60, 180)),
+    ("bob x", RGBColor(215, 95, 0)),
+    ("bob y", RGBColor(0, 140, 60)),
+];
 
+/// (t, value) points of one series.
+type Points = Vec<(f64, f64)>;
+
+/// Pale fills of the fitted modes behind the time panels.
 fn mode_color(m: Mode) -> RGBColor {
     match m {
-        Mode::Stick => RGBColor(230, 230, 230),
-        Mode::Slide(crate::model::Direction::Positive) => RGBColor(255, 224, 204),
-        Mode::Slide(crate::model::Direction::Negative) => RGBColor(204, 224, 255),
+        Mode::Stick => RGBColor(228, 228, 228),
+        Mode::Slide(crate::model::Direction::Positive) => RGBColor(255, 236, 200),
+        Mode::Slide(crate::model::Direction::Negative) => RGBColor(214, 232, 250),
+    }
+}
+
+/// Tick labels with as many decimals as the axis span needs, and never "-0".
+fn tick_label(v: f64, span: f64) -> String {
+    let decimals = (1.0 - (span / 5.0).log10().floor()).clamp(0.0, 6.0) as usize;
+    let text = format!("{v:.decimals$}");
+    if text
+        .trim_start_matches('-')
+        .chars()
+        .all(|c| c == '0' || c == '.')
+    {
+        text.trim_start_matches('-').to_owned()
+    } else {
+        text
+    }
+}
+
+impl FitFigure<'_> {
+    /// The legend's key numbers: mu with its error and interval, the model, the fit's quality
+    /// and the thirds.
+    fn notes(&self) -> Vec<String> {
+        let rep = self.report;
+        let mut notes = Vec::new();
+        match &rep.mu_kinetic {
+            Some(mu) => notes.push(format!(
+                "mu_kinetic = {:.6} +- {:.2e}, 95% [{:.6}, {:.6}] ({})",
+                mu.value, mu.stderr, mu.ci95[0], mu.ci95[1], mu.interval
+            )),
+            None => notes.push("mu_kinetic: not identifiable (no slide)".into()),
+        }
+        match &rep.mu_static {
+            StaticResult::Estimated(e) => notes.push(format!(
+                "mu_static = {:.6}, 95% [{:.6}, {:.6}]",
+                e.value, e.ci95[0], e.ci95[1]
+            )),
+            StaticResult::LowerBound(b) => notes.push(format!("mu_static >= {b:.4}")),
+            StaticResult::NotIdentifiable => {}
+        }
+        let model = if rep.nuisances.is_empty() {
+            "plain".to_owned()
+        } else {
+            rep.nuisances
+                .iter()
+                .map(|n| n.name())
+                .collect::<Vec<_>>()
+                .join(" + ")
+        };
+        notes.push(format!("model: {model}"));
+        let a = &rep.adequacy;
+        notes.push(format!(
+            "chi2 = {:.1} for {:.0} dof (reduced {:.3}, p = {:.3})",
+            a.chi2, a.dof, a.reduced_chi2, a.p_value
+        ));
+        notes.push(format!(
+            "noise (measured): slider {:.3} mm, bob {:.3} mm",
+            rep.noise_m[0] * 1e3,
+            rep.noise_m[1] * 1e3
+        ));
+        if a.limited_by_model.is_some() {
+            notes.push("limited by the model, not by the noise (see the report)".into());
+        }
+        notes
     }
 }
 
 impl Figure for FitFigure<'_> {
     fn size(&self) -> (u32, u32) {
-        (1100, 1000)
+        (1300, 1150)
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
         let rep = self.report;
         let t0 = self.obs.times[0];
         let times: Vec<f64> = self.obs.times.iter().map(|t| t - t0).collect();
-        let t_end = *times.last().unwrap_or(&1.0);
+        let t_end = times.last().copied().unwrap_or(1.0).max(1e-9);
         let sol = simulate(
             &rep.rig,
             &rep.initial,
@@ -354,37 +427,36 @@ impl Figure for FitFigure<'_> {
                 )
             })
             .collect();
-        let panels = root.split_evenly((3, 1));
-        let series = |k: usize| -> Panel {
-            let mut data = Vec::new();
-            let mut fit = Vec::new();
-            let mut resid = Vec::new();
-            for (i, &t) in times.iter().enumerate() {
-                let obs = if k < 2 {
-                    self.obs.slider[i].map(|p| p[k])
-                } else {
-                    self.obs.bob[i].map(|p| p[k - 2])
-                };
-                if let Some(o) = obs {
-                    data.push((t, o));
-                    if let Some(p) = pred.get(i) {
-                        resid.push((t, o - p.1[k]));
-                    }
-                }
-                if let Some(p) = pred.get(i) {
-                    fit.push((t, p.1[k]));
-                }
-            }
-            (data, fit, resid)
+        // Observed coordinate k (0..4 as in COORDS) at frame i, in mm.
+        let observed = |k: usize, i: usize| -> Option<f64> {
+            let m = if k < 2 {
+                self.obs.slider[i]
+            } else {
+                self.obs.bob[i]
+            };
+            m.map(|p| p[k % 2] * 1e3)
         };
-        let bands = |chart_top: f64, chart_bot: f64| -> Vec<Rectangle<(f64, f64)>> {
+        let data = |k: usize| -> Vec<(f64, f64)> {
+            (0..times.len())
+                .filter_map(|i| observed(k, i).map(|v| (times[i], v)))
+                .collect()
+        };
+        let fitted =
+            |k: usize| -> Vec<(f64, f64)> { pred.iter().map(|p| (p.0, p.1[k] * 1e3)).collect() };
+        // Residuals as the fit and the README define them: fitted minus observed.
+        let resid = |k: usize| -> Vec<(f64, f64)> {
+            (0..times.len())
+                .filter_map(|i| Some((times[i], pred.get(i)?.1[k] * 1e3 - observed(k, i)?)))
+                .collect()
+        };
+        let bands = |top: f64, bottom: f64| -> Vec<Rectangle<(f64, f64)>> {
             let mut out = Vec::new();
             let mut start = 0;
             for i in 1..=pred.len() {
                 if i == pred.len() || pred[i].2 != pred[start].2 {
                     let t1 = if i == pred.len() { t_end } else { pred[i].0 };
                     out.push(Rectangle::new(
-                        [(pred[start].0, chart_bot), (t1, chart_top)],
+                        [(pred[start].0, bottom), (t1, top)],
                         mode_color(pred[start].2).filled(),
                     ));
                     start = i;
@@ -392,59 +464,178 @@ impl Figure for FitFigure<'_> {
             }
             out
         };
-        let titles = [
-            "slider x [m] (bands: grey stick, orange slide+, blue slide-)",
-            "bob x and y [m]",
-            "residuals [mm]",
+
+        let (charts, side) = root.split_horizontally(1000);
+        let heights = [250, 250, 200, 200];
+        let (rows, thirds_area) = charts.split_vertically(heights.iter().sum::<u32>());
+        let mut areas = Vec::new();
+        let mut rest = rows;
+        for h in &heights[..3] {
+            let (a, b) = rest.split_vertically(*h);
+            areas.push(a);
+            rest = b;
+        }
+        areas.push(rest);
+        // (panel title, coordinates drawn, residual panel?)
+        let panels: [(&str, &[usize], bool); 4] = [
+            ("slider x [mm] (data and fit)", &[0], false),
+            ("bob x and y [mm] (data and fit)", &[2, 3], false),
+            (
+                "slider residual [mm] (fitted - observed; band +-2 noise)",
+                &[0, 1],
+                true,
+            ),
+            (
+                "bob residual [mm] (fitted - observed; band +-2 noise)",
+                &[2, 3],
+                true,
+            ),
         ];
-        for (panel, title) in panels.iter().zip(titles) {
-            let (data_sets, is_resid): (Vec<usize>, bool) = match title.chars().next() {
-                Some('s') => (vec![0], false),
-                Some('b') => (vec![2, 3], false),
-                _ => (vec![0, 2, 3], true),
-            };
-            let all: Vec<Panel> = data_sets.iter().map(|&k| series(k)).collect();
-            let scale = if is_resid { 1e3 } else { 1.0 };
-            let ys = all
+        for (area, (title, coords, is_resid)) in areas.iter().zip(panels) {
+            let series: Vec<(usize, Points, Points)> = coords
                 .iter()
-                .flat_map(|(d, f, r)| {
+                .map(|&k| {
                     if is_resid {
-                        r.clone()
+                        (k, resid(k), Vec::new())
                     } else {
-                        d.iter().chain(f).cloned().collect()
+                        (k, data(k), fitted(k))
                     }
                 })
-                .map(|p| p.1 * scale);
+                .collect();
+            let band = if is_resid {
+                2.0 * rep.noise_m[coords[0] / 2] * 1e3
+            } else {
+                0.0
+            };
+            let ys = series
+                .iter()
+                .flat_map(|(_, d, f)| d.iter().chain(f).map(|p| p.1))
+                .chain([band, -band]);
             let yr = data_range(ys, 0.05);
-            let mut chart = ChartBuilder::on(panel)
-                .caption(title, ("sans-serif", 18))
-                .margin(8)
-                .x_label_area_size(30)
-                .y_label_area_size(70)
+            let span = yr.end - yr.start;
+            let mut chart = ChartBuilder::on(area)
+                .caption(title, ("sans-serif", 16))
+                .margin(6)
+                .x_label_area_size(32)
+                .y_label_area_size(84)
                 .build_cartesian_2d(0.0..t_end, yr.clone())?;
-            chart.configure_mesh().x_desc("t [s]").draw()?;
+            chart
+                .configure_mesh()
+                .light_line_style(WHITE.mix(0.0))
+                .x_desc("t [s]")
+                .y_desc(if is_resid { "residual [mm]" } else { "[mm]" })
+                .y_label_formatter(&|v| tick_label(*v, span))
+                .x_label_formatter(&|v| tick_label(*v, t_end))
+                .label_style(("sans-serif", 13))
+                .draw()?;
             chart.draw_series(bands(yr.end, yr.start))?;
-            let colors = [
-                RGBColor(0, 90, 200),
-                RGBColor(200, 60, 0),
-                RGBColor(0, 150, 60),
-            ];
-            for (j, (d, f, r)) in all.iter().enumerate() {
-                let c = colors[j % 3];
-                if is_resid {
-                    chart.draw_series(
-                        r.iter()
-                            .map(|&(t, v)| Circle::new((t, v * scale), 1, c.filled())),
-                    )?;
-                } else {
-                    chart.draw_series(
-                        d.iter()
-                            .map(|&(t, v)| Circle::new((t, v), 1, c.mix(0.5).filled())),
-                    )?;
-                    chart.draw_series(LineSeries::new(f.iter().cloned(), BLACK.stroke_width(1)))?;
+            if is_resid {
+                chart.draw_series(std::iter::once(Rectangle::new(
+                    [(0.0, -band), (t_end, band)],
+                    RGBColor(120, 120, 120).mix(0.25).filled(),
+                )))?;
+                chart.draw_series(LineSeries::new([(0.0, 0.0), (t_end, 0.0)], BLACK))?;
+            }
+            for (k, d, f) in &series {
+                let c = COORDS[*k].1;
+                chart.draw_series(
+                    d.iter()
+                        .map(|&(t, v)| Circle::new((t, v), 1, c.mix(0.7).filled())),
+                )?;
+                if !f.is_empty() {
+                    chart.draw_series(LineSeries::new(
+                        f.iter().cloned(),
+                        BLACK.mix(0.8).stroke_width(1),
+                    ))?;
                 }
             }
         }
+
+        // The thirds: mu_kinetic fitted on each stretch against the whole fit's interval.
+        if let Some(mu) = rep.mu_kinetic {
+            let ys = rep
+                .windows
+                .iter()
+                .flat_map(|w| {
+                    [
+                        w.mu_kinetic - 1.96 * w.stderr,
+                        w.mu_kinetic + 1.96 * w.stderr,
+                    ]
+                })
+                .chain(mu.ci95);
+            let yr = data_range(ys, 0.15);
+            let span = yr.end - yr.start;
+            let mut chart = ChartBuilder::on(&thirds_area)
+                .caption(
+                    "mu_kinetic per third of the recording (95% bars) against the whole fit's 95% interval",
+                    ("sans-serif", 16),
+                )
+                .margin(6)
+                .x_label_area_size(32)
+                .y_label_area_size(84)
+                .build_cartesian_2d(0.0..t_end, yr)?;
+            chart
+                .configure_mesh()
+                .light_line_style(WHITE.mix(0.0))
+                .x_desc("t [s]")
+                .y_desc("mu_kinetic")
+                .y_label_formatter(&|v| tick_label(*v, span))
+                .x_label_formatter(&|v| tick_label(*v, t_end))
+                .label_style(("sans-serif", 13))
+                .draw()?;
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [(0.0, mu.ci95[0]), (t_end, mu.ci95[1])],
+                RGBColor(0, 90, 200).mix(0.18).filled(),
+            )))?;
+            chart.draw_series(LineSeries::new(
+                [(0.0, mu.value), (t_end, mu.value)],
+                RGBColor(0, 90, 200).stroke_width(2),
+            ))?;
+            for w in &rep.windows {
+                let (t0w, t1w) = (w.t_start, w.t_end);
+                let mid = 0.5 * (t0w + t1w);
+                let lo = w.mu_kinetic - 1.96 * w.stderr;
+                let hi = w.mu_kinetic + 1.96 * w.stderr;
+                chart.draw_series(LineSeries::new(
+                    [(t0w, w.mu_kinetic), (t1w, w.mu_kinetic)],
+                    BLACK.stroke_width(2),
+                ))?;
+                chart.draw_series(LineSeries::new([(mid, lo), (mid, hi)], BLACK))?;
+                chart.draw_series(std::iter::once(Circle::new(
+                    (mid, w.mu_kinetic),
+                    4,
+                    BLACK.filled(),
+                )))?;
+            }
+        }
+
+        let mut entries: Vec<(Swatch, String)> = COORDS
+            .iter()
+            .map(|(name, c)| (Swatch::Dot(*c), format!("{name} observed")))
+            .collect();
+        entries.push((Swatch::Line(BLACK, 1), "fitted model".into()));
+        entries.push((
+            Swatch::Fill(RGBColor(200, 200, 200)),
+            "+-2 measured noise".into(),
+        ));
+        entries.push((
+            Swatch::Fill(mode_color(Mode::Stick)),
+            "fitted: stuck".into(),
+        ));
+        entries.push((
+            Swatch::Fill(mode_color(Mode::Slide(crate::model::Direction::Positive))),
+            "fitted: sliding +x".into(),
+        ));
+        entries.push((
+            Swatch::Fill(mode_color(Mode::Slide(crate::model::Direction::Negative))),
+            "fitted: sliding -x".into(),
+        ));
+        entries.push((
+            Swatch::Line(RGBColor(0, 90, 200), 2),
+            "mu_kinetic, whole fit".into(),
+        ));
+        entries.push((Swatch::Line(BLACK, 2), "mu_kinetic, one third".into()));
+        draw_side_legend(&side, "Fit", &entries, &self.notes(), 30)?;
         Ok(())
     }
 }

@@ -46,6 +46,19 @@ struct ModeSystem<'a, T> {
     rig: &'a Rig<T>,
     mode: Mode,
     sigma: f64,
+    /// [`Rig::is_plain`], tested once here rather than in every right-hand side.
+    plain: bool,
+}
+
+impl<'a, T: Scalar> ModeSystem<'a, T> {
+    fn new(rig: &'a Rig<T>, mode: Mode, sigma: f64) -> Self {
+        ModeSystem {
+            rig,
+            mode,
+            sigma,
+            plain: rig.is_plain(),
+        }
+    }
 }
 
 impl<T: Scalar, const N: usize> OdeSystem<T, N> for ModeSystem<'_, T> {
@@ -57,7 +70,9 @@ impl<T: Scalar, const N: usize> OdeSystem<T, N> for ModeSystem<'_, T> {
             Mode::Stick => {
                 // x' stays exactly zero; only the pendulum equation is left.
                 dy[2] = T::from(0.0);
-                dy[3] = self.rig.stick_angular_acceleration(y[1], y[3]);
+                dy[3] = self
+                    .rig
+                    .stick_angular_acceleration_on(y[1], y[3], self.plain);
                 if N > 4 {
                     dy[4] = T::from(0.0);
                     dy[5] = self.rig.damping_power(y[3]);
@@ -65,8 +80,8 @@ impl<T: Scalar, const N: usize> OdeSystem<T, N> for ModeSystem<'_, T> {
             }
             Mode::Slide(dir) => {
                 let s = dir.sign();
-                let sh = Shorthands::at(self.rig, &y[..]);
-                let dynamics = self.rig.slide(&sh, s, self.sigma, y[2]);
+                let sh = Shorthands::new_on(self.rig, y[1], y[3], self.plain);
+                let dynamics = self.rig.slide_on(&sh, (s, self.sigma), y[2], self.plain);
                 dy[2] = dynamics.x_ddot;
                 dy[3] = dynamics.theta_ddot;
                 if N > 4 {
@@ -93,9 +108,19 @@ enum Guard {
 }
 
 impl Guard {
-    fn value<S: Scalar>(self, rig: &Rig<S>, y: &[S], mode: Mode, sigma: f64, thr: f64) -> S {
+    /// The guard's value; `plain` is [`Rig::is_plain`] of the run's rig, tested once per run.
+    fn value<S: Scalar>(
+        self,
+        rig: &Rig<S>,
+        y: &[S],
+        (mode, sigma): (Mode, f64),
+        thr: f64,
+        plain: bool,
+    ) -> S {
         match self {
-            Guard::StickMargin => Shorthands::at(rig, y).stick_margin(rig.mu_static),
+            Guard::StickMargin => {
+                Shorthands::new_on(rig, y[THETA], y[THETA_DOT], plain).stick_margin(rig.mu_static)
+            }
             Guard::Stop => {
                 let s = match mode {
                     Mode::Slide(d) => d.sign(),
@@ -103,13 +128,13 @@ impl Guard {
                 };
                 y[X_DOT] * s
             }
-            Guard::NormalSign => rig.normal_numerator(y) * sigma,
+            Guard::NormalSign => rig.normal_numerator_on(y, plain) * sigma,
             Guard::Denominator => {
                 let s = match mode {
                     Mode::Slide(d) => d.sign(),
                     Mode::Stick => 1.0,
                 };
-                let sh = Shorthands::at(rig, y);
+                let sh = Shorthands::new_on(rig, y[THETA], y[THETA_DOT], plain);
                 let delta = sh.d + sh.a * (rig.friction_mu(y[X_DOT] * s) * (s * sigma));
                 delta.abs() - (rig.slider_mass + rig.bob_mass) * thr
             }
@@ -135,6 +160,8 @@ struct Ctx<'a, T> {
     paradox_possible: bool,
     /// Sudden-stop threshold of the denominator guard, relative to m1 + m2.
     thr: f64,
+    /// [`Rig::is_plain`] of `rig`: the guards skip the real-rig terms' tests.
+    plain: bool,
 }
 
 impl<T: Scalar> Ctx<'_, T> {
@@ -148,7 +175,7 @@ impl<T: Scalar> Ctx<'_, T> {
         sigma: f64,
     ) -> (f64, f64) {
         let yd: [Dual64; 4] = std::array::from_fn(|i| Dual64::new(y[i], f[i]));
-        let g = guard.value(&self.rig_dual, &yd, mode, sigma, self.thr);
+        let g = guard.value(&self.rig_dual, &yd, (mode, sigma), self.thr, self.plain);
         (g.re, g.eps)
     }
 
@@ -627,6 +654,7 @@ where
         rig_dual: rig_re.lift(),
         paradox_possible: rig_re.mu_slide_max() > regions::mu_critical(rig_re.mass_ratio()),
         thr: options.stop_threshold,
+        plain: rig.is_plain(),
     };
     let is_f64 = TypeId::of::<T>() == TypeId::of::<f64>();
     let mut y: [T; N] = std::array::from_fn(|i| if i < 4 { y0[i] } else { T::from(0.0) });
@@ -695,7 +723,7 @@ where
     let exponent = -1.0 / f64::from(M::ERROR_ORDER + 1);
 
     'segments: loop {
-        let sys = ModeSystem { rig, mode, sigma };
+        let sys = ModeSystem::new(rig, mode, sigma);
         let t_segment = t;
         stepper.reset(&sys, &y);
         // A new mode has new dynamics: the step carried over from the old one is only an upper
@@ -796,9 +824,9 @@ where
                     st.guard.value(
                         &ctx.rig_re,
                         &re_vec(&stepper.interpolate(th))[..4],
-                        mode,
-                        sigma,
+                        (mode, sigma),
                         ctx.thr,
+                        ctx.plain,
                     )
                 };
                 let grazing = st.armed && g1 > 0.0 && st.gdot < 0.0 && gdot1 > 0.0;
@@ -1019,19 +1047,17 @@ fn jump_with_sensitivity<T: Scalar, const N: usize>(
     reset: Reset,
     y_star: &[T; N],
 ) -> [T; N] {
-    let old = ModeSystem {
-        rig: ctx.rig,
-        mode: old_mode,
-        sigma: old_sigma,
-    };
-    let new = ModeSystem {
-        rig: ctx.rig,
-        mode: new_mode,
-        sigma: new_sigma,
-    };
+    let old = ModeSystem::new(ctx.rig, old_mode, old_sigma);
+    let new = ModeSystem::new(ctx.rig, new_mode, new_sigma);
     let mut f_old = *y_star;
     OdeSystem::<T, N>::rhs(&old, y_star, &mut f_old);
-    let g = guard.value(ctx.rig, &y_star[..4], old_mode, old_sigma, ctx.thr);
+    let g = guard.value(
+        ctx.rig,
+        &y_star[..4],
+        (old_mode, old_sigma),
+        ctx.thr,
+        ctx.plain,
+    );
     let (_, gdot) = ctx.guard_with_rate(
         guard,
         &re_vec(y_star)[..4],

@@ -105,7 +105,20 @@ fn directory_gives_one_json_line_per_recording_and_a_figure() {
         String::from_utf8_lossy(&out.stderr)
     );
     let text = std::fs::read_to_string(&svg).unwrap();
-    assert!(text.starts_with("<svg") && text.contains("residuals"));
+    assert!(text.starts_with("<svg") && text.contains("fitted - observed"));
+    // The key numbers are on the figure: the fitted mu (the report's value) and the model.
+    let report = String::from_utf8_lossy(&out.stdout);
+    let mu = report
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("mu_kinetic"))
+        .and_then(|rest| rest.split_whitespace().next())
+        .expect("mu_kinetic line in the report");
+    let mu: f64 = mu.parse().unwrap();
+    assert!(
+        text.contains(&format!("mu_kinetic = {mu:.6}")),
+        "figure lacks mu_kinetic = {mu:.6}"
+    );
+    assert!(text.contains("model: "));
 }
 
 #[test]

@@ -392,6 +392,31 @@ fn dual_derivatives_of_new_parameters_match_finite_differences() {
         .with_pivot_damping(1e-3)
         .with_viscous_friction(0.02)
         .with_stribeck(0.08);
+    dual_matches_finite_differences(
+        &rig,
+        &[
+            NewParam::Tilt,
+            NewParam::Damping,
+            NewParam::Viscous,
+            NewParam::StribeckSpeed,
+        ],
+    );
+}
+
+/// The same at the ideal rig, where each term is exactly zero: a fit frees these parameters
+/// at zero, so skipping a zero term must not drop its derivative (num-dual's `is_zero`
+/// ignores derivatives; this test fails if the model uses it to skip terms).
+#[test]
+fn dual_derivatives_at_zero_terms_are_not_lost() {
+    let rig = Rig::new(0.1, 0.1, 0.3, 9.81, 0.3, Some(0.38)).unwrap();
+    dual_matches_finite_differences(
+        &rig,
+        &[NewParam::Tilt, NewParam::Damping, NewParam::Viscous],
+    );
+}
+
+fn dual_matches_finite_differences(rig: &Rig<f64>, params: &[NewParam]) {
+    let rig = *rig;
     let y0 = [0.0, 0.0, 0.0, 0.0];
     let times: Vec<f64> = (1..=24).map(|k| k as f64 * 0.05).collect();
     let req = Request {
@@ -406,18 +431,21 @@ fn dual_derivatives_of_new_parameters_match_finite_differences() {
     let base = simulate(&rig, &y0, 1.25, &opts, &req).unwrap();
     let kinds: Vec<EventKind> = base.events.iter().map(|e| e.kind).collect();
     assert!(kinds.contains(&EventKind::Slip) && kinds.contains(&EventKind::Stick));
-    for p in [
-        NewParam::Tilt,
-        NewParam::Damping,
-        NewParam::Viscous,
-        NewParam::StribeckSpeed,
-    ] {
+    for &p in params {
         let v = get(&rig, p);
         let mut rd: Rig<Dual64> = rig.lift();
         set(&mut rd, p, Dual64::new(v, 1.0));
         let y0d = y0.map(Dual64::from);
         let dual = simulate(&rd, &y0d, 1.25, &opts, &req).unwrap();
-        let h = 1e-5 * v.abs().max(1e-3);
+        // A step relative to the parameter's typical size: at zero, 1e-5 of a tiny floor
+        // would drown the difference in the integrator's own error.
+        let typical = match p {
+            NewParam::Tilt => 0.03,
+            NewParam::Damping => 1e-3,
+            NewParam::Viscous => 0.02,
+            NewParam::StribeckSpeed => 0.05,
+        };
+        let h = 1e-5 * v.abs().max(typical);
         let shifted = |d: f64| {
             let mut r = rig;
             set(&mut r, p, v + d);
@@ -426,17 +454,22 @@ fn dual_derivatives_of_new_parameters_match_finite_differences() {
         let (plus, minus) = (shifted(h), shifted(-h));
         assert_eq!(plus.events.len(), base.events.len(), "{p:?}: same events");
         assert_eq!(minus.events.len(), base.events.len(), "{p:?}: same events");
+        let mut largest: f64 = 0.0;
         for (k, t) in times.iter().enumerate() {
             for i in 0..4 {
                 let fd = (plus.samples[k].state[i] - minus.samples[k].state[i]) / (2.0 * h);
                 let ad = dual.samples[k].state[i].eps;
                 let scale = fd.abs().max(ad.abs()).max(1e-3);
+                largest = largest.max(fd.abs());
                 assert!(
                     (fd - ad).abs() < 2e-4 * scale,
                     "{p:?} t {t} state {i}: dual {ad} vs fd {fd}"
                 );
             }
         }
+        // The parameter matters: a zero derivative everywhere would pass the comparison
+        // above only if finite differences were zero too.
+        assert!(largest > 1e-3, "{p:?}: derivatives all below 1e-3");
     }
 }
 
