@@ -34,14 +34,16 @@ impl<T: Scalar> Shorthands<T> {
     /// Evaluate the shorthands at angle `theta` and angular velocity `w`.
     #[inline(always)]
     pub fn new(rig: &Rig<T>, theta: T, w: T) -> Self {
-        Self::new_on(rig, theta, w, false)
+        Self::new_on(rig, theta, w, false, rig.gravity_components())
     }
 
     /// [`Shorthands::new`] for a caller that already knows whether the rig is plain
-    /// ([`Rig::is_plain`]): `plain = true` skips the per-call tests of tilt and damping, which
-    /// the simulator's inner loop would otherwise repeat on every right-hand side.
+    /// ([`Rig::is_plain`]) and has gravity's components ([`Rig::gravity_components`]) at
+    /// hand: `plain = true` skips the per-call tests of tilt and damping, and the tilt's sine
+    /// and cosine are not recomputed, which the simulator's inner loop would otherwise do on
+    /// every right-hand side.
     #[inline(always)]
-    pub fn new_on(rig: &Rig<T>, theta: T, w: T, plain: bool) -> Self {
+    pub fn new_on(rig: &Rig<T>, theta: T, w: T, plain: bool, (gx, gy): (T, T)) -> Self {
         let (sin, cos) = theta.sin_cos();
         let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);
         let lw2 = l * w * w;
@@ -61,7 +63,6 @@ impl<T: Scalar> Shorthands<T> {
                 cos,
             };
         }
-        let (gx, gy) = rig.gravity_components();
         // The ideal rig's forms, which keep full precision for a light slider (b never
         // subtracts (m1 + m2) g from m2 g cos^2), plus the drive of tilt and damping.
         let e = rig.extra_drive(sin, w, gx).unwrap_or_else(T::zero);
@@ -199,18 +200,23 @@ impl<T: Scalar> Rig<T> {
     /// other shorthands (the stick phase's right-hand side needs nothing else).
     #[inline(always)]
     pub fn stick_angular_acceleration(&self, theta: T, w: T) -> T {
-        self.stick_angular_acceleration_on(theta, w, false)
+        self.stick_angular_acceleration_on(theta, w, false, self.gravity_components())
     }
 
-    /// [`Rig::stick_angular_acceleration`] with the plain-rig test hoisted out
-    /// (`plain = true` only on a [`Rig::is_plain`] rig).
+    /// [`Rig::stick_angular_acceleration`] with the plain-rig test and gravity's components
+    /// hoisted out (`plain = true` only on a [`Rig::is_plain`] rig).
     #[inline(always)]
-    pub fn stick_angular_acceleration_on(&self, theta: T, w: T, plain: bool) -> T {
+    pub fn stick_angular_acceleration_on(
+        &self,
+        theta: T,
+        w: T,
+        plain: bool,
+        (gx, gy): (T, T),
+    ) -> T {
         if plain || (self.rail_tilt.is_exact_zero() && self.pivot_damping.is_exact_zero()) {
             return self.gravity * theta.cos() / self.rod_length;
         }
         let (sin, cos) = theta.sin_cos();
-        let (gx, gy) = self.gravity_components();
         let extra = self.extra_drive(sin, w, gx).unwrap_or_else(T::zero);
         (gy * cos + extra) / self.rod_length
     }

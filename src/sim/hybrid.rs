@@ -48,6 +48,8 @@ struct ModeSystem<'a, T> {
     sigma: f64,
     /// [`Rig::is_plain`], tested once here rather than in every right-hand side.
     plain: bool,
+    /// Gravity's components along and across the rail (a tilt's sine and cosine once).
+    gravity: (T, T),
 }
 
 impl<'a, T: Scalar> ModeSystem<'a, T> {
@@ -57,6 +59,7 @@ impl<'a, T: Scalar> ModeSystem<'a, T> {
             mode,
             sigma,
             plain: rig.is_plain(),
+            gravity: rig.gravity_components(),
         }
     }
 }
@@ -70,9 +73,9 @@ impl<T: Scalar, const N: usize> OdeSystem<T, N> for ModeSystem<'_, T> {
             Mode::Stick => {
                 // x' stays exactly zero; only the pendulum equation is left.
                 dy[2] = T::from(0.0);
-                dy[3] = self
-                    .rig
-                    .stick_angular_acceleration_on(y[1], y[3], self.plain);
+                dy[3] =
+                    self.rig
+                        .stick_angular_acceleration_on(y[1], y[3], self.plain, self.gravity);
                 if N > 4 {
                     dy[4] = T::from(0.0);
                     dy[5] = self.rig.damping_power(y[3]);
@@ -80,7 +83,7 @@ impl<T: Scalar, const N: usize> OdeSystem<T, N> for ModeSystem<'_, T> {
             }
             Mode::Slide(dir) => {
                 let s = dir.sign();
-                let sh = Shorthands::new_on(self.rig, y[1], y[3], self.plain);
+                let sh = Shorthands::new_on(self.rig, y[1], y[3], self.plain, self.gravity);
                 let dynamics = self.rig.slide_on(&sh, (s, self.sigma), y[2], self.plain);
                 dy[2] = dynamics.x_ddot;
                 dy[3] = dynamics.theta_ddot;
@@ -119,7 +122,8 @@ impl Guard {
     ) -> S {
         match self {
             Guard::StickMargin => {
-                Shorthands::new_on(rig, y[THETA], y[THETA_DOT], plain).stick_margin(rig.mu_static)
+                Shorthands::new_on(rig, y[THETA], y[THETA_DOT], plain, rig.gravity_components())
+                    .stick_margin(rig.mu_static)
             }
             Guard::Stop => {
                 let s = match mode {
@@ -134,7 +138,13 @@ impl Guard {
                     Mode::Slide(d) => d.sign(),
                     Mode::Stick => 1.0,
                 };
-                let sh = Shorthands::new_on(rig, y[THETA], y[THETA_DOT], plain);
+                let sh = Shorthands::new_on(
+                    rig,
+                    y[THETA],
+                    y[THETA_DOT],
+                    plain,
+                    rig.gravity_components(),
+                );
                 let delta = sh.d + sh.a * (rig.friction_mu(y[X_DOT] * s) * (s * sigma));
                 delta.abs() - (rig.slider_mass + rig.bob_mass) * thr
             }
