@@ -19,6 +19,8 @@ pub struct FitPoint {
     pub rtol: f64,
     /// Whether the profile intervals were computed.
     pub profile: bool,
+    /// The plain model only (`--plain`: no nuisance search, no thirds).
+    pub plain: bool,
     /// Median wall time of one whole fit (s).
     pub seconds: f64,
     /// Estimated mu_kinetic.
@@ -56,8 +58,10 @@ pub fn recording() -> (Observations, crate::model::Rig<f64>, f64) {
 /// Time the fit over `rtols` (and with/without profile at the default tolerance).
 pub fn fit_benchmark(rtols: &[f64], batches: usize) -> Result<Vec<FitPoint>, String> {
     let (obs, start, truth) = recording();
-    let settings = |rtol: f64, profile: bool| FitSettings {
+    let settings = |rtol: f64, profile: bool, plain: bool| FitSettings {
         profile,
+        nuisances: !plain,
+        windows: !plain,
         options: Options {
             rtol,
             atol: rtol * 1e-2,
@@ -65,17 +69,22 @@ pub fn fit_benchmark(rtols: &[f64], batches: usize) -> Result<Vec<FitPoint>, Str
         },
         ..FitSettings::default()
     };
-    let reference = fit(obs.clone(), &start, &settings(1e-12, false)).map_err(|e| e.to_string())?;
+    let reference =
+        fit(obs.clone(), &start, &settings(1e-12, false, false)).map_err(|e| e.to_string())?;
     let mu_ref = reference
         .mu_kinetic
         .ok_or("reference fit: mu not identifiable")?
         .value;
     let default_rtol = FitSettings::default().options.rtol;
     let mut points = Vec::new();
-    let mut cases: Vec<(f64, bool)> = rtols.iter().map(|&r| (r, false)).collect();
-    cases.push((default_rtol, true));
-    for (rtol, profile) in cases {
-        let s = settings(rtol, profile);
+    // The rtol ladder with every step but the profiles, then the defaults, then the plain
+    // model (the speed a user keeps with --plain).
+    let mut cases: Vec<(f64, bool, bool)> = rtols.iter().map(|&r| (r, false, false)).collect();
+    cases.push((default_rtol, true, false));
+    cases.push((default_rtol, false, true));
+    cases.push((default_rtol, true, true));
+    for (rtol, profile, plain) in cases {
+        let s = settings(rtol, profile, plain);
         let rep = fit(obs.clone(), &start, &s).map_err(|e| e.to_string())?;
         let mu = rep.mu_kinetic.ok_or("mu not identifiable")?;
         let seconds = median_seconds(
@@ -87,6 +96,7 @@ pub fn fit_benchmark(rtols: &[f64], batches: usize) -> Result<Vec<FitPoint>, Str
         points.push(FitPoint {
             rtol,
             profile,
+            plain,
             seconds,
             mu: mu.value,
             stderr: mu.stderr,

@@ -201,8 +201,9 @@ fn run_fit(args: &Args) -> Result<(), Failure> {
     }
     outln!("fit of a 2 s, 1000 Hz two-marker recording (example rig, mu = 0.12, 0.2 mm noise), start 30% off in mu:");
     outln!(
-        "{:>8} {:>8} {:>11} {:>12} {:>10} {:>12} {:>18}",
+        "{:>8} {:>6} {:>8} {:>11} {:>12} {:>10} {:>12} {:>18}",
         "rtol",
+        "model",
         "profile",
         "median ms",
         "mu",
@@ -212,8 +213,9 @@ fn run_fit(args: &Args) -> Result<(), Failure> {
     );
     for p in points {
         outln!(
-            "{:>8.0e} {:>8} {:>11.2} {:>12.8} {:>10.2e} {:>12.2e} {:>18.2e}",
+            "{:>8.0e} {:>6} {:>8} {:>11.2} {:>12.8} {:>10.2e} {:>12.2e} {:>18.2e}",
             p.rtol,
+            if p.plain { "plain" } else { "full" },
             p.profile,
             p.seconds * 1e3,
             p.mu,
