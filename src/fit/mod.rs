@@ -736,8 +736,7 @@ pub fn fit(
             // well-described recording does not pay for two more fits.
             friction_candidates: settings.mu_static == StaticMode::Auto
                 && onset
-                && (base.static_evidence == Some(true)
-                    || select::misfits(chi2, (problem.n_rows() - problem.free.len()) as f64)),
+                && (base.static_evidence == Some(true) || select::misfits(&problem, chi2)),
             mu_static_start: base.mu_s_data.unwrap_or(1.15 * mu_k).max(1.05 * mu_k),
             max_added: if settings.nuisances { 3 } else { 0 },
             max_iters: settings.max_iters,

@@ -257,10 +257,11 @@ pub struct SelectOptions {
     pub forced: Vec<Nuisance>,
 }
 
-/// Whether chi-square is far beyond its degrees of freedom (5 standard deviations): the
-/// model misfits, so the linear screening and the current optimum are not to be trusted.
-pub fn misfits(chi2: f64, dof: f64) -> bool {
-    let dof = dof.max(1.0);
+/// Whether `problem`'s chi-square is far beyond its degrees of freedom (5 standard
+/// deviations): the model misfits, so the linear screening and the current optimum are not
+/// to be trusted.
+pub fn misfits(problem: &TrajectoryProblem, chi2: f64) -> bool {
+    let dof = (problem.n_rows().saturating_sub(problem.free.len()) as f64).max(1.0);
     chi2 > dof + 5.0 * (2.0 * dof).sqrt()
 }
 
@@ -363,7 +364,7 @@ pub fn forward(
         // Fit the two most promising screened candidates whose predicted drop pays their BIC
         // penalty, and the friction candidates outright. A misfitting model's linearisation
         // ranks poorly: then every screened candidate is fitted, from two starts.
-        let misfit = misfits(*cur_chi2, n - cur_problem.free.len() as f64);
+        let misfit = misfits(cur_problem, *cur_chi2);
         let fresh = opts.fresh_start.filter(|_| misfit);
         let mut to_fit: Vec<Nuisance> = drops
             .iter()
