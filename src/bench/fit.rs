@@ -106,3 +106,111 @@ pub fn fit_benchmark(rtols: &[f64], batches: usize) -> Result<Vec<FitPoint>, Str
     }
     Ok(points)
 }
+
+/// The length ladder's scene: the paper rig released from rest with the rod horizontal, whose
+/// stick-slip goes on for minutes (FORMATS.md's 0.5 mm noise).
+const LADDER_SCENE: &str = include_str!("../../configs/paper_rest_horizontal.toml");
+
+/// One rung of the length ladder: a whole fit (default settings) of a recording this long.
+#[derive(Debug, Clone, Serialize)]
+pub struct LengthPoint {
+    /// Recording length (s).
+    pub duration: f64,
+    /// Frame rate (Hz).
+    pub fps: f64,
+    /// Frames in the recording.
+    pub frames: usize,
+    /// Whether the profile intervals were computed.
+    pub profile: bool,
+    /// CPU time of the fit, every thread (s).
+    pub cpu_seconds: f64,
+    /// Wall time of the fit (s).
+    pub wall_seconds: f64,
+    /// Peak resident memory while the recording was held and fitted (MB), where the system
+    /// reports it (Linux).
+    pub peak_mb: Option<f64>,
+    /// Estimated mu_kinetic.
+    pub mu: f64,
+    /// Its reported standard error.
+    pub stderr: f64,
+    /// mu - truth.
+    pub mu_error: f64,
+}
+
+/// CPU time of this process so far, every thread (s).
+fn cpu_seconds() -> f64 {
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: clock_gettime writes one timespec through a valid pointer.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_PROCESS_CPUTIME_ID, &mut ts) };
+    if rc == 0 {
+        ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9
+    } else {
+        f64::NAN
+    }
+}
+
+/// Reset the peak resident set size the kernel keeps for this process (Linux's clear_refs
+/// with 5), so the next reading is the peak of what follows.
+fn reset_peak() -> bool {
+    std::fs::write("/proc/self/clear_refs", "5").is_ok()
+}
+
+/// Peak resident set size since the last reset (MB), from /proc/self/status.
+fn peak_mb() -> Option<f64> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let line = status.lines().find(|l| l.starts_with("VmHWM:"))?;
+    let kb: f64 = line.split_whitespace().nth(1)?.parse().ok()?;
+    Some(kb / 1024.0)
+}
+
+/// Fit synthetic recordings of the paper scene of each `(duration s, frame rate Hz)` with the
+/// default settings (`profile` on or off), one fit per rung (each takes long enough to time
+/// on its own); reports CPU time, wall time, peak memory and the error in mu.
+pub fn length_ladder(lengths: &[(f64, f64)], profile: bool) -> Result<Vec<LengthPoint>, String> {
+    let scene = Scene::from_toml(LADDER_SCENE, "configs/paper_rest_horizontal.toml".as_ref())
+        .map_err(|e| e.to_string())?;
+    let settings = FitSettings {
+        profile,
+        ..FitSettings::default()
+    };
+    let mut out = Vec::new();
+    for &(duration, fps) in lengths {
+        if !(duration > 0.0 && fps > 0.0 && duration * fps <= 1e7) {
+            return Err(format!(
+                "a ladder length needs duration > 0 and fps > 0 with at most 1e7 frames, got {duration} s at {fps} Hz"
+            ));
+        }
+        let opts = SynthOptions {
+            fps,
+            duration: Some(duration),
+            noise: 5e-4,
+            seed: 1,
+            ..SynthOptions::default()
+        };
+        let syn = synthesize(&scene, &opts).map_err(|e| e.to_string())?;
+        let obs = Observations::from(&syn.recording);
+        drop(syn);
+        let frames = obs.times.len();
+        let measured = reset_peak();
+        let (cpu0, wall0) = (cpu_seconds(), std::time::Instant::now());
+        let rep = fit(obs, &scene.rig, &settings).map_err(|e| e.to_string())?;
+        let (cpu, wall) = (cpu_seconds() - cpu0, wall0.elapsed().as_secs_f64());
+        let mu = rep.mu_kinetic.ok_or("mu not identifiable")?;
+        out.push(LengthPoint {
+            duration,
+            fps,
+            frames,
+            profile,
+            cpu_seconds: cpu,
+            wall_seconds: wall,
+            peak_mb: if measured { peak_mb() } else { None },
+            mu: mu.value,
+            stderr: mu.stderr,
+            mu_error: mu.value - scene.rig.mu_kinetic,
+        });
+    }
+    Ok(out)
+}

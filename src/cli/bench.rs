@@ -34,6 +34,14 @@ pub struct Args {
     /// ladder of integration tolerances (run time against mu error).
     #[arg(long, conflicts_with_all = ["work_precision", "scene"])]
     fit: bool,
+    /// With --fit: the length ladder instead of the tolerance ladder, a whole fit of the
+    /// paper scene per length (CPU time, peak memory, mu error): DURATION@FPS,... (default
+    /// 2@1000,10@1000,60@1000,100@10000,1000@1000).
+    #[arg(long, value_delimiter = ',', value_name = "S@HZ", num_args = 0.., requires = "fit")]
+    lengths: Option<Vec<String>>,
+    /// With --lengths: skip the profile intervals (--no-profile).
+    #[arg(long, requires = "lengths")]
+    no_profile: bool,
     /// Time what skipping unrequested work saves (slip monitoring on proven stick phases,
     /// dense samples, friction work, sensitivities).
     #[arg(long, conflicts_with_all = ["work_precision", "scene", "fit"])]
@@ -186,8 +194,88 @@ fn run_work_precision(args: &Args) -> Result<(), Failure> {
     Ok(())
 }
 
+/// `appell bench --fit --lengths`: a whole fit per recording length.
+fn run_lengths(args: &Args, lengths: &[String]) -> Result<(), Failure> {
+    let parse = |s: &str| -> Option<(f64, f64)> {
+        let (d, f) = s.split_once('@')?;
+        Some((d.trim().parse().ok()?, f.trim().parse().ok()?))
+    };
+    let ladder: Vec<(f64, f64)> = if lengths.is_empty() {
+        vec![
+            (2.0, 1000.0),
+            (10.0, 1000.0),
+            (60.0, 1000.0),
+            (100.0, 10000.0),
+            (1000.0, 1000.0),
+        ]
+    } else {
+        lengths
+            .iter()
+            .map(|s| {
+                parse(s).ok_or_else(|| {
+                    Failure::Input(anyhow!(
+                        "--lengths: expected DURATION@FPS such as 60@1000, got {s:?}"
+                    ))
+                })
+            })
+            .collect::<Result<_, _>>()?
+    };
+    if let Some((d, f)) = ladder
+        .iter()
+        .find(|(d, f)| !(*d > 0.0 && *f > 0.0 && d * f <= 1e7))
+    {
+        return Err(Failure::Input(anyhow!(
+            "--lengths: each length needs a duration and a frame rate above 0 and at most 1e7 frames, got {d} s at {f} Hz"
+        )));
+    }
+    let points = appell::bench::fit::length_ladder(&ladder, !args.no_profile)
+        .map_err(|e| Failure::Run(anyhow!(e)))?;
+    if args.json {
+        outln!("{}", serde_json::json!({"fit_lengths": points}));
+        return Ok(());
+    }
+    outln!(
+        "whole fits (default settings{}) of the paper scene, 0.5 mm noise, mu = 0.35:",
+        if args.no_profile {
+            ", --no-profile"
+        } else {
+            ""
+        }
+    );
+    outln!(
+        "{:>9} {:>7} {:>9} {:>8} {:>8} {:>9} {:>12} {:>10} {:>11}",
+        "length s",
+        "Hz",
+        "frames",
+        "CPU s",
+        "wall s",
+        "peak MB",
+        "mu",
+        "stderr",
+        "mu - 0.35"
+    );
+    for p in points {
+        outln!(
+            "{:>9} {:>7} {:>9} {:>8.2} {:>8.2} {:>9} {:>12.8} {:>10.2e} {:>11.2e}",
+            p.duration,
+            p.fps,
+            p.frames,
+            p.cpu_seconds,
+            p.wall_seconds,
+            p.peak_mb.map_or("-".into(), |m| format!("{m:.0}")),
+            p.mu,
+            p.stderr,
+            p.mu_error
+        );
+    }
+    Ok(())
+}
+
 /// `appell bench --fit`: the fit's run time against its mu error.
 fn run_fit(args: &Args) -> Result<(), Failure> {
+    if let Some(lengths) = &args.lengths {
+        return run_lengths(args, lengths);
+    }
     let rtols = if args.rtols.is_empty() {
         vec![1e-5, 1e-6, 1e-7, 1e-8, 1e-10]
     } else {

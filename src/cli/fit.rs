@@ -186,12 +186,21 @@ fn fit_one(
     opts: &ReadOptions,
     rig: &appell::model::Rig<f64>,
     settings: &FitSettings,
+    keep: bool,
 ) -> Fitted {
-    let rec = read_recording(paths, opts).map_err(|e| Failure::Input(e.into()))?;
-    let obs = Observations::from(&rec);
-    let report = fit(obs.clone(), rig, settings)
+    let obs = {
+        let rec = read_recording(paths, opts).map_err(|e| Failure::Input(e.into()))?;
+        Observations::from(&rec)
+    };
+    // Only the figure needs the observations after the fit: a long recording is held once.
+    let (kept, given) = if keep {
+        (obs.clone(), obs)
+    } else {
+        (Observations::default(), obs)
+    };
+    let report = fit(given, rig, settings)
         .map_err(|e| Failure::Run(anyhow!(e).context(format!("fitting {}", paths[0].display()))))?;
-    Ok((obs, report))
+    Ok((kept, report))
 }
 
 pub fn run(args: Args) -> Result<(), Failure> {
@@ -214,7 +223,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         let results: Vec<(PathBuf, Fitted)> = files
             .par_iter()
             .map(|f| {
-                let r = fit_one(std::slice::from_ref(f), &opts, &rig, &settings);
+                let r = fit_one(std::slice::from_ref(f), &opts, &rig, &settings, false);
                 bar.inc(1);
                 (f.clone(), r)
             })
@@ -263,7 +272,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         }
         return Ok(());
     }
-    let (obs, rep) = fit_one(&args.inputs, &opts, &rig, &settings)?;
+    let (obs, rep) = fit_one(&args.inputs, &opts, &rig, &settings, args.plot.is_some())?;
     if let Some(p) = &args.plot {
         render(
             p,

@@ -99,8 +99,8 @@ pub fn rod_length(obs: &Observations) -> Option<f64> {
     if d.is_empty() {
         return None;
     }
-    d.sort_by(f64::total_cmp);
-    Some(d[d.len() / 2])
+    let mid = d.len() / 2;
+    Some(*d.select_nth_unstable_by(mid, f64::total_cmp).1)
 }
 
 /// mu_kinetic from the sliding equation solved for mu at frames where the slider clearly
@@ -146,8 +146,8 @@ pub fn mu_from_sliding(obs: &Observations, rig: &Rig<f64>, half_window: usize) -
     if mus.len() < 5 {
         return None;
     }
-    mus.sort_by(f64::total_cmp);
-    Some(mus[mus.len() / 2])
+    let mid = mus.len() / 2;
+    Some(*mus.select_nth_unstable_by(mid, f64::total_cmp).1)
 }
 
 /// mu_static from the stick-to-slide onsets seen in the data: where a stretch with the slider
@@ -206,8 +206,8 @@ pub fn mu_static_from_onsets(
     if ratios.is_empty() {
         return None;
     }
-    ratios.sort_by(f64::total_cmp);
-    Some(ratios[ratios.len() / 2])
+    let mid = ratios.len() / 2;
+    Some(*ratios.select_nth_unstable_by(mid, f64::total_cmp).1)
 }
 
 /// Residual sum of squares of the hinge x = x0 (t <= t*), x0 + c2 u^2 + c3 u^3 (u = t - t*,

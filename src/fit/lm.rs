@@ -8,18 +8,57 @@
 use argmin::core::{Error, IterState, Problem, Solver, TerminationReason, TerminationStatus, KV};
 use nalgebra::{DMatrix, DVector};
 
-/// A nonlinear least-squares problem: residuals r(p), and residuals with their Jacobian.
+/// The Gauss-Newton normal equations at a point, summed frame by frame as the simulation
+/// passes each frame: the Jacobian itself is never stored, so memory does not grow with the
+/// recording.
+#[derive(Debug, Clone)]
+pub struct Normal {
+    /// Half the weighted sum of squares, 1/2 r'r.
+    pub cost: f64,
+    /// J'J.
+    pub jtj: DMatrix<f64>,
+    /// J'r.
+    pub jtr: DVector<f64>,
+    /// Sum over blocks of frames of (J_b'r_b)(J_b'r_b)', when blocks were asked for (the
+    /// middle of the block covariance).
+    pub meat: Option<DMatrix<f64>>,
+}
+
+impl Normal {
+    /// The normal equations of residuals `r` with Jacobian `j` held in full (small problems).
+    pub fn from_dense(r: &DVector<f64>, j: &DMatrix<f64>) -> Self {
+        Normal {
+            cost: half_sq(r),
+            jtj: j.tr_mul(j),
+            jtr: j.tr_mul(r),
+            meat: None,
+        }
+    }
+
+    /// Whether every number in it is finite (a simulation that blew up is not a step).
+    pub fn is_finite(&self) -> bool {
+        self.cost.is_finite()
+            && self
+                .jtr
+                .iter()
+                .chain(self.jtj.iter())
+                .all(|v| v.is_finite())
+    }
+}
+
+/// A nonlinear least-squares problem, seen by the solver only through its normal equations:
+/// a problem can then sum them as it goes and never hold the Jacobian.
 pub trait LeastSquares {
-    /// Residuals at `p`; an error marks `p` as unusable (the solver then damps harder).
-    fn residuals(&self, p: &DVector<f64>) -> Result<DVector<f64>, Error>;
-    /// Residuals and Jacobian dr/dp at `p`.
-    fn residuals_jacobian(&self, p: &DVector<f64>) -> Result<(DVector<f64>, DMatrix<f64>), Error>;
+    /// Cost 1/2 r'r, J'J and J'r at `p`; an error marks `p` as unusable (the solver then
+    /// damps harder).
+    fn normal_equations(&self, p: &DVector<f64>) -> Result<Normal, Error>;
     /// Map `p` into the feasible set (bounds such as mu >= 0); the identity by default.
     fn project(&self, _p: &mut DVector<f64>) {}
 }
 
-/// argmin's iteration state for this solver.
-pub type LmState = IterState<DVector<f64>, (), DMatrix<f64>, (), DVector<f64>, f64>;
+/// argmin's iteration state for this solver: the gradient slot holds J'r and the Hessian
+/// slot the Gauss-Newton J'J.
+pub type LmState = IterState<DVector<f64>, DVector<f64>, (), DMatrix<f64>, (), f64>;
 
 /// Levenberg-Marquardt with Marquardt's diagonal scaling and Nielsen's damping update.
 #[derive(Debug, Clone)]
@@ -73,9 +112,11 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
             o.project(&mut p);
             Ok(())
         })?;
-        let (r, j) = problem.problem("jacobian_count", |o| o.residuals_jacobian(&p))?;
-        let cost = half_sq(&r);
-        Ok((state.param(p).residuals(r).jacobian(j).cost(cost), None))
+        let n = problem.problem("jacobian_count", |o| o.normal_equations(&p))?;
+        Ok((
+            state.param(p).gradient(n.jtr).hessian(n.jtj).cost(n.cost),
+            None,
+        ))
     }
 
     fn next_iter(
@@ -86,15 +127,11 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
         let p = state
             .take_param()
             .ok_or_else(|| Error::msg("no parameters"))?;
-        let r = state
-            .take_residuals()
-            .ok_or_else(|| Error::msg("no residuals"))?;
-        let j = state
-            .take_jacobian()
-            .ok_or_else(|| Error::msg("no Jacobian"))?;
+        let g = state
+            .take_gradient()
+            .ok_or_else(|| Error::msg("no gradient J'r"))?;
+        let a = state.take_hessian().ok_or_else(|| Error::msg("no J'J"))?;
         let cost = state.get_cost();
-        let a = j.tr_mul(&j);
-        let g = j.tr_mul(&r);
         // Marquardt scaling: damp each parameter by its own curvature, floored so a parameter
         // the data do not constrain still gets a finite step.
         let max_diag = a.diagonal().max().max(1e-300);
@@ -121,18 +158,16 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
                 break;
             }
             let predicted = -(actual_step.dot(&g) + 0.5 * actual_step.dot(&(&a * &actual_step)));
-            // Residuals and Jacobian together: near the optimum almost every trial is accepted,
-            // and the dual-number run gives both for about the price of the Jacobian alone.
-            let trial_rj =
-                problem.problem("jacobian_count", |o| Ok(o.residuals_jacobian(&trial).ok()))?;
-            let Some((trial_r, trial_j)) =
-                trial_rj.filter(|(r, _)| r.iter().all(|v| v.is_finite()))
-            else {
+            // Cost and normal equations together: near the optimum almost every trial is
+            // accepted, and the dual-number run gives both for about the price of one.
+            let trial_n =
+                problem.problem("jacobian_count", |o| Ok(o.normal_equations(&trial).ok()))?;
+            let Some(trial_n) = trial_n.filter(Normal::is_finite) else {
                 self.lambda *= self.nu;
                 self.nu *= 2.0;
                 continue;
             };
-            let trial_cost = half_sq(&trial_r);
+            let trial_cost = trial_n.cost;
             let rho = if predicted > 0.0 {
                 (cost - trial_cost) / predicted
             } else {
@@ -146,8 +181,8 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
                 return Ok((
                     state
                         .param(trial)
-                        .residuals(trial_r)
-                        .jacobian(trial_j)
+                        .gradient(trial_n.jtr)
+                        .hessian(trial_n.jtj)
                         .cost(trial_cost),
                     None,
                 ));
@@ -157,7 +192,7 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
         }
         // No trial step decreased the cost: the current point is a minimum to working accuracy.
         self.stalled = true;
-        Ok((state.param(p).residuals(r).jacobian(j).cost(cost), None))
+        Ok((state.param(p).gradient(g).hessian(a).cost(cost), None))
     }
 
     fn terminate(&mut self, _state: &LmState) -> TerminationStatus {
@@ -184,7 +219,7 @@ mod tests {
         y: Vec<f64>,
     }
 
-    impl LeastSquares for Exponential {
+    impl Exponential {
         fn residuals(&self, p: &DVector<f64>) -> Result<DVector<f64>, Error> {
             Ok(DVector::from_iterator(
                 self.t.len(),
@@ -194,10 +229,10 @@ mod tests {
                     .map(|(t, y)| p[0] * (p[1] * t).exp() - y),
             ))
         }
-        fn residuals_jacobian(
-            &self,
-            p: &DVector<f64>,
-        ) -> Result<(DVector<f64>, DMatrix<f64>), Error> {
+    }
+
+    impl LeastSquares for Exponential {
+        fn normal_equations(&self, p: &DVector<f64>) -> Result<Normal, Error> {
             let j = DMatrix::from_fn(self.t.len(), 2, |i, k| {
                 let e = (p[1] * self.t[i]).exp();
                 if k == 0 {
@@ -206,7 +241,7 @@ mod tests {
                     p[0] * self.t[i] * e
                 }
             });
-            Ok((self.residuals(p)?, j))
+            Ok(Normal::from_dense(&self.residuals(p)?, &j))
         }
     }
 
@@ -229,19 +264,11 @@ mod tests {
     /// singular: the damped step still converges to a minimiser.
     struct Degenerate;
     impl LeastSquares for Degenerate {
-        fn residuals(&self, p: &DVector<f64>) -> Result<DVector<f64>, Error> {
-            Ok(DVector::from_vec(vec![
-                p[0] + p[1] - 3.0,
-                2.0 * (p[0] + p[1]) - 6.0,
-            ]))
-        }
-        fn residuals_jacobian(
-            &self,
-            p: &DVector<f64>,
-        ) -> Result<(DVector<f64>, DMatrix<f64>), Error> {
-            Ok((
-                self.residuals(p)?,
-                DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 2.0, 2.0]),
+        fn normal_equations(&self, p: &DVector<f64>) -> Result<Normal, Error> {
+            let r = DVector::from_vec(vec![p[0] + p[1] - 3.0, 2.0 * (p[0] + p[1]) - 6.0]);
+            Ok(Normal::from_dense(
+                &r,
+                &DMatrix::from_row_slice(2, 2, &[1.0, 1.0, 2.0, 2.0]),
             ))
         }
     }

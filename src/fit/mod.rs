@@ -20,9 +20,9 @@ pub use select::{ModelRow, Nuisance};
 pub use uncertainty::WindowFit;
 
 use crate::model::{Camera, Mode, Rig, Shorthands, State};
-use crate::sim::{simulate, Event, EventKind, Options, Request, Solution};
+use crate::sim::{simulate_each, Event, EventKind, Options, Request, Sample, Solution};
 use argmin::core::{Executor, State as _};
-use lm::{LeastSquares, LevenbergMarquardt};
+use lm::LevenbergMarquardt;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use std::sync::atomic::Ordering;
@@ -81,6 +81,10 @@ pub struct FitSettings {
     /// Nuisances put in the model whatever the data say (a rail known to be tilted); the
     /// selection adds others on top.
     pub with: Vec<Nuisance>,
+    /// A recording with more than twice this many frames is long: its starts and candidate
+    /// models are fitted on these first frames and the winner carried over the rest by
+    /// doubling the length; its profile intervals are checked at the Wald ends first.
+    pub long_prefix: usize,
 }
 
 impl Default for FitSettings {
@@ -101,6 +105,7 @@ impl Default for FitSettings {
             nuisances: true,
             windows: true,
             with: Vec::new(),
+            long_prefix: PREFIX_FRAMES,
         }
     }
 }
@@ -271,13 +276,39 @@ fn solve(problem: &TrajectoryProblem, p0: DVector<f64>, max_iters: u64) -> Solve
     solve_traced(problem, p0, max_iters).map(|(p, c, i, _)| (p, c, i))
 }
 
+/// [`solve`] stopping at a relative cost decrease of `ftol` (and a relative step of the
+/// same size) when given.
+fn solve_loose(
+    problem: &TrajectoryProblem,
+    p0: DVector<f64>,
+    max_iters: u64,
+    ftol: Option<f64>,
+) -> Solved {
+    let mut lm = LevenbergMarquardt::default();
+    if let Some(tol) = ftol {
+        lm.ftol = tol;
+        lm.xtol = tol;
+    }
+    run_lm(problem, p0, max_iters, lm).map(|(p, c, i, _)| (p, c, i))
+}
+
 /// [`solve`] with the solver's termination reason.
 fn solve_traced(
     problem: &TrajectoryProblem,
     p0: DVector<f64>,
     max_iters: u64,
 ) -> Result<(DVector<f64>, f64, u64, String), String> {
-    let res = Executor::new(problem.clone(), LevenbergMarquardt::default())
+    run_lm(problem, p0, max_iters, LevenbergMarquardt::default())
+}
+
+/// Run `lm` on `problem` from `p0`: optimum, cost, iterations and termination reason.
+fn run_lm(
+    problem: &TrajectoryProblem,
+    p0: DVector<f64>,
+    max_iters: u64,
+    lm: LevenbergMarquardt,
+) -> Result<(DVector<f64>, f64, u64, String), String> {
+    let res = Executor::new(problem.clone(), lm)
         .configure(|s| s.param(p0).max_iters(max_iters))
         .run()
         .map_err(|e| e.to_string())?;
@@ -297,11 +328,14 @@ fn idx(problem: &TrajectoryProblem, p: Param) -> Option<usize> {
 
 /// Per-marker RMS of raw residuals (weight-zero rows left out), with a degrees-of-freedom
 /// correction, and the overall RMS.
-fn marker_rms(raw: &[(usize, f64)], weights: &[f64], n_params: usize) -> ([f64; 2], f64) {
+fn marker_rms(problem: &TrajectoryProblem, weighted: &[f64], n_params: usize) -> ([f64; 2], f64) {
     let mut ss = [0.0; 2];
     let mut n = [0usize; 2];
-    for (&(m, r), &w) in raw.iter().zip(weights) {
+    for (i, (row, v)) in problem.rows().zip(weighted).enumerate() {
+        let (m, w) = (row.marker, problem.row_weight(i));
         if w > 0.0 {
+            // Back in metres from the solver's weighted residual.
+            let r = v * problem.sigma[m] / w;
             ss[m] += r * r;
             n[m] += 1;
         }
@@ -320,6 +354,14 @@ fn marker_rms(raw: &[(usize, f64)], weights: &[f64], n_params: usize) -> ([f64; 
 
 /// Step 1: the recording is usable: enough frames with both markers; times from zero.
 fn check_data(mut obs: Observations) -> Result<Observations, FitError> {
+    enough_frames(&obs)?;
+    let t0 = obs.times[0];
+    obs.times.iter_mut().for_each(|t| *t -= t0);
+    Ok(obs)
+}
+
+/// At least ten frames with both markers.
+fn enough_frames(obs: &Observations) -> Result<(), FitError> {
     let both = obs
         .slider
         .iter()
@@ -329,9 +371,7 @@ fn check_data(mut obs: Observations) -> Result<Observations, FitError> {
     if both < 10 {
         return Err(FitError::TooFewFrames(both));
     }
-    let t0 = obs.times[0];
-    obs.times.iter_mut().for_each(|t| *t -= t0);
-    Ok(obs)
+    Ok(())
 }
 
 /// The noise used as weights (m), the measurements behind it, and the positions dropped.
@@ -398,6 +438,10 @@ struct Base {
     mu0: f64,
 }
 
+/// The default [`FitSettings::long_prefix`]: frames a long recording's starts and candidate
+/// models are fitted on (recordings up to twice this are fitted whole from every start).
+pub const PREFIX_FRAMES: usize = 8000;
+
 /// Step 3: the base model (mu_kinetic and the initial state; released from rest or moving;
 /// mu_static when the onsets demand it) from several starts in mu, the best by AIC.
 fn base_fit(
@@ -432,7 +476,18 @@ fn base_fit(
     if settings.fit_rod_length {
         free.push(Param::RodLength);
     }
-    let mut problem = TrajectoryProblem::new(obs.clone(), *rig, y0, free, settings.options);
+    // A long recording's starts and candidates are fitted on its first frames, and the winner
+    // is carried over the whole recording by doubling the length, each fit starting where the
+    // shorter one ended: a few full-length fits instead of one per start, and a start that
+    // never meets a far-off part of the recording whose events it cannot yet match.
+    let prefix = settings.long_prefix.max(1);
+    let long = n > prefix.saturating_mul(2);
+    let fit_obs = if long {
+        Arc::new(obs.prefix(prefix))
+    } else {
+        obs.clone()
+    };
+    let mut problem = TrajectoryProblem::new(fit_obs, *rig, y0, free, settings.options);
     problem.tie_static = settings.mu_static != StaticMode::Fixed;
     problem.sigma = sigma;
     let mu_s_data = (settings.mu_static == StaticMode::Auto)
@@ -549,6 +604,29 @@ fn base_fit(
             }
         }
     }
+    if long {
+        let mut len = prefix;
+        while len < n {
+            // Doubling, without a last stage much shorter than the one before it.
+            len = if 3 * len >= n { n } else { 2 * len };
+            let stage = problem.on(if len == n {
+                obs.clone()
+            } else {
+                Arc::new(obs.prefix(len))
+            });
+            // A stage before the last only has to start the next one well.
+            let ftol = if len == n { None } else { Some(1e-6) };
+            let (q, _, it) = solve_loose(&stage, p, settings.max_iters, ftol).map_err(|e| {
+                FitError::NoStart(format!(
+                    "carrying the fit of the first {} frames over {len}: {e}",
+                    problem.frame_times().len()
+                ))
+            })?;
+            iterations += it;
+            p = q;
+            problem = stage;
+        }
+    }
     problem.set_values(&p);
     // A robust loss reweights the rows by their standardised residuals, a few rounds.
     if settings.loss != Loss::Squares {
@@ -556,10 +634,11 @@ fn base_fit(
             let Ok(raw) = problem.raw_residuals(&p) else {
                 break;
             };
-            problem.row_weights = raw
-                .iter()
-                .map(|&(m, r)| {
-                    let z = (r / problem.sigma[m]).abs();
+            let weights = problem
+                .rows()
+                .zip(&raw)
+                .map(|(row, &r)| {
+                    let z = (r / problem.sigma[row.marker]).abs();
                     match settings.loss {
                         Loss::Squares => 1.0,
                         Loss::Huber(k) if z > k => (k / z).sqrt(),
@@ -568,6 +647,7 @@ fn base_fit(
                     }
                 })
                 .collect();
+            problem.set_row_weights(weights);
             if let Ok((q, _, it)) = solve(&problem, p.clone(), settings.max_iters) {
                 iterations += it;
                 p = q;
@@ -602,24 +682,29 @@ fn drop_residual_outliers(
     let Ok(raw) = problem.raw_residuals(p) else {
         return dropped;
     };
-    let frames = problem.row_frames();
     // The scale: the measured noise, or the residuals' own robust spread when larger (a fit
     // that misses the motion has large residuals everywhere, and those are not outliers).
     let scale = [0, 1].map(|m| {
-        let mut a: Vec<f64> = raw
-            .iter()
-            .filter(|(mm, _)| *mm == m)
+        let mut a: Vec<f64> = problem
+            .rows()
+            .zip(&raw)
+            .filter(|(row, _)| row.marker == m)
             .map(|(_, r)| r.abs())
             .collect();
-        a.sort_by(f64::total_cmp);
-        let mad = a.get(a.len() / 2).copied().unwrap_or(0.0) / 0.6745;
-        problem.sigma[m].max(mad)
+        // The median by selection, not a sort: linear in a million frames.
+        let mid = a.len() / 2;
+        let median = if a.is_empty() {
+            0.0
+        } else {
+            *a.select_nth_unstable_by(mid, f64::total_cmp).1
+        };
+        problem.sigma[m].max(median / 0.6745)
     });
     // A position is one frame's marker: both its coordinates go together.
     let mut bad = std::collections::HashSet::new();
-    for (i, &(m, r)) in raw.iter().enumerate() {
-        if problem.row_weights[i] > 0.0 && (r / scale[m]).abs() > RESIDUAL_OUTLIER {
-            bad.insert((frames[i], m));
+    for (i, (row, &r)) in problem.rows().zip(&raw).enumerate() {
+        if problem.row_weight(i) > 0.0 && (r / scale[row.marker]).abs() > RESIDUAL_OUTLIER {
+            bad.insert((row.frame, row.marker));
         }
     }
     // More than 2% of the positions flagged is a misfit, not mis-tracking.
@@ -629,11 +714,13 @@ fn drop_residual_outliers(
     if bad.is_empty() {
         return dropped;
     }
-    for (i, &(m, _)) in raw.iter().enumerate() {
-        if bad.contains(&(frames[i], m)) {
-            problem.row_weights[i] = 0.0;
-        }
-    }
+    let rows: Vec<usize> = problem
+        .rows()
+        .enumerate()
+        .filter(|(_, row)| bad.contains(&(row.frame, row.marker)))
+        .map(|(i, _)| i)
+        .collect();
+    problem.drop_rows(rows);
     for &(_, m) in &bad {
         dropped[m] += 1;
     }
@@ -645,9 +732,30 @@ fn drop_residual_outliers(
     dropped
 }
 
+/// What the fitted motion does at the frame times, summed as it runs (no samples kept).
+struct Motion {
+    /// The run (events, final state; no samples).
+    sol: Solution<f64>,
+    /// Lowest and highest slider position at the frames (m).
+    range: (f64, f64),
+    /// Whether it slides at some frame.
+    slides: bool,
+    /// Whether it sticks at some frame.
+    sticks: bool,
+    /// The largest friction ratio |c|/|b| the motion needs at a frame: while it never
+    /// slides, mu_static is at least this.
+    needed_ratio: f64,
+    /// Lowest and highest sliding speed |x'| at the frames that slide.
+    slide_speeds: Option<[f64; 2]>,
+}
+
 /// The fitted motion at the frame times.
-fn motion(problem: &TrajectoryProblem) -> Result<Solution<f64>, FitError> {
-    simulate(
+fn motion(problem: &TrajectoryProblem) -> Result<Motion, FitError> {
+    let mut range = (f64::INFINITY, f64::NEG_INFINITY);
+    let (mut slides, mut sticks) = (false, false);
+    let mut needed_ratio: f64 = 0.0;
+    let mut slide_speeds: Option<[f64; 2]> = None;
+    let sol = simulate_each(
         &problem.rig,
         &problem.initial,
         problem.frame_times().last().copied().unwrap_or(0.0),
@@ -656,8 +764,28 @@ fn motion(problem: &TrajectoryProblem) -> Result<Solution<f64>, FitError> {
             sample_times: problem.frame_times().to_vec(),
             friction_work: false,
         },
+        &mut |s: Sample<f64>| {
+            range = (range.0.min(s.state[0]), range.1.max(s.state[0]));
+            if matches!(s.mode, Mode::Slide(_)) {
+                slides = true;
+                let v = s.state[2].abs();
+                let r = slide_speeds.get_or_insert([v, v]);
+                *r = [r[0].min(v), r[1].max(v)];
+            }
+            sticks |= s.mode == Mode::Stick;
+            let sh = Shorthands::at(&problem.rig, &s.state);
+            needed_ratio = needed_ratio.max(sh.c.abs() / sh.b.abs());
+        },
     )
-    .map_err(|e| FitError::NoStart(e.to_string()))
+    .map_err(|e| FitError::NoStart(e.to_string()))?;
+    Ok(Motion {
+        sol,
+        range,
+        slides,
+        sticks,
+        needed_ratio,
+        slide_speeds,
+    })
 }
 
 /// Whether the raw slider track moves by more than its noise can explain: its range along
@@ -681,7 +809,7 @@ pub fn fit(
     let mut obs = check_data(obs)?;
     let n_frames = obs.times.len();
     let (sigma, noise_measured, mut outliers) = noise_and_outliers(&mut obs, settings)?;
-    check_data(obs.clone())?;
+    enough_frames(&obs)?;
     let noise_dof: f64 = noise_measured
         .iter()
         .flatten()
@@ -705,17 +833,12 @@ pub fn fit(
 
     // Does the fitted motion slide? A slide shorter than the slider's noise is not seen; a
     // raw track that clearly moves while no fit slides is a failed fit, said as such.
-    let sol = motion(&problem)?;
-    let fitted_range = sol
-        .samples
-        .iter()
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
-            (lo.min(s.state[0]), hi.max(s.state[0]))
-        });
-    let slides = sol.samples.iter().any(|s| matches!(s.mode, Mode::Slide(_)))
-        && fitted_range.1 - fitted_range.0 > 3.0 * problem.sigma[0];
+    let mo = motion(&problem)?;
+    let fitted_range = mo.range;
+    let slides = mo.slides && fitted_range.1 - fitted_range.0 > 3.0 * problem.sigma[0];
     let raw_moves = slider_moves(&obs, problem.sigma[0]);
-    let onset = sol
+    let onset = mo
+        .sol
         .events
         .iter()
         .any(|e| e.kind == EventKind::Slip && e.t > 0.0)
@@ -725,10 +848,7 @@ pub fn fit(
     let mut models = Vec::new();
     let mut nuisances = Vec::new();
     if slides && (settings.nuisances || !settings.with.is_empty()) {
-        let chi2 = problem
-            .residuals(&p)
-            .map(|r| r.norm_squared())
-            .unwrap_or(f64::INFINITY);
+        let chi2 = problem.chi2(&p).unwrap_or(f64::INFINITY);
         let mu_k = p[0];
         let opts = select::SelectOptions {
             // The friction laws are fitted outright (no score test can screen them), so only
@@ -745,7 +865,10 @@ pub fn fit(
             } else {
                 Vec::new()
             },
-            fresh_start: Some((base.y0_guess, base.mu0)),
+            // A fresh start over a long recording would meet events it cannot match yet
+            // (the base fit reaches such recordings through their first frames).
+            fresh_start: (obs.times.len() <= settings.long_prefix.saturating_mul(2))
+                .then_some((base.y0_guess, base.mu0)),
             forced: settings.with.clone(),
         };
         let sel = select::forward(problem, p, chi2, &opts);
@@ -797,8 +920,11 @@ pub fn fit(
             }
         }
     }
-    let sol = if moved { motion(&problem)? } else { sol };
-    let sticks = sol.samples.iter().any(|s| s.mode == Mode::Stick);
+    let mo = if moved { motion(&problem)? } else { mo };
+    let sticks = mo.sticks;
+    let mo_ratio = mo.needed_ratio;
+    let mo_speeds = mo.slide_speeds;
+    let sol = mo.sol;
     let slip_after_stick = sol
         .events
         .iter()
@@ -905,11 +1031,24 @@ pub fn fit(
         && (static_at_bound || (slip_after_stick && base.static_evidence == Some(false)))
     {
         let mut upper = None;
+        let mut prefix_limit = false;
         if settings.profile {
             let mut free_static = problem.clone();
             free_static.free.push(Param::MuStatic);
             free_static.tie_static = false;
-            let q = free_static.values();
+            let mut q = free_static.values();
+            // A long recording's limit comes from its first frames, refitted there: a limit
+            // from fewer frames is looser, never narrower, and the search probes mu_static
+            // from afar, a full-length fit each time.
+            if obs.times.len() > settings.long_prefix.saturating_mul(2) {
+                free_static = free_static.on(Arc::new(obs.prefix(settings.long_prefix)));
+                if let Ok((opt, _, it)) = solve(&free_static, q.clone(), settings.max_iters) {
+                    iterations += it;
+                    q = opt;
+                    free_static.set_values(&q);
+                }
+                prefix_limit = true;
+            }
             upper = uncertainty::profile_interval(
                 &free_static,
                 &q,
@@ -924,8 +1063,13 @@ pub fn fit(
         let mu = p[0];
         match upper {
             Some(u) => {
+                let from = if prefix_limit {
+                    format!(" (from the first {} frames)", settings.long_prefix)
+                } else {
+                    String::new()
+                };
                 warnings.push(format!(
-                    "mu_static fits at its bound mu_static = mu_kinetic; the data allow up to {u:.5}"
+                    "mu_static fits at its bound mu_static = mu_kinetic; the data allow up to {u:.5}{from}"
                 ));
                 StaticResult::Estimated(Estimate {
                     value: mu,
@@ -943,15 +1087,7 @@ pub fn fit(
             }
         }
     } else if !slides {
-        let bound = sol
-            .samples
-            .iter()
-            .map(|s| {
-                let sh = Shorthands::at(&problem.rig, &s.state);
-                sh.c.abs() / sh.b.abs()
-            })
-            .fold(0.0, f64::max);
-        StaticResult::LowerBound(bound)
+        StaticResult::LowerBound(mo_ratio)
     } else {
         if !sticks {
             warnings
@@ -961,8 +1097,7 @@ pub fn fit(
     };
 
     // Step 9: the report.
-    let raw = problem.unweighted(a.r.as_slice());
-    let (rms_per_marker_m, rms_residual_m) = marker_rms(&raw, &problem.row_weights, k);
+    let (rms_per_marker_m, rms_residual_m) = marker_rms(&problem, a.r.as_slice(), k);
     // Starts that ended statistically as good as the best (cost within the 1-dof likelihood
     // ratio) but at a different mu are a real ambiguity.
     let best_cost = starts.iter().map(|s| s.cost).fold(f64::INFINITY, f64::min);
@@ -981,18 +1116,7 @@ pub fn fit(
         }
     }
     starts.sort_by(|a, b| a.mu_start.total_cmp(&b.mu_start));
-    let speeds: Vec<f64> = sol
-        .samples
-        .iter()
-        .filter(|s| matches!(s.mode, Mode::Slide(_)))
-        .map(|s| s.state[2].abs())
-        .collect();
-    let sliding_speed_range = (!speeds.is_empty()).then(|| {
-        [
-            speeds.iter().cloned().fold(f64::INFINITY, f64::min),
-            speeds.iter().cloned().fold(0.0, f64::max),
-        ]
-    });
+    let sliding_speed_range = mo_speeds;
     let fixed = Param::ALL
         .into_iter()
         // The Stribeck speed means nothing under Coulomb's law.
@@ -1022,7 +1146,7 @@ pub fn fit(
             (q, v)
         })
         .collect();
-    let n_rows = problem.row_weights.iter().filter(|w| **w > 0.0).count();
+    let n_rows = problem.rows_used();
     let adequacy = Adequacy {
         chi2: a.chi2,
         dof: a.dof,

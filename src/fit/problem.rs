@@ -1,9 +1,9 @@
 //! The estimation problem: predicted minus observed marker positions at every frame with data,
 //! weighted per marker, as a function of the free parameters (rig and initial state).
 
-use super::lm::LeastSquares;
+use super::lm::{LeastSquares, Normal};
 use crate::model::{observed_markers, Camera, Rig, Scalar, State};
-use crate::sim::{simulate, Options, Request, SimError};
+use crate::sim::{simulate_each, Options, Request, Sample, SimError};
 use argmin::core::Error;
 use nalgebra::{DMatrix, DVector, U1};
 use num_dual::{Derivative, DualSVec64};
@@ -20,6 +20,18 @@ pub struct Observations {
     pub slider: Vec<Option<[f64; 2]>>,
     /// Bob position per frame, `None` where missing.
     pub bob: Vec<Option<[f64; 2]>>,
+}
+
+impl Observations {
+    /// The first `n` frames (all of them when there are fewer).
+    pub fn prefix(&self, n: usize) -> Observations {
+        let n = n.min(self.times.len());
+        Observations {
+            times: self.times[..n].to_vec(),
+            slider: self.slider[..n].to_vec(),
+            bob: self.bob[..n].to_vec(),
+        }
+    }
 }
 
 /// A quantity the fit can estimate.
@@ -130,13 +142,30 @@ impl Param {
 /// The most parameters a fit frees at once (the dual-number Jacobian is built for each count).
 pub const MAX_FREE: usize = 10;
 
-/// One residual row: which frame, which marker (0 slider, 1 bob), which coordinate.
-#[derive(Debug, Clone, Copy)]
-struct Row {
-    frame: usize,
-    marker: usize,
-    coord: usize,
-    observed: f64,
+/// Which frames hold data, the requested sample times and the row count: fixed by the
+/// observations, so a problem's many clones share one copy.
+#[derive(Debug)]
+struct Layout {
+    /// Index into the observations of each frame with data.
+    obs_index: Vec<usize>,
+    /// Samples at the frame times with data, nothing else.
+    request: Request,
+    /// Residual rows: two per marker position present.
+    n_rows: usize,
+}
+
+/// One residual row: which frame (among the frames with data), which marker (0 slider, 1 bob),
+/// which coordinate, and the observed value.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RowInfo {
+    /// Frame index among the frames with data.
+    pub frame: usize,
+    /// 0 slider, 1 bob.
+    pub marker: usize,
+    /// 0 x, 1 y.
+    pub coord: usize,
+    /// Observed value (m).
+    pub observed: f64,
 }
 
 /// The residual function of a fit: fixed values, free parameters, weights.
@@ -157,12 +186,10 @@ pub struct TrajectoryProblem {
     pub options: Options,
     /// Noise scale per marker (slider, bob) in metres: residuals are divided by it.
     pub sigma: [f64; 2],
-    /// Extra weight per row (robust loss by iteratively reweighted least squares).
-    pub row_weights: Vec<f64>,
-    rows: Vec<Row>,
-    times: Vec<f64>,
-    /// Samples at the frame times, nothing else: built once, not per evaluation.
-    request: Request,
+    /// Extra weight per row (robust loss, outliers at zero); `None` while every weight is one,
+    /// so the common case stores nothing per row.
+    weights: Option<Arc<Vec<f64>>>,
+    layout: Arc<Layout>,
     /// Evaluations of this problem and its clones, for the report.
     pub counters: Arc<Counters>,
 }
@@ -185,28 +212,17 @@ impl TrajectoryProblem {
         free: Vec<Param>,
         options: Options,
     ) -> Self {
-        let mut rows = Vec::new();
+        let mut obs_index = Vec::new();
         let mut frames = Vec::new();
+        let mut n_rows = 0;
         for (i, (s, b)) in obs.slider.iter().zip(&obs.bob).enumerate() {
-            let mut any = false;
-            for (marker, pos) in [(0, s), (1, b)] {
-                if let Some(p) = pos {
-                    any = true;
-                    for (coord, &observed) in p.iter().enumerate() {
-                        rows.push(Row {
-                            frame: frames.len(),
-                            marker,
-                            coord,
-                            observed,
-                        });
-                    }
-                }
-            }
-            if any {
+            let present = usize::from(s.is_some()) + usize::from(b.is_some());
+            if present > 0 {
+                n_rows += 2 * present;
+                obs_index.push(i);
                 frames.push(obs.times[i]);
             }
         }
-        let n = rows.len();
         TrajectoryProblem {
             obs,
             rig,
@@ -216,25 +232,60 @@ impl TrajectoryProblem {
             tie_static: true,
             options,
             sigma: [1.0, 1.0],
-            row_weights: vec![1.0; n],
-            rows,
-            request: Request {
-                sample_times: frames.clone(),
-                friction_work: false,
-            },
-            times: frames,
+            weights: None,
+            layout: Arc::new(Layout {
+                obs_index,
+                request: Request {
+                    sample_times: frames,
+                    friction_work: false,
+                },
+                n_rows,
+            }),
             counters: Arc::new(Counters::default()),
         }
     }
 
+    /// The same model, values and settings over other observations (every row weight one;
+    /// the counters stay shared).
+    pub fn on(&self, obs: Arc<Observations>) -> TrajectoryProblem {
+        let mut pr =
+            TrajectoryProblem::new(obs, self.rig, self.initial, self.free.clone(), self.options);
+        pr.camera = self.camera;
+        pr.tie_static = self.tie_static;
+        pr.sigma = self.sigma;
+        pr.counters = self.counters.clone();
+        pr
+    }
+
+    /// Every residual row in order: frame-major, the slider before the bob, x before y.
+    pub fn rows(&self) -> impl Iterator<Item = RowInfo> + '_ {
+        self.layout
+            .obs_index
+            .iter()
+            .enumerate()
+            .flat_map(move |(frame, &i)| {
+                [(0, self.obs.slider[i]), (1, self.obs.bob[i])]
+                    .into_iter()
+                    .filter_map(|(marker, pos)| pos.map(|p| (marker, p)))
+                    .flat_map(move |(marker, p)| {
+                        (0..2).map(move |coord| RowInfo {
+                            frame,
+                            marker,
+                            coord,
+                            observed: p[coord],
+                        })
+                    })
+            })
+    }
+
     /// Frame index (into the problem's frames with data) of each residual row.
     pub fn row_frames(&self) -> Vec<usize> {
-        self.rows.iter().map(|r| r.frame).collect()
+        self.rows().map(|r| r.frame).collect()
     }
 
     /// Observed value of each residual row (m).
     pub fn row_observed(&self) -> Vec<f64> {
-        self.rows.iter().map(|r| r.observed).collect()
+        self.rows().map(|r| r.observed).collect()
     }
 
     /// The observations.
@@ -244,12 +295,39 @@ impl TrajectoryProblem {
 
     /// Number of residual rows.
     pub fn n_rows(&self) -> usize {
-        self.rows.len()
+        self.layout.n_rows
     }
 
     /// Marker (0 slider, 1 bob) of each residual row.
     pub fn row_markers(&self) -> Vec<usize> {
-        self.rows.iter().map(|r| r.marker).collect()
+        self.rows().map(|r| r.marker).collect()
+    }
+
+    /// Extra weight of row `row` (1 unless a robust loss or an outlier set it).
+    pub fn row_weight(&self, row: usize) -> f64 {
+        self.weights.as_ref().map_or(1.0, |w| w[row])
+    }
+
+    /// Set every row's extra weight (`weights.len()` must be [`Self::n_rows`]).
+    pub fn set_row_weights(&mut self, weights: Vec<f64>) {
+        debug_assert_eq!(weights.len(), self.n_rows());
+        self.weights = Some(Arc::new(weights));
+    }
+
+    /// Set the weight of some rows to zero (mis-tracked positions left out).
+    pub fn drop_rows(&mut self, rows: impl IntoIterator<Item = usize>) {
+        let n = self.n_rows();
+        let w = Arc::make_mut(self.weights.get_or_insert_with(|| Arc::new(vec![1.0; n])));
+        for r in rows {
+            w[r] = 0.0;
+        }
+    }
+
+    /// Rows with a weight above zero.
+    pub fn rows_used(&self) -> usize {
+        self.weights
+            .as_ref()
+            .map_or(self.n_rows(), |w| w.iter().filter(|v| **v > 0.0).count())
     }
 
     /// Current values of the free parameters.
@@ -321,75 +399,88 @@ impl TrajectoryProblem {
     }
 
     /// Simulate with parameters `p` and hand every residual row (predicted - observed, in
-    /// metres, with its marker) to `each`, without collecting intermediate vectors: the
-    /// Jacobian path runs this tens of times per fit on thousands of frames.
+    /// metres) to `each(row, frame, marker, residual)` as the simulation passes its frame:
+    /// nothing per frame is kept, so a million frames cost no more memory than ten.
     fn for_each_residual<T: Scalar + 'static>(
         &self,
         p: &[T],
-        mut each: impl FnMut(usize, &Row, T),
+        mut each: impl FnMut(usize, usize, usize, T),
     ) -> Result<(), SimError> {
         let (rig, y0, camera) = self.apply(p);
-        let t_end = self.times.last().copied().unwrap_or(0.0);
-        let sol = simulate(&rig, &y0, t_end, &self.options, &self.request)?;
-        if sol.samples.len() < self.times.len() {
+        let layout = &*self.layout;
+        let obs = &*self.obs;
+        let t_end = layout.request.sample_times.last().copied().unwrap_or(0.0);
+        let (mut frame, mut row) = (0, 0);
+        let mut sink = |s: Sample<T>| {
+            let i = layout.obs_index[frame];
+            let m = observed_markers(&rig, &camera, s.mode, &s.state);
+            for (marker, pos) in [(0, &obs.slider[i]), (1, &obs.bob[i])] {
+                if let Some(o) = pos {
+                    for (coord, &observed) in o.iter().enumerate() {
+                        each(row, frame, marker, m[2 * marker + coord] - observed);
+                        row += 1;
+                    }
+                }
+            }
+            frame += 1;
+        };
+        let sol = simulate_each(&rig, &y0, t_end, &self.options, &layout.request, &mut sink)?;
+        if frame < layout.obs_index.len() {
             return Err(SimError::InvalidInput(format!(
                 "the model stops at t = {} s (Painleve paradox) before the recording ends",
                 sol.final_time
             )));
-        }
-        let mut cached: Option<(usize, [T; 4])> = None;
-        for (i, r) in self.rows.iter().enumerate() {
-            let m = match cached {
-                Some((f, m)) if f == r.frame => m,
-                _ => {
-                    let sample = &sol.samples[r.frame];
-                    let m = observed_markers(&rig, &camera, sample.mode, &sample.state);
-                    cached = Some((r.frame, m));
-                    m
-                }
-            };
-            each(i, r, m[2 * r.marker + r.coord] - r.observed);
         }
         Ok(())
     }
 
     /// Weighted residuals (predicted - observed) / sigma for parameters `p`.
     pub fn weighted<T: Scalar + 'static>(&self, p: &[T]) -> Result<Vec<T>, SimError> {
-        let mut out = Vec::with_capacity(self.rows.len());
-        self.for_each_residual(p, |i, r, d| {
-            out.push(d * (self.row_weights[i] / self.sigma[r.marker]))
+        let mut out = Vec::with_capacity(self.n_rows());
+        self.for_each_residual(p, |row, _, marker, d| {
+            out.push(d * (self.row_weight(row) / self.sigma[marker]))
         })?;
         Ok(out)
     }
 
-    /// Weighted residuals (as the solver sees them) back in metres, with each row's marker:
-    /// saves simulating again when the weighted ones are at hand.
-    pub fn unweighted(&self, weighted: &[f64]) -> Vec<(usize, f64)> {
-        self.rows
-            .iter()
-            .zip(weighted)
-            .zip(&self.row_weights)
-            .map(|((r, v), w)| (r.marker, v * self.sigma[r.marker] / w))
-            .collect()
+    /// Weighted residuals as a vector (one simulation).
+    pub fn residuals(&self, p: &DVector<f64>) -> Result<DVector<f64>, Error> {
+        self.counters.residuals.fetch_add(1, Ordering::Relaxed);
+        let r = self.weighted(p.as_slice()).map_err(to_err)?;
+        Ok(DVector::from_vec(r))
     }
 
-    /// Unweighted residuals in metres, with each row's marker.
-    pub fn raw_residuals(&self, p: &DVector<f64>) -> Result<Vec<(usize, f64)>, SimError> {
-        let mut out = Vec::with_capacity(self.rows.len());
-        self.for_each_residual(p.as_slice(), |_, r, d| out.push((r.marker, d)))?;
+    /// The weighted sum of squares at `p`, summed as the simulation runs (nothing stored).
+    pub fn chi2(&self, p: &DVector<f64>) -> Result<f64, Error> {
+        self.counters.residuals.fetch_add(1, Ordering::Relaxed);
+        let mut ss = 0.0;
+        self.for_each_residual(p.as_slice(), |row, _, marker, d: f64| {
+            let v = d * (self.row_weight(row) / self.sigma[marker]);
+            ss += v * v;
+        })
+        .map_err(to_err)?;
+        Ok(ss)
+    }
+
+    /// Unweighted residuals in metres, row by row (pair them with [`Self::rows`]).
+    pub fn raw_residuals(&self, p: &DVector<f64>) -> Result<Vec<f64>, SimError> {
+        let mut out = Vec::with_capacity(self.n_rows());
+        self.for_each_residual(p.as_slice(), |_, _, _, d| out.push(d))?;
         Ok(out)
     }
 
     /// Frame times with data.
     pub fn frame_times(&self) -> &[f64] {
-        &self.times
+        &self.layout.request.sample_times
     }
 
-    fn jacobian_n<const N: usize>(
+    /// The normal equations at `p` with dual numbers of width `N` >= `p.len()` (slots beyond
+    /// carry no seed), and the block sums over `block` frames when asked for.
+    fn normal_n<const N: usize>(
         &self,
         p: &DVector<f64>,
-    ) -> Result<(DVector<f64>, DMatrix<f64>), SimError> {
-        // Width N >= k = p.len(): slots k.. carry no seed and are not read back.
+        block: Option<usize>,
+    ) -> Result<Normal, SimError> {
         let k = p.len();
         let seeded: Vec<DualSVec64<N>> = (0..k)
             .map(|i| {
@@ -399,18 +490,125 @@ impl TrajectoryProblem {
                 )
             })
             .collect();
-        let n = self.rows.len();
-        let mut jac = DMatrix::zeros(n, k);
-        let mut res = DVector::zeros(n);
-        self.for_each_residual(&seeded, |row, r, d| {
-            let v = d * (self.row_weights[row] / self.sigma[r.marker]);
-            res[row] = v.re;
+        let mut ss = 0.0;
+        let mut jtj = [[0.0; N]; N];
+        let mut jtr = [0.0; N];
+        let mut meat = [[0.0; N]; N];
+        let mut g = [0.0; N];
+        let mut current = usize::MAX;
+        let flush = |g: &mut [f64; N], meat: &mut [[f64; N]; N]| {
+            for a in 0..k {
+                for b in 0..=a {
+                    meat[a][b] += g[a] * g[b];
+                }
+            }
+            *g = [0.0; N];
+        };
+        self.for_each_residual(&seeded, |row, frame, marker, d| {
+            let v = d * (self.row_weight(row) / self.sigma[marker]);
+            let r = v.re;
             let e = v.eps.unwrap_generic(nalgebra::Const::<N>, U1);
-            for c in 0..k {
-                jac[(row, c)] = e[c];
+            ss += r * r;
+            // Over the whole width N, a constant, so the loops unroll: the unseeded slots
+            // only ever add zeros to entries nobody reads.
+            for a in 0..N {
+                jtr[a] += e[a] * r;
+                for b in 0..=a {
+                    jtj[a][b] += e[a] * e[b];
+                }
+            }
+            if let Some(len) = block {
+                let b = frame / len;
+                if b != current {
+                    flush(&mut g, &mut meat);
+                    current = b;
+                }
+                for a in 0..N {
+                    g[a] += e[a] * r;
+                }
             }
         })?;
-        Ok((res, jac))
+        flush(&mut g, &mut meat);
+        let sym = |m: &[[f64; N]; N]| DMatrix::from_fn(k, k, |a, b| m[a.max(b)][a.min(b)]);
+        Ok(Normal {
+            cost: 0.5 * ss,
+            jtj: sym(&jtj),
+            jtr: DVector::from_fn(k, |a, _| jtr[a]),
+            meat: block.map(|_| sym(&meat)),
+        })
+    }
+
+    /// Residuals and the whole Jacobian (rows x parameters) at `p`, by the same dual-number
+    /// run as the normal equations: for tests and small problems only (the fit never holds
+    /// the Jacobian).
+    pub fn jacobian(&self, p: &DVector<f64>) -> Result<(DVector<f64>, DMatrix<f64>), Error> {
+        fn dense<const N: usize>(
+            pr: &TrajectoryProblem,
+            p: &DVector<f64>,
+        ) -> Result<(DVector<f64>, DMatrix<f64>), SimError> {
+            let k = p.len();
+            let seeded: Vec<DualSVec64<N>> = (0..k)
+                .map(|i| {
+                    DualSVec64::<N>::new(
+                        p[i],
+                        Derivative::derivative_generic(nalgebra::Const::<N>, U1, i),
+                    )
+                })
+                .collect();
+            let n = pr.n_rows();
+            let (mut res, mut jac) = (DVector::zeros(n), DMatrix::zeros(n, k));
+            pr.for_each_residual(&seeded, |row, _, marker, d| {
+                let v = d * (pr.row_weight(row) / pr.sigma[marker]);
+                res[row] = v.re;
+                let e = v.eps.unwrap_generic(nalgebra::Const::<N>, U1);
+                for c in 0..k {
+                    jac[(row, c)] = e[c];
+                }
+            })?;
+            Ok((res, jac))
+        }
+        match p.len() {
+            0..=3 => dense::<3>(self, p),
+            4 => dense::<4>(self, p),
+            5 => dense::<5>(self, p),
+            6 => dense::<6>(self, p),
+            7 | 8 => dense::<8>(self, p),
+            9 | 10 => dense::<10>(self, p),
+            n => {
+                return Err(Error::msg(format!(
+                    "at most {MAX_FREE} free parameters, got {n}"
+                )))
+            }
+        }
+        .map_err(to_err)
+    }
+
+    /// Exact normal equations by forward-mode dual numbers through the integrator, with event
+    /// times differentiated implicitly at every mode switch; with `block`, also the block sums
+    /// of the block covariance (frames per block).
+    pub fn normal_equations_blocked(
+        &self,
+        p: &DVector<f64>,
+        block: Option<usize>,
+    ) -> Result<Normal, Error> {
+        self.counters.jacobians.fetch_add(1, Ordering::Relaxed);
+        // Each dual width is a full copy of the simulator in the binary: widths 3, 4, 5, 6,
+        // 8 and 10 serve every size (a few derivative slots stay unused) and keep the build
+        // time down.
+        match p.len() {
+            0..=3 => self.normal_n::<3>(p, block),
+            4 => self.normal_n::<4>(p, block),
+            5 => self.normal_n::<5>(p, block),
+            6 => self.normal_n::<6>(p, block),
+            7 | 8 => self.normal_n::<8>(p, block),
+            9 | 10 => self.normal_n::<10>(p, block),
+            n => {
+                return Err(Error::msg(format!(
+                    "at most {MAX_FREE} free parameters, got {n}"
+                )))
+            }
+        }
+        .map_err(to_err)
     }
 }
 
@@ -419,33 +617,8 @@ fn to_err(e: SimError) -> Error {
 }
 
 impl LeastSquares for TrajectoryProblem {
-    fn residuals(&self, p: &DVector<f64>) -> Result<DVector<f64>, Error> {
-        self.counters.residuals.fetch_add(1, Ordering::Relaxed);
-        let r = self.weighted(p.as_slice()).map_err(to_err)?;
-        Ok(DVector::from_vec(r))
-    }
-
-    /// Exact Jacobian by forward-mode dual numbers through the integrator, with event times
-    /// differentiated implicitly at every mode switch.
-    fn residuals_jacobian(&self, p: &DVector<f64>) -> Result<(DVector<f64>, DMatrix<f64>), Error> {
-        self.counters.jacobians.fetch_add(1, Ordering::Relaxed);
-        // Each dual width is a full copy of the simulator in the binary: widths 3, 4, 5, 6,
-        // 8 and 10 serve every size (a few derivative slots stay unused) and keep the build
-        // time down.
-        match p.len() {
-            0..=3 => self.jacobian_n::<3>(p),
-            4 => self.jacobian_n::<4>(p),
-            5 => self.jacobian_n::<5>(p),
-            6 => self.jacobian_n::<6>(p),
-            7 | 8 => self.jacobian_n::<8>(p),
-            9 | 10 => self.jacobian_n::<10>(p),
-            n => {
-                return Err(Error::msg(format!(
-                    "at most {MAX_FREE} free parameters, got {n}"
-                )))
-            }
-        }
-        .map_err(to_err)
+    fn normal_equations(&self, p: &DVector<f64>) -> Result<Normal, Error> {
+        self.normal_equations_blocked(p, None)
     }
 
     fn project(&self, p: &mut DVector<f64>) {

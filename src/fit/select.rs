@@ -202,18 +202,19 @@ fn score_drops(
         for (i, &param) in aug.free.iter().enumerate().skip(k) {
             q[i] = problem.get(param);
         }
-        if let Ok((r, j)) = aug.residuals_jacobian(&q) {
-            let b = j.columns(0, k).into_owned();
-            let btb = b.tr_mul(&b);
+        // Every block the score test needs is a block of the augmented normal equations:
+        // B'B, B'C, C'C and C'r.
+        if let Ok(nq) = aug.normal_equations(&q) {
+            let btb = nq.jtj.view((0, 0), (k, k)).into_owned();
             if let Some(btb_inv) = btb.try_inverse() {
                 let mut col = k;
                 for n in group.iter() {
                     let w = n.params().len();
-                    let c = j.columns(col, w).into_owned();
+                    let g = nq.jtr.rows(col, w).into_owned();
+                    let bc = nq.jtj.view((0, col), (k, w)).into_owned();
+                    let ctc = nq.jtj.view((col, col), (w, w)).into_owned();
                     col += w;
-                    let g = c.tr_mul(&r);
-                    let bc = b.tr_mul(&c);
-                    let s = c.tr_mul(&c) - bc.transpose() * &btb_inv * &bc;
+                    let s = ctc - bc.transpose() * &btb_inv * &bc;
                     let drop = s
                         .try_inverse()
                         .map(|si| (g.transpose() * si * &g)[(0, 0)])

@@ -3,11 +3,10 @@
 //! (heteroskedasticity-and-autocorrelation-consistent) covariance over contiguous stretches of
 //! frames, fits of the recording's thirds, and the profile interval for a parameter.
 
-use super::lm::LeastSquares;
 use super::problem::{Observations, Param, TrajectoryProblem};
-use super::{solve, FitSettings};
+use super::{solve, solve_loose, FitSettings};
 use crate::model::Mode;
-use crate::sim::{simulate, Request};
+use crate::sim::{simulate, simulate_each, Request, Sample};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use statrs::distribution::{ChiSquared, ContinuousCDF, FisherSnedecor};
@@ -34,7 +33,7 @@ pub struct Assessment {
     pub se_block: Vec<f64>,
     /// Frames per block of the block covariance.
     pub block_frames: usize,
-    /// The residuals (weighted) and Jacobian at the optimum.
+    /// The residuals (weighted) at the optimum.
     pub r: DVector<f64>,
 }
 
@@ -44,11 +43,18 @@ pub fn assess(
     p: &DVector<f64>,
     noise_dof: f64,
 ) -> Result<Assessment, String> {
-    let (r, j) = problem.residuals_jacobian(p).map_err(|e| e.to_string())?;
-    let used = problem.row_weights.iter().filter(|w| **w > 0.0).count();
+    // The residuals first (one simulation in f64): the block length comes from their
+    // autocorrelation, and the normal equations are then summed with the block sums in one
+    // dual-number run, without the Jacobian in memory.
+    let r = problem.residuals(p).map_err(|e| e.to_string())?;
+    let block = block_length(problem, r.as_slice());
+    let normal = problem
+        .normal_equations_blocked(p, Some(block))
+        .map_err(|e| e.to_string())?;
+    let used = problem.rows_used();
     let k = p.len();
     let dof = (used.saturating_sub(k)).max(1) as f64;
-    let chi2 = r.norm_squared();
+    let chi2 = 2.0 * normal.cost;
     let reduced = chi2 / dof;
     let p_value = if noise_dof.is_finite() && noise_dof > 1.0 {
         FisherSnedecor::new(dof, noise_dof)
@@ -57,29 +63,16 @@ pub fn assess(
     } else {
         ChiSquared::new(dof).map(|c| c.sf(chi2)).unwrap_or(f64::NAN)
     };
-    let jtj = j.tr_mul(&j);
+    let jtj = normal.jtj;
     let inv = jtj.clone().try_inverse().unwrap_or_else(|| {
         jtj.pseudo_inverse(1e-14)
             .unwrap_or(DMatrix::from_element(k, k, f64::NAN))
     });
     let cov = &inv * reduced.max(1.0);
     let se: Vec<f64> = (0..k).map(|i| cov[(i, i)].max(0.0).sqrt()).collect();
-    let frames = problem.row_frames();
-    let block = block_length(problem, r.as_slice());
-    let mut meat = DMatrix::zeros(k, k);
-    let mut g = DVector::zeros(k);
-    let mut current = usize::MAX;
-    for (row, &f) in frames.iter().enumerate() {
-        let b = f / block;
-        if b != current {
-            meat += &g * g.transpose();
-            g.fill(0.0);
-            current = b;
-        }
-        g += j.row(row).transpose() * r[row];
-    }
-    meat += &g * g.transpose();
-    let n_blocks = frames.last().map_or(1, |f| f / block + 1) as f64;
+    let meat = normal.meat.unwrap_or_else(|| DMatrix::zeros(k, k));
+    let n_frames = problem.frame_times().len();
+    let n_blocks = n_frames.div_ceil(block).max(1) as f64;
     // Small-sample correction of the cluster-robust estimate: G / (G - 1) (n - 1) / (n - k).
     let n = used.max(k + 2) as f64;
     let correction = n_blocks / (n_blocks - 1.0).max(1.0) * (n - 1.0) / (n - k as f64);
@@ -101,8 +94,7 @@ pub fn assess(
 /// Frames per block: twice the lag at which the residuals' autocorrelation falls below 0.1,
 /// at least 5 frames and at most a tenth of the recording (at least ten blocks).
 fn block_length(problem: &TrajectoryProblem, r: &[f64]) -> usize {
-    let frames = problem.row_frames();
-    let n_frames = frames.last().map_or(1, |f| f + 1);
+    let n_frames = problem.frame_times().len().max(1);
     let streams = streams(problem, r);
     let den: f64 = streams.iter().flatten().map(|v| v * v).sum();
     let mut lag_small = 1;
@@ -123,17 +115,9 @@ fn block_length(problem: &TrajectoryProblem, r: &[f64]) -> usize {
 
 /// The residuals split into their coordinate streams (slider x, y, bob x, y), in frame order.
 fn streams(problem: &TrajectoryProblem, r: &[f64]) -> Vec<Vec<f64>> {
-    let markers = problem.row_markers();
     let mut out = vec![Vec::new(); 4];
-    // Rows come frame-major with x before y for each marker present.
-    let mut last: Option<(usize, usize)> = None;
-    for (i, &v) in r.iter().enumerate() {
-        let coord = match last {
-            Some((m, 0)) if m == markers[i] => 1,
-            _ => 0,
-        };
-        out[2 * markers[i] + coord].push(v);
-        last = Some((markers[i], coord));
+    for (row, &v) in problem.rows().zip(r) {
+        out[2 * row.marker + row.coord].push(v);
     }
     out
 }
@@ -221,10 +205,14 @@ pub fn windows(
             m.camera = problem.camera;
             m.tie_static = problem.tie_static && !problem.free.contains(&Param::MuStatic);
             m.sigma = problem.sigma;
-            let (q, _, _) = solve(&m, m.values(), settings.max_iters).ok()?;
+            // A long recording's thirds start next to their optimum (the whole fit's state)
+            // and check agreement within errors far wider than a looser stop moves them.
+            let ftol = (n > settings.long_prefix.saturating_mul(2)).then_some(1e-6);
+            let (q, _, _) = solve_loose(&m, m.values(), settings.max_iters, ftol).ok()?;
             m.set_values(&q);
             // Only a stretch that slides says anything about mu_kinetic.
-            let slides = simulate(
+            let mut sliding = 0;
+            simulate_each(
                 &m.rig,
                 &m.initial,
                 m.frame_times().last().copied().unwrap_or(0.0),
@@ -233,13 +221,10 @@ pub fn windows(
                     sample_times: m.frame_times().to_vec(),
                     friction_work: false,
                 },
+                &mut |s: Sample<f64>| sliding += usize::from(matches!(s.mode, Mode::Slide(_))),
             )
-            .ok()?
-            .samples
-            .iter()
-            .filter(|s| matches!(s.mode, Mode::Slide(_)))
-            .count()
-                >= 10;
+            .ok()?;
+            let slides = sliding >= 10;
             if !slides {
                 return None;
             }
@@ -295,7 +280,7 @@ pub fn profile_interval(
 ) -> Option<[f64; 2]> {
     let target = 3.84 * scale;
     let base = p.clone();
-    let s_min = problem.residuals(p).ok()?.norm_squared();
+    let s_min = problem.chi2(p).ok()?;
     let mut fixed = problem.clone();
     fixed.free.remove(k);
     let others: Vec<usize> = (0..p.len()).filter(|&i| i != k).collect();
@@ -312,6 +297,31 @@ pub fn profile_interval(
         Some((2.0 * cost - s_min, opt))
     };
     let start: DVector<f64> = DVector::from_iterator(others.len(), others.iter().map(|&i| p[i]));
+    // A long recording's interval is so narrow that the chi-square is quadratic across it to
+    // high accuracy: one profile point at each Wald end checks that, and when its rise is
+    // within 20% of the target, the end follows from it (exact for a quadratic). Otherwise,
+    // and always for short recordings, the search below.
+    let long = problem.frame_times().len() > settings.long_prefix.saturating_mul(2);
+    if long && se.is_finite() && se > 0.0 {
+        let half = 1.96 * se;
+        let mut quick = [0.0; 2];
+        let mut ok = true;
+        for (side, dir) in [-1.0f64, 1.0].iter().enumerate() {
+            let v = p[k] + dir * half;
+            match profile(v, &start) {
+                Some((d, _)) if v >= lower_limit && d > 0.8 * target && d < 1.25 * target => {
+                    quick[side] = p[k] + dir * half * (target / d).sqrt();
+                }
+                _ => ok = false,
+            }
+            if !ok {
+                break;
+            }
+        }
+        if ok {
+            return Some(quick);
+        }
+    }
     let mut ends = [0.0; 2];
     for (side, dir) in [-1.0f64, 1.0].iter().enumerate() {
         // A standard error larger than half the value means the linearisation says nothing

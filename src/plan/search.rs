@@ -175,10 +175,10 @@ impl<'a> Evaluator<'a> {
         problem.tie_static = self.spec.mu_static.is_none();
         let noise = self.spec.camera.noise_m;
         problem.sigma = [noise, noise];
-        let Ok((_, j)) = problem.residuals_jacobian(&problem.values()) else {
+        let Ok(normal) = problem.normal_equations(&problem.values()) else {
             return f64::INFINITY;
         };
-        let info = j.transpose() * &j;
+        let info = normal.jtj;
         match info.cholesky() {
             Some(ch) => {
                 let var = ch.inverse()[(0, 0)];

@@ -289,8 +289,25 @@ pub fn fit_text(rep: &FitReport) -> String {
         let _ = writeln!(s, "[[Fitted timeline]] no mode changes");
     } else {
         let _ = writeln!(s, "[[Fitted timeline]]");
-        for e in &rep.events {
+        // A long stick-slip recording has hundreds of events: the first and the last ones
+        // here, every one in the JSON.
+        let n = rep.events.len();
+        let (head, tail) = if n > 40 { (30, 5) } else { (n, 0) };
+        let line = |s: &mut String, e: &crate::sim::Event| {
             let _ = writeln!(s, "  {:>12.6} s  {:<7} -> {}", e.t, e.from.name(), e.to);
+        };
+        for e in &rep.events[..head] {
+            line(&mut s, e);
+        }
+        if tail > 0 {
+            let _ = writeln!(
+                s,
+                "  ... {} more events (every one in --json) ...",
+                n - head - tail
+            );
+            for e in &rep.events[n - tail..] {
+                line(&mut s, e);
+            }
         }
     }
     for w in &rep.warnings {
@@ -298,6 +315,9 @@ pub fn fit_text(rep: &FitReport) -> String {
     }
     s
 }
+
+/// Most frames the fit's figure draws.
+const PLOT_FRAMES: usize = 20_000;
 
 /// The fit's figure: slider x and bob position, data and fit, residuals, mode bands.
 pub struct FitFigure<'a> {
@@ -398,8 +418,22 @@ impl Figure for FitFigure<'_> {
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
         let rep = self.report;
-        let t0 = self.obs.times[0];
-        let times: Vec<f64> = self.obs.times.iter().map(|t| t - t0).collect();
+        // A figure cannot show more frames than it has pixels: a long recording is drawn
+        // from every k-th frame (at most PLOT_FRAMES), the fit's numbers still from all.
+        let stride = self.obs.times.len().div_ceil(PLOT_FRAMES).max(1);
+        let thinned;
+        let obs = if stride > 1 {
+            thinned = Observations {
+                times: self.obs.times.iter().step_by(stride).copied().collect(),
+                slider: self.obs.slider.iter().step_by(stride).copied().collect(),
+                bob: self.obs.bob.iter().step_by(stride).copied().collect(),
+            };
+            &thinned
+        } else {
+            self.obs
+        };
+        let t0 = obs.times[0];
+        let times: Vec<f64> = obs.times.iter().map(|t| t - t0).collect();
         let t_end = times.last().copied().unwrap_or(1.0).max(1e-9);
         let sol = simulate(
             &rep.rig,
@@ -429,11 +463,7 @@ impl Figure for FitFigure<'_> {
             .collect();
         // Observed coordinate k (0..4 as in COORDS) at frame i, in mm.
         let observed = |k: usize, i: usize| -> Option<f64> {
-            let m = if k < 2 {
-                self.obs.slider[i]
-            } else {
-                self.obs.bob[i]
-            };
+            let m = if k < 2 { obs.slider[i] } else { obs.bob[i] };
             m.map(|p| p[k % 2] * 1e3)
         };
         let data = |k: usize| -> Vec<(f64, f64)> {

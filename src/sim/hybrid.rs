@@ -32,11 +32,34 @@ pub fn simulate<T: Scalar + 'static>(
     options: &Options,
     request: &Request,
 ) -> Result<Solution<T>, SimError> {
+    let mut samples = Vec::with_capacity(request.sample_times.len());
+    let mut sol = simulate_each(rig, y0, t_end, options, request, &mut |s: Sample<T>| {
+        samples.push(s)
+    })?;
+    sol.samples = samples;
+    Ok(sol)
+}
+
+/// [`simulate`] handing each requested sample to `sink` as the run passes its time, in time
+/// order, instead of collecting them: a fit over a million frames keeps no per-frame state.
+/// The returned solution's `samples` is empty.
+pub fn simulate_each<T: Scalar + 'static>(
+    rig: &Rig<T>,
+    y0: &State<T>,
+    t_end: f64,
+    options: &Options,
+    request: &Request,
+    sink: &mut dyn FnMut(Sample<T>),
+) -> Result<Solution<T>, SimError> {
+    // The sink is a trait object so that each scalar type has one copy of the run, whatever
+    // the callers do with their samples.
     match (options.method, request.friction_work) {
-        (Method::Dp5, false) => run::<T, Dp5<T, 4>, 4>(rig, y0, t_end, options, request),
-        (Method::Dp5, true) => run::<T, Dp5<T, 6>, 6>(rig, y0, t_end, options, request),
-        (Method::Dop853, false) => run::<T, Dop853<T, 4>, 4>(rig, y0, t_end, options, request),
-        (Method::Dop853, true) => run::<T, Dop853<T, 6>, 6>(rig, y0, t_end, options, request),
+        (Method::Dp5, false) => run::<T, Dp5<T, 4>, 4>(rig, y0, t_end, options, request, sink),
+        (Method::Dp5, true) => run::<T, Dp5<T, 6>, 6>(rig, y0, t_end, options, request, sink),
+        (Method::Dop853, false) => {
+            run::<T, Dop853<T, 4>, 4>(rig, y0, t_end, options, request, sink)
+        }
+        (Method::Dop853, true) => run::<T, Dop853<T, 6>, 6>(rig, y0, t_end, options, request, sink),
     }
 }
 
@@ -314,14 +337,14 @@ fn find_root(
 }
 
 /// Bookkeeping shared by the steps of a run.
-struct Output<T> {
+struct Output<'s, T> {
     events: Vec<Event>,
-    samples: Vec<Sample<T>>,
+    sink: &'s mut dyn FnMut(Sample<T>),
     next_sample: usize,
     stats: Stats,
 }
 
-impl<T: Scalar> Output<T> {
+impl<T: Scalar> Output<'_, T> {
     /// Emit requested samples with times in (t_lo, t_hi] (or [0, t_hi] at the start).
     fn emit<const N: usize>(
         &mut self,
@@ -337,7 +360,7 @@ impl<T: Scalar> Output<T> {
             }
             if ts >= t_lo {
                 let y = at(ts);
-                self.samples.push(Sample {
+                (self.sink)(Sample {
                     t: ts,
                     state: [y[0], y[1], y[2], y[3]],
                     mode,
@@ -626,6 +649,7 @@ fn run<T, M, const N: usize>(
     t_end: f64,
     options: &Options,
     request: &Request,
+    sink: &mut dyn FnMut(Sample<T>),
 ) -> Result<Solution<T>, SimError>
 where
     T: Scalar + 'static,
@@ -671,7 +695,7 @@ where
     let mut t = 0.0;
     let mut out = Output {
         events: Vec::new(),
-        samples: Vec::with_capacity(times.len()),
+        sink,
         next_sample: 0,
         stats: Stats::default(),
     };
@@ -1102,14 +1126,14 @@ fn apply_reset<T: Scalar, const N: usize>(rig: &Rig<T>, reset: Reset, y: &mut [T
 }
 
 fn finish<T: Scalar, const N: usize>(
-    out: Output<T>,
+    out: Output<'_, T>,
     t: f64,
     y: &[T; N],
     mode: Mode,
 ) -> Solution<T> {
     Solution {
         events: out.events,
-        samples: out.samples,
+        samples: Vec::new(),
         final_time: t,
         final_state: [y[0], y[1], y[2], y[3]],
         final_mode: mode,

@@ -5,7 +5,7 @@ mod hybrid;
 pub mod rk;
 pub mod tableau;
 
-pub use hybrid::{impulsive_stop, simulate};
+pub use hybrid::{impulsive_stop, simulate, simulate_each};
 
 use crate::model::{Direction, Mode, State};
 use serde::Serialize;
