@@ -167,17 +167,18 @@ const CANONICAL_MARKERS: usize = 8;
 /// One frame in the exact layout [`write_json`] (and the Python example files) write:
 /// `{"timestamp":{"sec":S,"nsec":N},"frame_id":"..","markers":[{"id":"..","x":X,"y":Y},..]}`
 /// without whitespace: the stamp's parts and up to [`CANONICAL_MARKERS`] markers (name, x, y),
-/// names and the frame id printable ASCII without escapes.
+/// names and the frame id without escapes.
 struct CanonicalFrame<'a> {
     sec: i64,
     nsec: i64,
     len: usize,
-    markers: [(&'a [u8], Option<f64>, Option<f64>); CANONICAL_MARKERS],
+    markers: [(&'a str, Option<f64>, Option<f64>); CANONICAL_MARKERS],
 }
 
 /// A byte cursor over one message for [`canonical_frame`]; every method returns `None` (the
 /// message then goes to serde) at anything outside the narrow layout it accepts.
 struct Bytes<'a> {
+    text: &'a str,
     d: &'a [u8],
     at: usize,
 }
@@ -194,20 +195,20 @@ impl<'a> Bytes<'a> {
             .count()
     }
 
-    /// A string of printable ASCII without escapes: its bytes are its text.
-    fn string(&mut self) -> Option<&'a [u8]> {
+    /// A string without escapes or control characters: its bytes are its text.
+    fn string(&mut self) -> Option<&'a str> {
         self.lit(b"\"")?;
         let start = self.at;
         let len = self.d[start..].iter().position(|&b| b == b'"')?;
-        let raw = &self.d[start..start + len];
-        if raw
+        if self.d[start..start + len]
             .iter()
-            .any(|&b| b == b'\\' || !(0x20..0x7f).contains(&b))
+            .any(|&b| b == b'\\' || b < 0x20)
         {
             return None;
         }
         self.at = start + len + 1;
-        Some(raw)
+        // Quotes are ASCII, so both ends are character boundaries.
+        Some(&self.text[start..start + len])
     }
 
     /// A JSON integer of at most 18 digits (no `-0`, which serde reads as a float).
@@ -280,7 +281,7 @@ impl<'a> Bytes<'a> {
         if !(fraction || exponent) || significant > 19 {
             return None;
         }
-        let v: f64 = std::str::from_utf8(&self.d[start..i]).ok()?.parse().ok()?;
+        let v: f64 = self.text[start..i].parse().ok()?;
         if !v.is_finite() {
             return None;
         }
@@ -293,7 +294,13 @@ impl<'a> Bytes<'a> {
 /// (spaces, other keys or key order, escapes, integers where floats are written, more
 /// markers), which serde then reads. What this accepts, serde reads to the same values.
 fn canonical_frame(data: &[u8]) -> Option<CanonicalFrame<'_>> {
-    let mut b = Bytes { d: data, at: 0 };
+    // One UTF-8 check for the whole message; its pieces are then sliced out as text.
+    let text = std::str::from_utf8(data).ok()?;
+    let mut b = Bytes {
+        text,
+        d: data,
+        at: 0,
+    };
     b.lit(b"{\"timestamp\":{\"sec\":")?;
     let sec = b.int()?;
     b.lit(b",\"nsec\":")?;
@@ -305,7 +312,7 @@ fn canonical_frame(data: &[u8]) -> Option<CanonicalFrame<'_>> {
         sec,
         nsec,
         len: 0,
-        markers: [(b"", None, None); CANONICAL_MARKERS],
+        markers: [("", None, None); CANONICAL_MARKERS],
     };
     loop {
         if frame.len == CANONICAL_MARKERS {
@@ -424,22 +431,6 @@ impl Acc {
         };
         self.series[k].2.push((ns, p));
         self.next = k + 1;
-    }
-
-    /// [`Acc::push`] for a name of ASCII bytes, made text only for a marker not met at this
-    /// place in the frame before.
-    fn push_ascii(&mut self, topic: &str, name: &[u8], ns: i64, p: Option<[f64; 2]>) {
-        let guess = self.next % self.series.len().max(1);
-        match self.series.get_mut(guess) {
-            Some((t, n, s)) if t == topic && n.as_bytes() == name => {
-                s.push((ns, p));
-                self.next = guess + 1;
-            }
-            _ => {
-                let name = std::str::from_utf8(name).expect("ASCII is UTF-8");
-                self.push(topic, name, ns, p);
-            }
-        }
     }
 
     fn push_tf(&mut self, t: ros_cdr::TransformStamped, fixed: bool) {
@@ -723,7 +714,7 @@ fn decode(
                 }
                 .ns()?;
                 for &(id, x, y) in &f.markers[..f.len] {
-                    acc.push_ascii(topic, id, stamp, xy(x, y, None, plane));
+                    acc.push(topic, id, stamp, xy(x, y, None, plane));
                 }
                 return Ok(f.len);
             }
