@@ -1,10 +1,12 @@
 //! Benchmarks a user can run on their own machine: run time of a scene (median of repeats),
-//! and the work-precision diagram (run time against error for each integrator).
+//! the work-precision diagram (run time against error for each integrator), and the fit, the
+//! planner and the recording readers (`read`).
 
 pub use crate::model::pendulum as exact;
 pub mod fit;
 pub mod plan;
 pub mod plot;
+pub mod read;
 pub mod skips;
 pub mod work_precision;
 

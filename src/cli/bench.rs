@@ -1,5 +1,6 @@
 //! `appell bench [SCENE.toml]`: time a scene on this machine; `appell bench --work-precision`:
-//! run time against error for each integrator over a ladder of tolerances.
+//! run time against error for each integrator over a ladder of tolerances; `--fit`, `--skips`,
+//! `--plan`, `--read`: the fit, skipped work, the planner, the recording readers.
 
 use super::Failure;
 use anyhow::anyhow;
@@ -50,6 +51,13 @@ pub struct Args {
     /// Carlo draws).
     #[arg(long, conflicts_with_all = ["work_precision", "scene", "fit", "skips"])]
     plan: bool,
+    /// Time reading a long recording (wide CSV, long CSV, MCAP) with the readers every command
+    /// uses: median seconds and frames per second per format.
+    #[arg(long, conflicts_with_all = ["work_precision", "scene", "fit", "skips", "plan"])]
+    read: bool,
+    /// Read benchmark: frames in the recording (10 kHz).
+    #[arg(long, default_value_t = appell::bench::read::DEFAULT_FRAMES, requires = "read")]
+    frames: usize,
     /// Work-precision: draw run time against error (log axes) to this SVG or PNG.
     #[arg(long, value_name = "FILE.svg", requires = "work_precision")]
     plot: Option<PathBuf>,
@@ -373,7 +381,45 @@ fn run_plan(args: &Args) -> Result<(), Failure> {
     Ok(())
 }
 
+/// `appell bench --read`: reading time per format.
+fn run_read(args: &Args) -> Result<(), Failure> {
+    let timings = appell::bench::read::read_benchmark(args.frames, args.batches.unwrap_or(5))
+        .map_err(|e| Failure::Run(anyhow!(e)))?;
+    if args.json {
+        outln!("{}", serde_json::json!({"read": timings}));
+        return Ok(());
+    }
+    outln!(
+        "reading a {}-frame recording (paper scene, {} Hz, 0.5 mm noise), median of {} reads:",
+        args.frames,
+        appell::bench::read::FPS,
+        timings.first().map_or(0, |t| t.runs)
+    );
+    outln!(
+        "{:>6} {:>10} {:>10} {:>10} {:>13}",
+        "format",
+        "MB",
+        "median s",
+        "fastest s",
+        "M frames/s"
+    );
+    for t in timings {
+        outln!(
+            "{:>6} {:>10.1} {:>10.3} {:>10.3} {:>13.2}",
+            t.format,
+            t.bytes as f64 / 1e6,
+            t.median_s,
+            t.min_s,
+            t.frames_per_s / 1e6
+        );
+    }
+    Ok(())
+}
+
 pub fn run(args: Args) -> Result<(), Failure> {
+    if args.read {
+        return run_read(&args);
+    }
     if args.plan {
         return run_plan(&args);
     }

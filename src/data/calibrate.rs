@@ -21,11 +21,11 @@ pub fn calibrate(
         (Some(s), _, _) => (s, "--scale".to_string()),
         (None, Some((s, why)), _) => (s, why),
         (None, None, Some(l)) => {
-            let d = distances(rec);
+            let mut d = distances(rec);
             if d.is_empty() {
                 return Err("no frame shows both markers, so --rod-length cannot set the scale: give --scale".into());
             }
-            let m = median(d.into_iter().map(|(_, d)| d).collect());
+            let m = median(&mut d);
             (l / m, format!("from --rod-length {l} m over a median of {m} file units"))
         }
         (None, None, None) => {
@@ -151,26 +151,33 @@ pub fn fit_rail(rec: &Recording) -> Result<(f64, [f64; 2], f64), String> {
     Ok((angle, origin, rms))
 }
 
-/// `(frame, distance)` for every frame with both markers.
-fn distances(rec: &Recording) -> Vec<(usize, f64)> {
+/// The slider-bob distance of every frame with both markers, in frame order.
+fn distances(rec: &Recording) -> Vec<f64> {
     rec.slider
         .iter()
         .zip(&rec.bob)
-        .enumerate()
-        .filter_map(|(i, (s, b))| {
+        .filter_map(|(s, b)| {
             let (s, b) = (s.as_ref()?, b.as_ref()?);
-            Some((i, (b[0] - s[0]).hypot(b[1] - s[1])))
+            Some((b[0] - s[0]).hypot(b[1] - s[1]))
         })
         .collect()
 }
 
-fn median(mut v: Vec<f64>) -> f64 {
-    v.sort_by(f64::total_cmp);
+/// The median of `v` (not empty), whose order it changes: the middle value (of the two middle
+/// values, their mean) in `f64::total_cmp` order, found by selection rather than a sort.
+fn median(v: &mut [f64]) -> f64 {
     let n = v.len();
+    let (lower, mid, _) = v.select_nth_unstable_by(n / 2, f64::total_cmp);
+    let mid = *mid;
     if n % 2 == 1 {
-        v[n / 2]
+        mid
     } else {
-        0.5 * (v[n / 2 - 1] + v[n / 2])
+        let below = lower
+            .iter()
+            .copied()
+            .max_by(f64::total_cmp)
+            .expect("an even count above zero has a lower half");
+        0.5 * (below + mid)
     }
 }
 
@@ -178,29 +185,82 @@ fn median(mut v: Vec<f64>) -> f64 {
 /// reference (`rod_length`, else the median) than five robust standard deviations (at least
 /// 2 % of the length).
 pub fn check_geometry(rec: &Recording, rod_length: Option<f64>) -> Option<Geometry> {
-    let d = distances(rec);
-    if d.is_empty() {
+    let vals = distances(rec);
+    if vals.is_empty() {
         return None;
     }
-    let n = d.len() as f64;
-    let vals: Vec<f64> = d.iter().map(|x| x.1).collect();
-    let med = median(vals.clone());
+    let n = vals.len() as f64;
+    // Sums in frame order, before the selections below reorder a copy.
     let mean = vals.iter().sum::<f64>() / n;
     let std = (vals.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / n).sqrt();
+    let mut work = vals.clone();
+    let med = median(&mut work);
     let reference = rod_length.unwrap_or(med);
-    let mad = median(vals.iter().map(|v| (v - med).abs()).collect());
+    for (w, v) in work.iter_mut().zip(&vals) {
+        *w = (v - med).abs();
+    }
+    let mad = median(&mut work);
+    drop(work);
     let tolerance = (5.0 * 1.4826 * mad).max(0.02 * reference);
-    let outliers = d
+    // Frames with both markers, in order, are the distances' frames.
+    let both = rec
+        .slider
         .iter()
-        .filter(|(_, v)| (v - reference).abs() > tolerance)
-        .map(|(i, _)| *i)
+        .zip(&rec.bob)
+        .enumerate()
+        .filter(|(_, (s, b))| s.is_some() && b.is_some())
+        .map(|(i, _)| i);
+    let outliers = both
+        .zip(&vals)
+        .filter(|(_, v)| (*v - reference).abs() > tolerance)
+        .map(|(i, _)| i)
         .collect();
     Some(Geometry {
-        frames: d.len(),
+        frames: vals.len(),
         median: med,
         std,
         reference,
         outliers,
         tolerance,
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::median;
+
+    /// The median by a full sort, as it was computed before selection.
+    fn sorted_median(mut v: Vec<f64>) -> f64 {
+        v.sort_by(f64::total_cmp);
+        let n = v.len();
+        if n % 2 == 1 {
+            v[n / 2]
+        } else {
+            0.5 * (v[n / 2 - 1] + v[n / 2])
+        }
+    }
+
+    #[test]
+    fn selection_median_is_the_sorted_median_bit_for_bit() {
+        let mut x = 0.3f64;
+        for n in 1..200 {
+            let v: Vec<f64> = (0..n)
+                .map(|i| {
+                    x = (x * 3.7 + 0.1).fract();
+                    match i % 5 {
+                        0 => 0.0,
+                        1 => -0.0,
+                        2 => (x * 8.0).floor(),
+                        _ => x - 0.5,
+                    }
+                })
+                .collect();
+            let mut w = v.clone();
+            assert_eq!(
+                median(&mut w).to_bits(),
+                sorted_median(v).to_bits(),
+                "n = {n}"
+            );
+        }
+    }
 }

@@ -120,6 +120,16 @@ impl<R: Read> Rows<R> {
 
     /// A number cell: empty is `None`; text, NaN and infinities are errors.
     fn num(&self, i: usize, field: &str, decimal_comma: bool) -> Result<Option<f64>, DataError> {
+        self.num_named(i, || field.to_string(), decimal_comma)
+    }
+
+    /// [`Rows::num`] with the field's name made only for an error.
+    fn num_named(
+        &self,
+        i: usize,
+        field: impl FnOnce() -> String,
+        decimal_comma: bool,
+    ) -> Result<Option<f64>, DataError> {
         let raw = self.cell(i).trim();
         if raw.is_empty() || (self.nan_missing && raw.eq_ignore_ascii_case("nan")) {
             return Ok(None);
@@ -133,8 +143,8 @@ impl<R: Read> Rows<R> {
         };
         match c.parse::<f64>() {
             Ok(v) if v.is_finite() => Ok(Some(v)),
-            Ok(_) => Err(self.err(field, "a finite number", format!("{raw:?}"))),
-            Err(_) => Err(self.err(field, "a number", format!("{raw:?}"))),
+            Ok(_) => Err(self.err(field(), "a finite number", format!("{raw:?}"))),
+            Err(_) => Err(self.err(field(), "a number", format!("{raw:?}"))),
         }
     }
 
@@ -154,9 +164,11 @@ impl<R: Read> Rows<R> {
         let mut out = [0.0; N];
         let mut present = 0;
         for (k, &i) in idx.iter().enumerate() {
-            if let Some(v) =
-                self.num(i, &format!("{name} {}", ["x", "y", "z"][k]), decimal_comma)?
-            {
+            if let Some(v) = self.num_named(
+                i,
+                || format!("{name} {}", ["x", "y", "z"][k]),
+                decimal_comma,
+            )? {
                 out[k] = v;
                 present += 1;
             }
@@ -197,11 +209,17 @@ struct Clock {
 }
 
 impl Clock {
-    fn check(&mut self, path: &Path, at: &str, t: f64) -> Result<(), DataError> {
+    /// Check `t` against the previous time; `at` (called only for an error) says where.
+    fn check(&mut self, path: &Path, at: impl FnOnce() -> String, t: f64) -> Result<(), DataError> {
+        if t.is_finite() && t.abs() < MAX_SECONDS && self.prev.is_none_or(|prev| t > prev) {
+            self.prev = Some(t);
+            return Ok(());
+        }
+        let at = at();
         if !(t.is_finite() && t.abs() < MAX_SECONDS) {
             return Err(DataError::parse(
                 path,
-                at,
+                &at,
                 "time",
                 format!("a time within +-{MAX_SECONDS:e} s of the first frame"),
                 t.to_string(),
@@ -211,7 +229,7 @@ impl Clock {
             if t <= prev {
                 return Err(DataError::Time {
                     path: path.to_owned(),
-                    at: at.to_owned(),
+                    at,
                     time: t,
                     previous: prev,
                     problem: if t == prev {
@@ -411,7 +429,7 @@ fn read_wide(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed
             None => row_number as f64 / opts.fps.expect("checked above"),
         };
         row_number += 1;
-        clock.check(path, &rows.at(), t)?;
+        clock.check(path, || rows.at(), t)?;
         times.push(t);
         for (k, (name, i, j, z)) in pairs.iter().enumerate() {
             let p = match z {
@@ -482,6 +500,7 @@ fn read_long(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed
     let mut series: Vec<Series> = Vec::new();
     let mut clocks: Vec<Clock> = Vec::new();
     let mut rowcount = 0usize;
+    let mut next = 0usize;
     while rows.next()? {
         if rows.is_blank() {
             continue;
@@ -492,19 +511,25 @@ fn read_long(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed
         if name.is_empty() {
             return Err(rows.err("marker", "a marker name", "an empty cell"));
         }
-        let k = match index.get(name) {
-            Some(&k) => k,
-            None => {
-                index.insert(name.to_string(), series.len());
-                series.push(Series {
-                    name: name.to_string(),
-                    ..Series::default()
-                });
-                clocks.push(Clock::default());
-                series.len() - 1
-            }
+        // Markers come in the same order in every frame: the one after the last row's first.
+        let guess = next % series.len().max(1);
+        let k = match series.get(guess) {
+            Some(s) if s.name == name => guess,
+            _ => match index.get(name) {
+                Some(&k) => k,
+                None => {
+                    index.insert(name.to_string(), series.len());
+                    series.push(Series {
+                        name: name.to_string(),
+                        ..Series::default()
+                    });
+                    clocks.push(Clock::default());
+                    series.len() - 1
+                }
+            },
         };
-        clocks[k].check(path, &format!("{} (marker {name:?})", rows.at()), t)?;
+        next = k + 1;
+        clocks[k].check(path, || format!("{} (marker {name:?})", rows.at()), t)?;
         let p = rows.point([xcol, ycol], name, false)?;
         series[k].times.push(t);
         series[k].points.push(p);
@@ -763,7 +788,7 @@ fn read_tracker(input: impl Read, path: &Path) -> Result<Parsed, DataError> {
                 None if p.is_none() => continue,
                 None => return Err(rows.err("t", "a time", "an empty cell")),
             };
-            clocks[k].check(path, &rows.at(), t)?;
+            clocks[k].check(path, || rows.at(), t)?;
             series[k].times.push(t);
             series[k].points.push(p);
         }
@@ -914,7 +939,7 @@ fn read_dlc(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed,
             times.len() as f64
         };
         let t = frame / fps;
-        clock.check(path, &rows.at(), t)?;
+        clock.check(path, || rows.at(), t)?;
         times.push(t);
         for (k, &(x, y, l, z)) in cols.iter().enumerate() {
             let mut p = match z {
@@ -1016,7 +1041,7 @@ fn read_xyz_rows<R: Read>(
             continue;
         }
         let t = time(rows)?;
-        clock.check(path, &rows.at(), t)?;
+        clock.check(path, || rows.at(), t)?;
         times.push(t);
         for (k, (name, idx)) in markers.iter().enumerate() {
             series[k]
@@ -1342,7 +1367,7 @@ fn read_sleap_csv(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<P
                 clocks.push(Clock::default());
                 series.len() - 1
             });
-            clocks[k].check(path, &format!("{} (marker {name:?})", rows.at()), t)?;
+            clocks[k].check(path, || format!("{} (marker {name:?})", rows.at()), t)?;
             series[k].times.push(t);
             series[k].points.push(rows.point([*x, *y], &name, false)?);
         }
@@ -1526,7 +1551,7 @@ fn read_kinovea(input: impl Read, path: &Path) -> Result<Parsed, DataError> {
         clocks
             .last_mut()
             .expect("one per series")
-            .check(path, &at, t)?;
+            .check(path, || at.clone(), t)?;
         s.times.push(t);
         s.points.push(Some([num(1, "x")?, num(2, "y")?]));
     }
@@ -1614,7 +1639,7 @@ fn read_trex(input: impl Read, path: &Path) -> Result<Parsed, DataError> {
         let raw = rows.req(tcol, what, false)? * factor;
         let b = *base.get_or_insert(raw);
         let t = raw - b;
-        clock.check(path, &rows.at(), t)?;
+        clock.check(path, || rows.at(), t)?;
         times.push(t);
         let lost = match missing {
             Some(m) => rows.num(m, "missing", false)?.is_some_and(|v| v != 0.0),

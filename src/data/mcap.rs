@@ -122,6 +122,219 @@ struct JMsg {
     position: Option<JPoint>,
 }
 
+/// The common JSON frame (a `markers` array, `{"sec", "nsec"}` stamps), read without copying
+/// marker names: a message this reads, [`JMsg`] reads to the same values; any other message
+/// (a stamp in float seconds, a malformed one) goes to [`JMsg`], which words the errors.
+#[derive(Deserialize)]
+struct FastMsg<'a> {
+    timestamp: Option<FastStamp>,
+    header: Option<FastHeader>,
+    #[serde(borrow)]
+    markers: Option<Vec<FastMarker<'a>>>,
+    x: Option<f64>,
+    y: Option<f64>,
+    z: Option<f64>,
+    point: Option<JPoint>,
+    position: Option<JPoint>,
+}
+
+/// [`JStamp::Parts`] alone.
+#[derive(Deserialize)]
+struct FastStamp {
+    sec: i64,
+    #[serde(default, alias = "nanosec", alias = "nanos")]
+    nsec: i64,
+}
+
+#[derive(Deserialize)]
+struct FastHeader {
+    stamp: Option<FastStamp>,
+}
+
+/// [`JMarker`] with its name borrowed from the message when it holds no escapes.
+#[derive(Deserialize)]
+struct FastMarker<'a> {
+    #[serde(borrow, alias = "name", alias = "label")]
+    id: std::borrow::Cow<'a, str>,
+    x: Option<f64>,
+    y: Option<f64>,
+    z: Option<f64>,
+}
+
+/// The most markers a frame read by [`canonical_frame`] holds (more go to serde).
+const CANONICAL_MARKERS: usize = 8;
+
+/// One frame in the exact layout [`write_json`] (and the Python example files) write:
+/// `{"timestamp":{"sec":S,"nsec":N},"frame_id":"..","markers":[{"id":"..","x":X,"y":Y},..]}`
+/// without whitespace: the stamp's parts and up to [`CANONICAL_MARKERS`] markers (name, x, y),
+/// names and the frame id without escapes.
+struct CanonicalFrame<'a> {
+    sec: i64,
+    nsec: i64,
+    len: usize,
+    markers: [(&'a str, Option<f64>, Option<f64>); CANONICAL_MARKERS],
+}
+
+/// A byte cursor over one message for [`canonical_frame`]; every method returns `None` (the
+/// message then goes to serde) at anything outside the narrow layout it accepts.
+struct Bytes<'a> {
+    text: &'a str,
+    d: &'a [u8],
+    at: usize,
+}
+
+impl<'a> Bytes<'a> {
+    fn lit(&mut self, s: &[u8]) -> Option<()> {
+        self.d[self.at..].starts_with(s).then(|| self.at += s.len())
+    }
+
+    fn digits(&self, from: usize) -> usize {
+        self.d[from..]
+            .iter()
+            .take_while(|b| b.is_ascii_digit())
+            .count()
+    }
+
+    /// A string without escapes or control characters: its bytes are its text.
+    fn string(&mut self) -> Option<&'a str> {
+        self.lit(b"\"")?;
+        let start = self.at;
+        let len = self.d[start..].iter().position(|&b| b == b'"')?;
+        if self.d[start..start + len]
+            .iter()
+            .any(|&b| b == b'\\' || b < 0x20)
+        {
+            return None;
+        }
+        self.at = start + len + 1;
+        // Quotes are ASCII, so both ends are character boundaries.
+        Some(&self.text[start..start + len])
+    }
+
+    /// A JSON integer of at most 18 digits (no `-0`, which serde reads as a float).
+    fn int(&mut self) -> Option<i64> {
+        let neg = self.lit(b"-").is_some();
+        let n = self.digits(self.at);
+        let digits = &self.d[self.at..self.at + n];
+        if n == 0 || n > 18 || (n > 1 && digits[0] == b'0') {
+            return None;
+        }
+        let v = digits
+            .iter()
+            .fold(0i64, |v, &b| v * 10 + i64::from(b - b'0'));
+        if neg && v == 0 {
+            return None;
+        }
+        self.at += n;
+        Some(if neg { -v } else { v })
+    }
+
+    /// Digits from `i`: where they end and how many are significant (from the first nonzero
+    /// one on, counting those already seen, `significant`).
+    fn count_digits(&self, mut i: usize, mut significant: usize) -> (usize, usize) {
+        while let Some(&c) = self.d.get(i) {
+            if !c.is_ascii_digit() {
+                break;
+            }
+            if significant > 0 || c != b'0' {
+                significant += 1;
+            }
+            i += 1;
+        }
+        (i, significant)
+    }
+
+    /// `null`, or a JSON number with a fraction or an exponent (how serde_json writes every
+    /// f64) of at most 19 significant digits and a finite value: exact input to both std's and
+    /// serde_json's correctly rounded parsers, so the same f64.
+    fn float(&mut self) -> Option<Option<f64>> {
+        if self.lit(b"null").is_some() {
+            return Some(None);
+        }
+        let start = self.at;
+        let int_start = start + usize::from(self.d.get(start) == Some(&b'-'));
+        let (mut i, mut significant) = self.count_digits(int_start, 0);
+        if i == int_start || (i - int_start > 1 && self.d[int_start] == b'0') {
+            return None;
+        }
+        let mut fraction = false;
+        if self.d.get(i) == Some(&b'.') {
+            let (end, sig) = self.count_digits(i + 1, significant);
+            if end == i + 1 {
+                return None;
+            }
+            (i, significant, fraction) = (end, sig, true);
+        }
+        let mut exponent = false;
+        if matches!(self.d.get(i), Some(b'e' | b'E')) {
+            i += 1;
+            if matches!(self.d.get(i), Some(b'+' | b'-')) {
+                i += 1;
+            }
+            let n = self.digits(i);
+            if n == 0 || n > 4 {
+                return None;
+            }
+            i += n;
+            exponent = true;
+        }
+        if !(fraction || exponent) || significant > 19 {
+            return None;
+        }
+        let v: f64 = self.text[start..i].parse().ok()?;
+        if !v.is_finite() {
+            return None;
+        }
+        self.at = i;
+        Some(Some(v))
+    }
+}
+
+/// Read a frame in the exact layout of [`CanonicalFrame`], or `None` for any other message
+/// (spaces, other keys or key order, escapes, integers where floats are written, more
+/// markers), which serde then reads. What this accepts, serde reads to the same values.
+fn canonical_frame(data: &[u8]) -> Option<CanonicalFrame<'_>> {
+    // One UTF-8 check for the whole message; its pieces are then sliced out as text.
+    let text = std::str::from_utf8(data).ok()?;
+    let mut b = Bytes {
+        text,
+        d: data,
+        at: 0,
+    };
+    b.lit(b"{\"timestamp\":{\"sec\":")?;
+    let sec = b.int()?;
+    b.lit(b",\"nsec\":")?;
+    let nsec = b.int()?;
+    b.lit(b"},\"frame_id\":")?;
+    b.string()?;
+    b.lit(b",\"markers\":[")?;
+    let mut frame = CanonicalFrame {
+        sec,
+        nsec,
+        len: 0,
+        markers: [("", None, None); CANONICAL_MARKERS],
+    };
+    loop {
+        if frame.len == CANONICAL_MARKERS {
+            return None;
+        }
+        b.lit(b"{\"id\":")?;
+        let id = b.string()?;
+        b.lit(b",\"x\":")?;
+        let x = b.float()?;
+        b.lit(b",\"y\":")?;
+        let y = b.float()?;
+        b.lit(b"}")?;
+        frame.markers[frame.len] = (id, x, y);
+        frame.len += 1;
+        if b.lit(b",").is_none() {
+            break;
+        }
+    }
+    b.lit(b"]}")?;
+    (b.at == data.len()).then_some(frame)
+}
+
 /// How a channel's messages are decoded. The protobuf ones carry the message descriptor built
 /// from the channel's schema (the file's own definition, not one compiled in).
 #[derive(Clone)]
@@ -192,21 +405,32 @@ struct Acc {
     /// Topic, marker name, samples; in the order markers were first seen.
     series: Vec<(String, String, Stamped)>,
     tf: Vec<Tf>,
+    /// The series after the one pushed to last.
+    next: usize,
 }
 
 impl Acc {
     fn push(&mut self, topic: &str, name: &str, ns: i64, p: Option<[f64; 2]>) {
-        let key = (topic.to_string(), name.to_string());
-        let k = match self.index.get(&key) {
-            Some(&k) => k,
-            None => {
-                self.index.insert(key, self.series.len());
-                self.series
-                    .push((topic.to_string(), name.to_string(), Vec::new()));
-                self.series.len() - 1
+        // Markers come in the same order in every frame: try the one after the last first, so
+        // the usual sample needs no key (no allocation, no hash).
+        let guess = self.next % self.series.len().max(1);
+        let k = match self.series.get(guess) {
+            Some((t, n, _)) if t == topic && n == name => guess,
+            _ => {
+                let key = (topic.to_string(), name.to_string());
+                match self.index.get(&key) {
+                    Some(&k) => k,
+                    None => {
+                        self.index.insert(key, self.series.len());
+                        self.series
+                            .push((topic.to_string(), name.to_string(), Vec::new()));
+                        self.series.len() - 1
+                    }
+                }
             }
         };
         self.series[k].2.push((ns, p));
+        self.next = k + 1;
     }
 
     fn push_tf(&mut self, t: ros_cdr::TransformStamped, fixed: bool) {
@@ -483,6 +707,41 @@ fn decode(
     let p3 = |p: [f64; 3]| xy(Some(p[0]), Some(p[1]), Some(p[2]), plane);
     match dec {
         Decoder::Json => {
+            if let Some(f) = canonical_frame(data) {
+                let stamp = JStamp::Parts {
+                    sec: f.sec,
+                    nsec: f.nsec,
+                }
+                .ns()?;
+                for &(id, x, y) in &f.markers[..f.len] {
+                    acc.push(topic, id, stamp, xy(x, y, None, plane));
+                }
+                return Ok(f.len);
+            }
+            if let Ok(m) = serde_json::from_slice::<FastMsg>(data) {
+                let stamp = match m.timestamp.or(m.header.and_then(|h| h.stamp)) {
+                    Some(s) => JStamp::Parts {
+                        sec: s.sec,
+                        nsec: s.nsec,
+                    }
+                    .ns()?,
+                    None => log_time,
+                };
+                if let Some(markers) = m.markers {
+                    for mk in &markers {
+                        acc.push(topic, &mk.id, stamp, xy(mk.x, mk.y, mk.z, plane));
+                    }
+                    return Ok(markers.len());
+                }
+                if let Some(p) = m.point.or(m.position) {
+                    acc.push(topic, topic, stamp, xy(p.x, p.y, p.z, plane));
+                    return Ok(1);
+                }
+                if m.x.is_some() || m.y.is_some() {
+                    acc.push(topic, topic, stamp, xy(m.x, m.y, m.z, plane));
+                    return Ok(1);
+                }
+            }
             let m: JMsg = serde_json::from_slice(data).map_err(|e| format!("JSON: {e}"))?;
             let stamp = match m.timestamp.or(m.header.and_then(|h| h.stamp)) {
                 Some(s) => s.ns()?,
@@ -657,6 +916,26 @@ fn check_lengths(opcode: u8, data: &[u8]) -> Result<(), String> {
     }
 }
 
+/// A Message record whose body (at least 22 bytes) is `data`: channel id, sequence, log time
+/// and publish time (little-endian), then the payload, borrowed.
+fn message_record(data: &[u8]) -> Record<'_> {
+    let le = |at: usize, n: usize| {
+        data[at..at + n]
+            .iter()
+            .rev()
+            .fold(0u64, |v, &b| (v << 8) | u64::from(b))
+    };
+    Record::Message {
+        header: MessageHeader {
+            channel_id: le(0, 2) as u16,
+            sequence: le(2, 4) as u32,
+            log_time: le(6, 8),
+            publish_time: le(14, 8),
+        },
+        data: std::borrow::Cow::Borrowed(&data[22..]),
+    }
+}
+
 /// The first line of an mcap error, without terminal escape codes (binrw's errors carry a
 /// coloured backtrace).
 fn plain(err: &McapError) -> String {
@@ -757,7 +1036,14 @@ pub(crate) fn read_from(
                     damage = Some(format!("record {records} (opcode {opcode:#04x}): {why}"));
                     break;
                 }
-                let record = match ::mcap::parse_record(opcode, data) {
+                // A message's header is four fixed fields (check_lengths saw its 22 bytes):
+                // read here, the payload borrowed, as parse_record would give them.
+                let parsed_record = if opcode == op::MESSAGE {
+                    Ok(message_record(data))
+                } else {
+                    ::mcap::parse_record(opcode, data)
+                };
+                let record = match parsed_record {
                     Ok(r) => r,
                     Err(e) => {
                         damage = Some(plain(&e));
@@ -1079,4 +1365,157 @@ pub fn write_json(
     }
     out.finish()?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    /// Samples: marker, stamp, position bits.
+    type Samples = Vec<(String, i64, Option<[u64; 2]>)>;
+
+    /// What the serde reader alone makes of a JSON message: its samples, bit for bit.
+    fn by_serde(data: &[u8]) -> Result<Samples, String> {
+        let m: JMsg = serde_json::from_slice(data).map_err(|e| format!("JSON: {e}"))?;
+        let stamp = m.timestamp.expect("a stamp").ns()?;
+        Ok(m.markers
+            .expect("markers")
+            .into_iter()
+            .map(|mk| {
+                let p = xy(mk.x, mk.y, mk.z, None);
+                (mk.id, stamp, p.map(|p| p.map(f64::to_bits)))
+            })
+            .collect())
+    }
+
+    /// What `decode` gives (the canonical layout first, then serde).
+    fn by_decode(data: &[u8]) -> Result<Samples, String> {
+        let mut acc = Acc::default();
+        decode(&Decoder::Json, "/markers", data, 0, None, &mut acc)?;
+        let mut out = Vec::new();
+        for (_, name, s) in acc.series {
+            for (ns, p) in s {
+                out.push((name.clone(), ns, p.map(|p| p.map(f64::to_bits))));
+            }
+        }
+        // decode groups by marker; by_serde lists in message order: compare as sets by name.
+        out.sort_by(|a, b| a.0.cmp(&b.0));
+        Ok(out)
+    }
+
+    fn frame(sec: &str, nsec: &str, x: &str, y: &str) -> String {
+        format!(
+            r#"{{"timestamp":{{"sec":{sec},"nsec":{nsec}}},"frame_id":"rail","markers":[{{"id":"slider","x":{x},"y":{y}}},{{"id":"bob","x":0.2350487,"y":-0.186438}}]}}"#
+        )
+    }
+
+    #[test]
+    fn canonical_layout_reads_what_serde_reads() {
+        let numbers = [
+            "6.09e-05",
+            "-9.04e-05",
+            "-0.0",
+            "0.0",
+            "1e-320",
+            "5e-324",
+            "2.4703282292062328e-324",
+            "0.30000000000000004",
+            "1.7976931348623157e308",
+            "2.2250738585072014e-308",
+            "123456789012345678.9",
+            "0.000000000000000000001234567890123456789",
+            "9007199254740993.0",
+            "1E5",
+            "1e+05",
+            "null",
+        ];
+        for x in numbers {
+            for y in numbers {
+                let m = frame("1700000000", "5", x, y);
+                let fast = canonical_frame(m.as_bytes());
+                assert!(fast.is_some(), "{m}");
+                let mut want = by_serde(m.as_bytes()).unwrap();
+                want.sort_by(|a, b| a.0.cmp(&b.0));
+                assert_eq!(by_decode(m.as_bytes()).unwrap(), want, "{m}");
+            }
+        }
+        // Not the layout: serde reads them (or words the error) as before.
+        for m in [
+            frame("-0", "0", "1.0", "2.0"),
+            frame("1", "0", "1", "2.0"),
+            frame("1", "0", "01.5", "2.0"),
+            frame("1", "0", "1.", "2.0"),
+            frame("1", "0", "1e400", "2.0"),
+            frame("1", "0", "12345678901234567890.5", "2.0"),
+            frame("1.5", "0", "1.0", "2.0"),
+            frame("9223372036854775807", "0", "1.0", "2.0"),
+            frame("1", "0", "1.0", "2.0").replace("slider", "sli\\u0064er"),
+            frame("1", "0", "1.0", "2.0").replace(",\"y\"", ", \"y\""),
+            frame("1", "0", "1.0", "2.0") + " ",
+        ] {
+            assert!(canonical_frame(m.as_bytes()).is_none(), "{m}");
+            let want = by_serde(m.as_bytes()).map(|mut v| {
+                v.sort_by(|a, b| a.0.cmp(&b.0));
+                v
+            });
+            assert_eq!(by_decode(m.as_bytes()), want, "{m}");
+        }
+    }
+
+    #[test]
+    fn canonical_floats_are_serdes_bit_for_bit() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(11);
+        for k in 0..200_000 {
+            let v = match k % 3 {
+                0 => f64::from_bits(rng.random::<u64>()),
+                1 => rng.random::<f64>() * 10f64.powi(rng.random_range(-12..12)),
+                _ => (rng.random::<f64>() - 0.5) * 1e-3,
+            };
+            if !v.is_finite() {
+                continue;
+            }
+            for text in [
+                serde_json::to_string(&v).unwrap(),
+                format!("{v:e}"),
+                format!("{v:.17e}"),
+                format!("{v:.9}"),
+            ] {
+                let m = frame("1", "0", &text, "0.5");
+                let Some(f) = canonical_frame(m.as_bytes()) else {
+                    continue;
+                };
+                let serde: JMsg = serde_json::from_slice(m.as_bytes()).unwrap();
+                let want = serde.markers.unwrap()[0].x.unwrap();
+                assert_eq!(f.markers[0].1.unwrap().to_bits(), want.to_bits(), "{text}");
+            }
+        }
+    }
+
+    #[test]
+    fn message_headers_read_as_parse_record_reads_them() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..100 {
+            let mut body: Vec<u8> = (0..22).map(|_| rng.random()).collect();
+            body.extend_from_slice(b"{\"x\":1}");
+            let Record::Message { header, data } =
+                ::mcap::parse_record(op::MESSAGE, &body).unwrap()
+            else {
+                panic!("a message");
+            };
+            let Record::Message { header: h, data: d } = message_record(&body) else {
+                panic!("a message");
+            };
+            assert_eq!(
+                (h.channel_id, h.sequence, h.log_time, h.publish_time),
+                (
+                    header.channel_id,
+                    header.sequence,
+                    header.log_time,
+                    header.publish_time
+                )
+            );
+            assert_eq!(d, data);
+        }
+    }
 }

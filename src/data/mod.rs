@@ -325,8 +325,12 @@ fn assemble(
         });
     }
     let t0 = times[0];
+    let mut times = times;
+    for t in &mut times {
+        *t -= t0;
+    }
     let mut rec = Recording {
-        times: times.iter().map(|t| t - t0).collect(),
+        times,
         slider,
         bob,
         provenance: Provenance {
@@ -342,8 +346,9 @@ fn assemble(
             ..Provenance::default()
         },
     };
-    if rec.seen().0 == 0 || rec.seen().1 == 0 {
-        let role = if rec.seen().0 == 0 { "slider" } else { "bob" };
+    let seen = rec.seen();
+    if seen.0 == 0 || seen.1 == 0 {
+        let role = if seen.0 == 0 { "slider" } else { "bob" };
         let name = if role == "slider" {
             &rec.provenance.slider_name
         } else {
