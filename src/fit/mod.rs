@@ -436,6 +436,9 @@ struct Base {
     y0_guess: State<f64>,
     /// mu_kinetic from the data (the main start).
     mu0: f64,
+    /// How the last fit over the whole of a long recording stopped, when nothing changed
+    /// after it (it need not be polished again).
+    settled: Option<String>,
 }
 
 /// The default [`FitSettings::long_prefix`]: frames a long recording's starts and candidate
@@ -604,6 +607,7 @@ fn base_fit(
             }
         }
     }
+    let mut settled = None;
     if long {
         let mut len = prefix;
         while len < n {
@@ -615,13 +619,19 @@ fn base_fit(
                 Arc::new(obs.prefix(len))
             });
             // A stage before the last only has to start the next one well.
-            let ftol = if len == n { None } else { Some(1e-6) };
-            let (q, _, it) = solve_loose(&stage, p, settings.max_iters, ftol).map_err(|e| {
+            let mut lm = LevenbergMarquardt::default();
+            if len < n {
+                (lm.ftol, lm.xtol) = (1e-6, 1e-6);
+            }
+            let (q, _, it, reason) = run_lm(&stage, p, settings.max_iters, lm).map_err(|e| {
                 FitError::NoStart(format!(
                     "carrying the fit of the first {} frames over {len}: {e}",
                     problem.frame_times().len()
                 ))
             })?;
+            // The whole recording's fit, converged: nothing to polish unless the model or
+            // the weights change after it.
+            settled = (len == n).then_some(reason);
             iterations += it;
             p = q;
             problem = stage;
@@ -630,6 +640,7 @@ fn base_fit(
     problem.set_values(&p);
     // A robust loss reweights the rows by their standardised residuals, a few rounds.
     if settings.loss != Loss::Squares {
+        settled = None;
         for _ in 0..3 {
             let Ok(raw) = problem.raw_residuals(&p) else {
                 break;
@@ -664,6 +675,7 @@ fn base_fit(
         static_evidence,
         y0_guess: y0,
         mu0,
+        settled,
     })
 }
 
@@ -931,7 +943,14 @@ pub fn fit(
         .any(|e| e.kind == EventKind::Slip && e.t > 0.0);
 
     // Step 7: uncertainty.
-    let (stop_reason, p) = match solve_traced(&problem, p.clone(), settings.max_iters) {
+    // Polished once more unless a long recording's whole fit already converged on this very
+    // model and weights (each pass over a million frames costs a third of a second).
+    let settled = base.settled.clone().filter(|_| !moved && late == [0, 0]);
+    let polished = match settled {
+        Some(reason) => Ok((p.clone(), 0.0, 0, reason)),
+        None => solve_traced(&problem, p.clone(), settings.max_iters),
+    };
+    let (stop_reason, p) = match polished {
         Ok((q, _, it, reason)) => {
             iterations += it;
             problem.set_values(&q);
