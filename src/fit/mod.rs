@@ -984,7 +984,16 @@ pub fn fit(
     let identifiable = slides;
     let mu_index = idx(&problem, Param::MuKinetic).filter(|_| identifiable);
     if let (true, Some(i)) = (settings.profile, mu_index) {
-        match uncertainty::profile_interval(&problem, &p, i, a.se[i], scale, settings, 0.0) {
+        match uncertainty::profile_interval(
+            &problem,
+            &p,
+            i,
+            a.se[i],
+            scale,
+            settings,
+            0.0,
+            Some(&a.cov),
+        ) {
             Some(ci) => {
                 // The profile knows the curvature, the block covariance the correlated
                 // residuals: widen the profile's half-widths by the block's excess.
@@ -1037,7 +1046,16 @@ pub fn fit(
     let mu_kinetic = mu_index.map(|i| params[i].1);
     let mu_static = if let Some(i) = idx(&problem, Param::MuStatic).filter(|_| mu_static_free) {
         if settings.profile {
-            match uncertainty::profile_interval(&problem, &p, i, a.se[i], scale, settings, p[0]) {
+            match uncertainty::profile_interval(
+                &problem,
+                &p,
+                i,
+                a.se[i],
+                scale,
+                settings,
+                p[0],
+                Some(&a.cov),
+            ) {
                 Some(ci) => {
                     params[i].1.ci95 = ci;
                     params[i].1.interval = "profile";
@@ -1076,6 +1094,7 @@ pub fn fit(
                 scale,
                 settings,
                 q[0],
+                None,
             )
             .map(|ci| ci[1]);
         }

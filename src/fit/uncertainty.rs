@@ -269,6 +269,9 @@ pub fn window_consistency(windows: &[WindowFit]) -> Option<f64> {
 
 /// 95% profile-likelihood interval for parameter `k`: where the best chi-square with that
 /// parameter held rises by 3.84 times `scale` (the reduced chi-square when above one).
+/// `cov`, the covariance at `p` when known, warm-starts a long recording's profile points
+/// on the linear prediction of the other parameters.
+#[allow(clippy::too_many_arguments)]
 pub fn profile_interval(
     problem: &TrajectoryProblem,
     p: &DVector<f64>,
@@ -277,6 +280,7 @@ pub fn profile_interval(
     scale: f64,
     settings: &FitSettings,
     lower_limit: f64,
+    cov: Option<&DMatrix<f64>>,
 ) -> Option<[f64; 2]> {
     let target = 3.84 * scale;
     let base = p.clone();
@@ -308,7 +312,17 @@ pub fn profile_interval(
         let mut ok = true;
         for (side, dir) in [-1.0f64, 1.0].iter().enumerate() {
             let v = p[k] + dir * half;
-            match profile(v, &start) {
+            // Where the other parameters go when this one is held at v, to first order.
+            let warm = match cov {
+                Some(c) if c[(k, k)] > 0.0 => DVector::from_iterator(
+                    others.len(),
+                    others
+                        .iter()
+                        .map(|&i| p[i] + c[(i, k)] / c[(k, k)] * (v - p[k])),
+                ),
+                _ => start.clone(),
+            };
+            match profile(v, &warm) {
                 Some((d, _)) if v >= lower_limit && d > 0.8 * target && d < 1.25 * target => {
                     quick[side] = p[k] + dir * half * (target / d).sqrt();
                 }
