@@ -3,6 +3,7 @@
 //! (heteroskedasticity-and-autocorrelation-consistent) covariance over contiguous stretches of
 //! frames, fits of the recording's thirds, and the profile interval for a parameter.
 
+use super::lm::LeastSquares;
 use super::problem::{Observations, Param, TrajectoryProblem};
 use super::{solve, solve_loose, FitSettings};
 use crate::model::Mode;
@@ -288,7 +289,8 @@ pub fn profile_interval(
     let mut fixed = problem.clone();
     fixed.free.remove(k);
     let others: Vec<usize> = (0..p.len()).filter(|&i| i != k).collect();
-    let profile = |v: f64, warm: &DVector<f64>| -> Option<(f64, DVector<f64>)> {
+    // The problem with parameter k held at v.
+    let held = |v: f64| {
         let mut pr = fixed.clone();
         let mut full = base.clone();
         full[k] = v;
@@ -297,7 +299,10 @@ pub fn profile_interval(
         pr.rig = tmp.rig;
         pr.initial = tmp.initial;
         pr.camera = tmp.camera;
-        let (opt, cost, _) = solve(&pr, warm.clone(), settings.max_iters).ok()?;
+        pr
+    };
+    let profile = |v: f64, warm: &DVector<f64>| -> Option<(f64, DVector<f64>)> {
+        let (opt, cost, _) = solve(&held(v), warm.clone(), settings.max_iters).ok()?;
         Some((2.0 * cost - s_min, opt))
     };
     let start: DVector<f64> = DVector::from_iterator(others.len(), others.iter().map(|&i| p[i]));
@@ -322,8 +327,16 @@ pub fn profile_interval(
                 ),
                 _ => start.clone(),
             };
-            match profile(v, &warm) {
-                Some((d, _)) if v >= lower_limit && d > 0.8 * target && d < 1.25 * target => {
+            // From there one Gauss-Newton step is as good as the whole minimisation (the
+            // prediction misses by second-order terms): the minimum is the chi-square there
+            // less the step's predicted drop, g'H^-1 g, from one pass over the recording.
+            let gauss_newton = || -> Option<f64> {
+                let n = held(v).normal_equations(&warm).ok()?;
+                let step = n.jtj.clone().cholesky()?.solve(&n.jtr);
+                Some(2.0 * n.cost - n.jtr.dot(&step) - s_min)
+            };
+            match gauss_newton() {
+                Some(d) if v >= lower_limit && d > 0.8 * target && d < 1.25 * target => {
                     quick[side] = p[k] + dir * half * (target / d).sqrt();
                 }
                 _ => ok = false,
