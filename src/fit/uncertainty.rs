@@ -206,10 +206,30 @@ pub fn windows(
             m.camera = problem.camera;
             m.tie_static = problem.tie_static && !problem.free.contains(&Param::MuStatic);
             m.sigma = problem.sigma;
-            // A long recording's thirds start next to their optimum (the whole fit's state)
-            // and check agreement within errors far wider than a looser stop moves them.
-            let ftol = (n > settings.long_prefix.saturating_mul(2)).then_some(1e-6);
-            let (q, _, _) = solve_loose(&m, m.values(), settings.max_iters, ftol).ok()?;
+            // A long recording's thirds start next to their optimum (the whole fit's state):
+            // one Gauss-Newton step from there, checked below against the chi-square it
+            // predicts; a looser stop for the minimisation when that check fails.
+            let long = n > settings.long_prefix.saturating_mul(2);
+            let p0 = m.values();
+            let stepped = long
+                .then(|| {
+                    let ne = m.normal_equations(&p0).ok()?;
+                    let step = ne.jtj.clone().cholesky()?.solve(&ne.jtr);
+                    let mut q = &p0 - &step;
+                    m.project(&mut q);
+                    Some((q, 2.0 * ne.cost - ne.jtr.dot(&step)))
+                })
+                .flatten();
+            let minimise = |m: &TrajectoryProblem| {
+                let ftol = long.then_some(1e-6);
+                solve_loose(m, p0.clone(), settings.max_iters, ftol)
+                    .ok()
+                    .map(|(q, _, _)| q)
+            };
+            let (mut q, predicted) = match stepped {
+                Some((q, chi2)) => (q, Some(chi2)),
+                None => (minimise(&m)?, None),
+            };
             m.set_values(&q);
             // Only a stretch that slides says anything about mu_kinetic.
             let mut sliding = 0;
@@ -229,7 +249,14 @@ pub fn windows(
             if !slides {
                 return None;
             }
-            let fit = assess(&m, &q, f64::INFINITY).ok()?;
+            let mut fit = assess(&m, &q, f64::INFINITY).ok()?;
+            // The step missed the chi-square it predicted by more than a tenth of a unit:
+            // the problem is not linear enough here, so minimise properly.
+            if predicted.is_some_and(|c| fit.chi2 > c + 0.1) {
+                q = minimise(&m)?;
+                m.set_values(&q);
+                fit = assess(&m, &q, f64::INFINITY).ok()?;
+            }
             Some(WindowFit {
                 t_start: starts[w],
                 t_end: obs.times[b],
