@@ -278,16 +278,6 @@ impl TrajectoryProblem {
             })
     }
 
-    /// Frame index (into the problem's frames with data) of each residual row.
-    pub fn row_frames(&self) -> Vec<usize> {
-        self.rows().map(|r| r.frame).collect()
-    }
-
-    /// Observed value of each residual row (m).
-    pub fn row_observed(&self) -> Vec<f64> {
-        self.rows().map(|r| r.observed).collect()
-    }
-
     /// The observations.
     pub fn observations(&self) -> &Observations {
         &self.obs
@@ -296,11 +286,6 @@ impl TrajectoryProblem {
     /// Number of residual rows.
     pub fn n_rows(&self) -> usize {
         self.layout.n_rows
-    }
-
-    /// Marker (0 slider, 1 bob) of each residual row.
-    pub fn row_markers(&self) -> Vec<usize> {
-        self.rows().map(|r| r.marker).collect()
     }
 
     /// Extra weight of row `row` (1 unless a robust loss or an outlier set it).
