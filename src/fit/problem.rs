@@ -168,6 +168,59 @@ pub struct RowInfo {
     pub observed: f64,
 }
 
+/// Run `$body` with the const `$n` set to the dual width for `$k` free parameters, or give
+/// an error beyond [`MAX_FREE`]. Each width is a full copy of the simulator in the binary:
+/// widths 3, 4, 5, 6, 8 and 10 serve every size (a few derivative slots stay unused) and keep
+/// the build time down.
+macro_rules! by_width {
+    ($k:expr, $n:ident => $body:expr) => {
+        match $k {
+            0..=3 => {
+                const $n: usize = 3;
+                $body
+            }
+            4 => {
+                const $n: usize = 4;
+                $body
+            }
+            5 => {
+                const $n: usize = 5;
+                $body
+            }
+            6 => {
+                const $n: usize = 6;
+                $body
+            }
+            7 | 8 => {
+                const $n: usize = 8;
+                $body
+            }
+            9 | 10 => {
+                const $n: usize = 10;
+                $body
+            }
+            n => {
+                return Err(Error::msg(format!(
+                    "at most {MAX_FREE} free parameters, got {n}"
+                )))
+            }
+        }
+    };
+}
+
+/// `p` as dual numbers of width `N` >= `p.len()`, parameter i seeded in slot i (the slots
+/// beyond carry no seed).
+fn seed<const N: usize>(p: &DVector<f64>) -> Vec<DualSVec64<N>> {
+    (0..p.len())
+        .map(|i| {
+            DualSVec64::<N>::new(
+                p[i],
+                Derivative::derivative_generic(nalgebra::Const::<N>, U1, i),
+            )
+        })
+        .collect()
+}
+
 /// The residual function of a fit: fixed values, free parameters, weights.
 #[derive(Debug, Clone)]
 pub struct TrajectoryProblem {
@@ -467,14 +520,7 @@ impl TrajectoryProblem {
         block: Option<usize>,
     ) -> Result<Normal, SimError> {
         let k = p.len();
-        let seeded: Vec<DualSVec64<N>> = (0..k)
-            .map(|i| {
-                DualSVec64::<N>::new(
-                    p[i],
-                    Derivative::derivative_generic(nalgebra::Const::<N>, U1, i),
-                )
-            })
-            .collect();
+        let seeded = seed::<N>(p);
         let mut ss = 0.0;
         let mut jtj = [[0.0; N]; N];
         let mut jtr = [0.0; N];
@@ -532,14 +578,7 @@ impl TrajectoryProblem {
             p: &DVector<f64>,
         ) -> Result<(DVector<f64>, DMatrix<f64>), SimError> {
             let k = p.len();
-            let seeded: Vec<DualSVec64<N>> = (0..k)
-                .map(|i| {
-                    DualSVec64::<N>::new(
-                        p[i],
-                        Derivative::derivative_generic(nalgebra::Const::<N>, U1, i),
-                    )
-                })
-                .collect();
+            let seeded = seed::<N>(p);
             let n = pr.n_rows();
             let (mut res, mut jac) = (DVector::zeros(n), DMatrix::zeros(n, k));
             pr.for_each_residual(&seeded, |row, _, marker, d| {
@@ -552,20 +591,7 @@ impl TrajectoryProblem {
             })?;
             Ok((res, jac))
         }
-        match p.len() {
-            0..=3 => dense::<3>(self, p),
-            4 => dense::<4>(self, p),
-            5 => dense::<5>(self, p),
-            6 => dense::<6>(self, p),
-            7 | 8 => dense::<8>(self, p),
-            9 | 10 => dense::<10>(self, p),
-            n => {
-                return Err(Error::msg(format!(
-                    "at most {MAX_FREE} free parameters, got {n}"
-                )))
-            }
-        }
-        .map_err(to_err)
+        by_width!(p.len(), N => dense::<N>(self, p)).map_err(to_err)
     }
 
     /// Exact normal equations by forward-mode dual numbers through the integrator, with event
@@ -577,23 +603,7 @@ impl TrajectoryProblem {
         block: Option<usize>,
     ) -> Result<Normal, Error> {
         self.counters.jacobians.fetch_add(1, Ordering::Relaxed);
-        // Each dual width is a full copy of the simulator in the binary: widths 3, 4, 5, 6,
-        // 8 and 10 serve every size (a few derivative slots stay unused) and keep the build
-        // time down.
-        match p.len() {
-            0..=3 => self.normal_n::<3>(p, block),
-            4 => self.normal_n::<4>(p, block),
-            5 => self.normal_n::<5>(p, block),
-            6 => self.normal_n::<6>(p, block),
-            7 | 8 => self.normal_n::<8>(p, block),
-            9 | 10 => self.normal_n::<10>(p, block),
-            n => {
-                return Err(Error::msg(format!(
-                    "at most {MAX_FREE} free parameters, got {n}"
-                )))
-            }
-        }
-        .map_err(to_err)
+        by_width!(p.len(), N => self.normal_n::<N>(p, block)).map_err(to_err)
     }
 }
 
