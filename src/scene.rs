@@ -402,6 +402,7 @@ impl Scene {
         Request {
             sample_times: self.frame_times(),
             friction_work: self.output.energy,
+            positions_only: false,
         }
     }
 }

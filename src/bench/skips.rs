@@ -29,6 +29,7 @@ pub fn skip_benchmark(batches: usize) -> Vec<SkipCase> {
     let frames = Request {
         sample_times: (0..=2000).map(|k| k as f64 / 1000.0).collect(),
         friction_work: false,
+        positions_only: false,
     };
     let stuck = Rig::paper(2.5);
     let swing: State<f64> = [0.0, 0.4, 0.0, 0.0];

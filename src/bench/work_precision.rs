@@ -167,6 +167,7 @@ impl Reference {
             &Request {
                 sample_times: scene.frame_times(),
                 friction_work: false,
+                positions_only: false,
             },
         )?;
         Ok(Reference {
@@ -423,6 +424,7 @@ fn point(
         &Request {
             sample_times: scene.frame_times(),
             friction_work: true,
+            positions_only: false,
         },
     );
     match sampled {

@@ -102,6 +102,7 @@ pub fn synthesize(scene: &Scene, opts: &SynthOptions) -> Result<Synthetic, SimEr
         &Request {
             sample_times,
             friction_work: false,
+            positions_only: false,
         },
     )?;
     let mut rng = ChaCha8Rng::seed_from_u64(opts.seed);

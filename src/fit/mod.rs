@@ -441,6 +441,10 @@ struct Base {
     settled: Option<String>,
 }
 
+/// Relative cost decrease (and step) at which a long recording's fits short of the whole
+/// recording stop: they only start the next fit well.
+const STAGE_FTOL: f64 = 1e-6;
+
 /// The default [`FitSettings::long_prefix`]: frames a long recording's starts and candidate
 /// models are fitted on (recordings up to twice this are fitted whole from every start).
 pub const PREFIX_FRAMES: usize = 8000;
@@ -549,12 +553,16 @@ fn base_fit(
         }
     }
     jobs.extend((0..candidates.len()).map(|m| (m, mu0)));
+    // A long recording's starts only pick the model and basin the doubling stages refine:
+    // they stop where a stage before the last does.
+    let start_ftol = long.then_some(STAGE_FTOL);
     let solved: Vec<(usize, f64, Solved)> = jobs
         .par_iter()
         .with_max_len(1)
         .map(|&(m, mu)| {
             let c = &candidates[m];
-            (m, mu, solve(c, start_values(c, mu), settings.max_iters))
+            let p0 = start_values(c, mu);
+            (m, mu, solve_loose(c, p0, settings.max_iters, start_ftol))
         })
         .collect();
     // Akaike's criterion chi2 + 2k picks among the candidates.
@@ -593,7 +601,7 @@ fn base_fit(
         if rho.is_ok_and(|rho| rho > 0.3) {
             let mut p0 = free_model.values();
             p0[0] = p[0];
-            if let Ok((q, c, it)) = solve(&free_model, p0, settings.max_iters) {
+            if let Ok((q, c, it)) = solve_loose(&free_model, p0, settings.max_iters, start_ftol) {
                 iterations += it;
                 starts.push(StartOutcome {
                     mu_start: p[0],
@@ -621,7 +629,7 @@ fn base_fit(
             // A stage before the last only has to start the next one well.
             let mut lm = LevenbergMarquardt::default();
             if len < n {
-                (lm.ftol, lm.xtol) = (1e-6, 1e-6);
+                (lm.ftol, lm.xtol) = (STAGE_FTOL, STAGE_FTOL);
             }
             let (q, _, it, reason) = run_lm(&stage, p, settings.max_iters, lm).map_err(|e| {
                 FitError::NoStart(format!(
@@ -775,6 +783,7 @@ fn motion(problem: &TrajectoryProblem) -> Result<Motion, FitError> {
         &Request {
             sample_times: problem.frame_times().to_vec(),
             friction_work: false,
+            positions_only: false,
         },
         &mut |s: Sample<f64>| {
             range = (range.0.min(s.state[0]), range.1.max(s.state[0]));
@@ -992,7 +1001,7 @@ pub fn fit(
             scale,
             settings,
             0.0,
-            Some(&a.cov),
+            Some((&a.cov, a.chi2)),
         ) {
             Some(ci) => {
                 // The profile knows the curvature, the block covariance the correlated
@@ -1054,7 +1063,7 @@ pub fn fit(
                 scale,
                 settings,
                 p[0],
-                Some(&a.cov),
+                Some((&a.cov, a.chi2)),
             ) {
                 Some(ci) => {
                     params[i].1.ci95 = ci;

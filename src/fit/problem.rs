@@ -2,7 +2,7 @@
 //! weighted per marker, as a function of the free parameters (rig and initial state).
 
 use super::lm::{LeastSquares, Normal};
-use crate::model::{observed_markers, Camera, Rig, Scalar, State};
+use crate::model::{observed_markers, observed_markers_with, re_state, Camera, Rig, Scalar, State};
 use crate::sim::{simulate_each, Options, Request, Sample, SimError};
 use argmin::core::Error;
 use nalgebra::{DMatrix, DVector, U1};
@@ -96,6 +96,20 @@ impl Param {
         Param::Lag,
     ];
 
+    /// Whether it belongs to the camera and marker model, which acts on the positions seen
+    /// and not on the motion.
+    pub fn is_camera(self) -> bool {
+        matches!(
+            self,
+            Param::ScaleError
+                | Param::BobAlong
+                | Param::BobAcross
+                | Param::SliderDx
+                | Param::SliderDy
+                | Param::Lag
+        )
+    }
+
     /// Name in reports and JSON.
     pub fn name(self) -> &'static str {
         match self {
@@ -141,6 +155,9 @@ impl Param {
 
 /// The most parameters a fit frees at once (the dual-number Jacobian is built for each count).
 pub const MAX_FREE: usize = 10;
+
+/// Parameters of the camera and marker model ([`Param::is_camera`]).
+pub const CAMERA_PARAMS: usize = 6;
 
 /// Which frames hold data, the requested sample times and the row count: fixed by the
 /// observations, so a problem's many clones share one copy.
@@ -288,9 +305,11 @@ impl TrajectoryProblem {
             weights: None,
             layout: Arc::new(Layout {
                 obs_index,
+                // Markers need positions only (a lag, which needs velocities, asks again).
                 request: Request {
                     sample_times: frames,
                     friction_work: false,
+                    positions_only: true,
                 },
                 n_rows,
             }),
@@ -444,6 +463,24 @@ impl TrajectoryProblem {
         p: &[T],
         mut each: impl FnMut(usize, usize, usize, T),
     ) -> Result<(), SimError> {
+        self.for_each_residual_at(
+            p,
+            false,
+            |_| (),
+            |row, frame, marker, _, d, _| each(row, frame, marker, d),
+        )
+    }
+
+    /// [`Self::for_each_residual`] with a per-frame value: `at(sample)` once per frame, and
+    /// `each(row, frame, marker, coord, residual, &value)` for each of its rows. The samples
+    /// carry velocities when `velocities` is set or the camera has a lag.
+    fn for_each_residual_at<T: Scalar + 'static, X>(
+        &self,
+        p: &[T],
+        velocities: bool,
+        mut at: impl FnMut(&Sample<T>) -> X,
+        mut each: impl FnMut(usize, usize, usize, usize, T, &X),
+    ) -> Result<(), SimError> {
         let (rig, y0, camera) = self.apply(p);
         let layout = &*self.layout;
         let obs = &*self.obs;
@@ -452,17 +489,35 @@ impl TrajectoryProblem {
         let mut sink = |s: Sample<T>| {
             let i = layout.obs_index[frame];
             let m = observed_markers(&rig, &camera, s.mode, &s.state);
+            let x = at(&s);
             for (marker, pos) in [(0, &obs.slider[i]), (1, &obs.bob[i])] {
                 if let Some(o) = pos {
                     for (coord, &observed) in o.iter().enumerate() {
-                        each(row, frame, marker, m[2 * marker + coord] - observed);
+                        each(
+                            row,
+                            frame,
+                            marker,
+                            coord,
+                            m[2 * marker + coord] - observed,
+                            &x,
+                        );
                         row += 1;
                     }
                 }
             }
             frame += 1;
         };
-        let sol = simulate_each(&rig, &y0, t_end, &self.options, &layout.request, &mut sink)?;
+        let full;
+        let request = if velocities || !camera.lag.is_exact_zero() {
+            full = Request {
+                positions_only: false,
+                ..layout.request.clone()
+            };
+            &full
+        } else {
+            &layout.request
+        };
+        let sol = simulate_each(&rig, &y0, t_end, &self.options, request, &mut sink)?;
         if frame < layout.obs_index.len() {
             return Err(SimError::InvalidInput(format!(
                 "the model stops at t = {} s (Painleve paradox) before the recording ends",
@@ -604,6 +659,101 @@ impl TrajectoryProblem {
     ) -> Result<Normal, Error> {
         self.counters.jacobians.fetch_add(1, Ordering::Relaxed);
         by_width!(p.len(), N => self.normal_n::<N>(p, block)).map_err(to_err)
+    }
+}
+
+impl TrajectoryProblem {
+    /// The normal equations over the free parameters followed by `extra`, camera parameters
+    /// that are not free (at most [`CAMERA_PARAMS`]): their columns come from differentiating
+    /// the observation model alone at each frame's state, since they do not enter the motion.
+    /// The score test screens the camera's nuisances this way in the same pass as the rig's,
+    /// with dual numbers no wider than the rig's parameters need.
+    pub fn normal_equations_observed(
+        &self,
+        p: &DVector<f64>,
+        extra: &[Param],
+    ) -> Result<Normal, Error> {
+        if let Some(q) = extra
+            .iter()
+            .find(|q| !q.is_camera() || self.free.contains(q))
+        {
+            return Err(Error::msg(format!(
+                "{} is not a camera parameter held fixed",
+                q.name()
+            )));
+        }
+        if extra.len() > CAMERA_PARAMS {
+            return Err(Error::msg(format!(
+                "at most {CAMERA_PARAMS} camera parameters, got {}",
+                extra.len()
+            )));
+        }
+        self.counters.jacobians.fetch_add(1, Ordering::Relaxed);
+        by_width!(p.len(), N => self.normal_observed_n::<N>(p, extra)).map_err(to_err)
+    }
+
+    fn normal_observed_n<const N: usize>(
+        &self,
+        p: &DVector<f64>,
+        extra: &[Param],
+    ) -> Result<Normal, SimError> {
+        const M: usize = CAMERA_PARAMS;
+        const W: usize = MAX_FREE + CAMERA_PARAMS;
+        let (k, m) = (p.len(), extra.len());
+        // The rig and camera at p, with the extra camera parameters seeded.
+        let mut at_p = self.clone();
+        at_p.set_values(p);
+        at_p.free = extra.to_vec();
+        let values = at_p.values();
+        let (rig_m, _, cam_m) = at_p.apply(&seed::<M>(&values));
+        let mut ss = 0.0;
+        let mut jtj = [[0.0; W]; W];
+        let mut jtr = [0.0; W];
+        // A lag among the extra parameters differentiates along the motion: velocities.
+        self.for_each_residual_at(
+            &seed::<N>(p),
+            extra.contains(&Param::Lag),
+            |s: &Sample<DualSVec64<N>>| {
+                let y = re_state(&s.state);
+                // The lag's accelerations in f64: nothing in them depends on the camera.
+                let acc = (!cam_m.lag.is_exact_zero()).then(|| {
+                    let (a, b) = at_p.rig.accelerations(s.mode, &y);
+                    (DualSVec64::from(a), DualSVec64::from(b))
+                });
+                observed_markers_with(rig_m.rod_length, &cam_m, &y.map(DualSVec64::from), acc)
+            },
+            |row, _, marker, coord, d, cam| {
+                let scale = self.row_weight(row) / self.sigma[marker];
+                let r = d.re * scale;
+                let e = d.eps.unwrap_generic(nalgebra::Const::<N>, U1);
+                let c = cam[2 * marker + coord]
+                    .eps
+                    .unwrap_generic(nalgebra::Const::<M>, U1);
+                let mut g = [0.0; W];
+                g[..k]
+                    .iter_mut()
+                    .zip(e.iter())
+                    .for_each(|(g, e)| *g = e * scale);
+                g[k..k + m]
+                    .iter_mut()
+                    .zip(c.iter())
+                    .for_each(|(g, c)| *g = c * scale);
+                ss += r * r;
+                for a in 0..k + m {
+                    jtr[a] += g[a] * r;
+                    for b in 0..=a {
+                        jtj[a][b] += g[a] * g[b];
+                    }
+                }
+            },
+        )?;
+        let kk = k + m;
+        Ok(Normal {
+            cost: 0.5 * ss,
+            jtj: DMatrix::from_fn(kk, kk, |a, b| jtj[a.max(b)][a.min(b)]),
+            jtr: DVector::from_fn(kk, |a, _| jtr[a]),
+            meat: None,
+        })
     }
 }
 

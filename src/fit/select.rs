@@ -3,7 +3,6 @@
 //! Jacobian at the current optimum), the promising ones fitted, and the best kept while it
 //! lowers the Bayesian information criterion BIC = chi2 + k ln(n) (forward selection).
 
-use super::lm::LeastSquares;
 use super::problem::{Param, TrajectoryProblem, MAX_FREE};
 use super::{solve, Solved};
 use crate::model::{FrictionLaw, State};
@@ -180,7 +179,10 @@ fn chi2_of(cost: f64) -> f64 {
 
 /// Predicted chi-square drops of the screened candidates from one augmented Jacobian per
 /// group of columns (the score test): with residuals r and base columns B at the optimum and
-/// candidate columns C, drop = (C'r)' S^-1 (C'r) with S = C'C - C'B (B'B)^-1 B'C.
+/// candidate columns C, drop = (C'r)' S^-1 (C'r) with S = C'C - C'B (B'B)^-1 B'C. The camera's
+/// candidates join the first group's pass: their columns come from the observation model
+/// alone ([`TrajectoryProblem::normal_equations_observed`]), so only the rig's candidates
+/// widen the dual numbers carried through the motion.
 fn score_drops(
     problem: &TrajectoryProblem,
     p: &DVector<f64>,
@@ -188,27 +190,34 @@ fn score_drops(
 ) -> Vec<(Nuisance, f64)> {
     let k = problem.free.len();
     let room = MAX_FREE.saturating_sub(k);
+    let seen_only = |n: &Nuisance| {
+        n.params()
+            .iter()
+            .all(|q| q.is_camera() && !problem.free.contains(q))
+    };
     let mut out = Vec::new();
     let mut group: Vec<Nuisance> = Vec::new();
-    let flush = |group: &mut Vec<Nuisance>, out: &mut Vec<(Nuisance, f64)>| {
-        if group.is_empty() {
+    let mut seen: Vec<Nuisance> = candidates.iter().copied().filter(seen_only).collect();
+    let flush = |group: &mut Vec<Nuisance>, seen: &mut Vec<Nuisance>, out: &mut Vec<_>| {
+        if group.is_empty() && seen.is_empty() {
             return;
         }
         let mut aug = problem.clone();
         for n in group.iter() {
             aug.free.extend(n.params());
         }
+        let extra: Vec<Param> = seen.iter().flat_map(|n| n.params()).copied().collect();
         let mut q = p.clone().resize_vertically(aug.free.len(), 0.0);
         for (i, &param) in aug.free.iter().enumerate().skip(k) {
             q[i] = problem.get(param);
         }
         // Every block the score test needs is a block of the augmented normal equations:
         // B'B, B'C, C'C and C'r.
-        if let Ok(nq) = aug.normal_equations(&q) {
+        if let Ok(nq) = aug.normal_equations_observed(&q, &extra) {
             let btb = nq.jtj.view((0, 0), (k, k)).into_owned();
             if let Some(btb_inv) = btb.try_inverse() {
                 let mut col = k;
-                for n in group.iter() {
+                for n in group.iter().chain(seen.iter()) {
                     let w = n.params().len();
                     let g = nq.jtr.rows(col, w).into_owned();
                     let bc = nq.jtj.view((0, col), (k, w)).into_owned();
@@ -224,16 +233,19 @@ fn score_drops(
             }
         }
         group.clear();
+        seen.clear();
     };
-    for &n in candidates {
+    for &n in candidates.iter().filter(|n| !seen_only(n)) {
         if group.iter().map(|g| g.params().len()).sum::<usize>() + n.params().len() > room {
-            flush(&mut group, &mut out);
+            flush(&mut group, &mut seen, &mut out);
         }
         if n.params().len() <= room {
             group.push(n);
         }
     }
-    flush(&mut group, &mut out);
+    flush(&mut group, &mut seen, &mut out);
+    // In the candidates' order, which breaks ties.
+    out.sort_by_key(|(n, _)| candidates.iter().position(|c| c == n));
     out
 }
 

@@ -175,6 +175,7 @@ pub fn windows(
         &Request {
             sample_times: starts.clone(),
             friction_work: false,
+            positions_only: false,
         },
     ) else {
         return Vec::new();
@@ -221,7 +222,7 @@ pub fn windows(
                 })
                 .flatten();
             let minimise = |m: &TrajectoryProblem| {
-                let ftol = long.then_some(1e-6);
+                let ftol = long.then_some(super::STAGE_FTOL);
                 solve_loose(m, p0.clone(), settings.max_iters, ftol)
                     .ok()
                     .map(|(q, _, _)| q)
@@ -241,6 +242,7 @@ pub fn windows(
                 &Request {
                     sample_times: m.frame_times().to_vec(),
                     friction_work: false,
+                    positions_only: true,
                 },
                 &mut |s: Sample<f64>| sliding += usize::from(matches!(s.mode, Mode::Slide(_))),
             )
@@ -297,8 +299,8 @@ pub fn window_consistency(windows: &[WindowFit]) -> Option<f64> {
 
 /// 95% profile-likelihood interval for parameter `k`: where the best chi-square with that
 /// parameter held rises by 3.84 times `scale` (the reduced chi-square when above one).
-/// `cov`, the covariance at `p` when known, warm-starts a long recording's profile points
-/// on the linear prediction of the other parameters.
+/// `at`, the covariance and chi-square at `p` when known, warm-starts a long recording's
+/// profile points on the linear prediction of the other parameters (and saves a pass).
 #[allow(clippy::too_many_arguments)]
 pub fn profile_interval(
     problem: &TrajectoryProblem,
@@ -308,11 +310,15 @@ pub fn profile_interval(
     scale: f64,
     settings: &FitSettings,
     lower_limit: f64,
-    cov: Option<&DMatrix<f64>>,
+    at: Option<(&DMatrix<f64>, f64)>,
 ) -> Option<[f64; 2]> {
     let target = 3.84 * scale;
     let base = p.clone();
-    let s_min = problem.chi2(p).ok()?;
+    let cov = at.map(|a| a.0);
+    let s_min = match at {
+        Some((_, chi2)) => chi2,
+        None => problem.chi2(p).ok()?,
+    };
     let mut fixed = problem.clone();
     fixed.free.remove(k);
     let others: Vec<usize> = (0..p.len()).filter(|&i| i != k).collect();

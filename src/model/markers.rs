@@ -71,18 +71,30 @@ pub fn observed_markers<T: Scalar>(
     mode: Mode,
     y: &State<T>,
 ) -> [T; 4] {
+    // A lag that is zero but being differentiated must still take the Taylor path.
+    let accelerations = (!camera.lag.is_exact_zero()).then(|| rig.accelerations(mode, y));
+    observed_markers_with(rig.rod_length, camera, y, accelerations)
+}
+
+/// [`observed_markers`] with the accelerations (x'', theta'') at `y` given, as the lag needs
+/// them (`None`: no lag): a caller differentiating by the camera's parameters alone computes
+/// them once in f64.
+pub fn observed_markers_with<T: Scalar>(
+    rod_length: T,
+    camera: &Camera<T>,
+    y: &State<T>,
+    accelerations: Option<(T, T)>,
+) -> [T; 4] {
     let k = T::from(1.0) + camera.scale_error;
     let (sin, cos) = y[THETA].sin_cos();
-    let lb = rig.rod_length + camera.bob_along;
+    let lb = rod_length + camera.bob_along;
     let e = camera.bob_across;
     // Bob relative to the slider, y down, and its first two angular derivatives' factors.
     let along = lb * cos - e * sin; // d(bx)/d(theta) = -across_y
     let across = lb * sin + e * cos; // by (y down); d(by)/d(theta) = along
     let mut bx = y[X] + along;
     let mut by = across;
-    // A lag that is zero but being differentiated must still take the Taylor path.
-    if !camera.lag.is_exact_zero() {
-        let (x_dd, th_dd) = rig.accelerations(mode, y);
+    if let Some((x_dd, th_dd)) = accelerations {
         let w = y[THETA_DOT];
         let vx = y[X_DOT] - across * w;
         let vy = along * w;

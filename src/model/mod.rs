@@ -11,7 +11,7 @@ mod rig;
 mod transition;
 
 pub use forces::{energy, momentum, Shorthands, SlideBranches, SlideDynamics};
-pub use markers::{markers, observed_markers, Camera};
+pub use markers::{markers, observed_markers, observed_markers_with, Camera};
 pub use mode::{Direction, Mode};
 pub use rig::{FrictionLaw, Rig, RigError};
 pub use transition::{choose_at_rest, RestChoice};

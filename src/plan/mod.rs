@@ -143,6 +143,7 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
             let request = Request {
                 sample_times: frames.clone(),
                 friction_work: false,
+                positions_only: false,
             };
             let (sol, nominal) =
                 ev.run(&spec.rig, &y0, &request)

@@ -447,6 +447,7 @@ impl Figure for FitFigure<'_> {
             &Request {
                 sample_times: times.clone(),
                 friction_work: false,
+                positions_only: false,
             },
         )
         .map_err(|e| PlotError::Draw(e.to_string()))?;

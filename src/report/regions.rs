@@ -92,6 +92,7 @@ pub fn phase_portrait(rig: &Rig<f64>, options: &PortraitOptions) -> Vec<Trajecto
     let request = Request {
         sample_times: (0..=n).map(|k| k as f64 / options.frame_rate).collect(),
         friction_work: false,
+        positions_only: false,
     };
     portrait_initial_states(rig, options.trajectories)
         .into_iter()

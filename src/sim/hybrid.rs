@@ -63,6 +63,21 @@ pub fn simulate_each<T: Scalar + 'static>(
     }
 }
 
+/// The state at fraction `theta` of the stepper's prepared step, or only its positions when
+/// that is all the samples need.
+#[inline]
+fn dense_at<T: Scalar, M: Stepper<T, N>, const N: usize>(
+    stepper: &M,
+    theta: f64,
+    positions_only: bool,
+) -> [T; N] {
+    if positions_only {
+        stepper.interpolate_positions(theta)
+    } else {
+        stepper.interpolate(theta)
+    }
+}
+
 /// The right-hand side of one mode; a fifth and sixth component, when present, are the
 /// friction work and the pivot's damping work.
 struct ModeSystem<'a, T> {
@@ -672,6 +687,7 @@ where
         ));
     }
     let times = &request.sample_times;
+    let positions_only = request.positions_only;
     if times
         .windows(2)
         .any(|w| w[0].partial_cmp(&w[1]) == Some(std::cmp::Ordering::Greater))
@@ -939,7 +955,7 @@ where
                     prepare(&mut stepper, &mut dense_ready);
                 }
                 out.emit(times, t, t_star, mode, |ts| {
-                    stepper.interpolate(((ts - t) / step).min(1.0))
+                    dense_at(&stepper, ((ts - t) / step).min(1.0), positions_only)
                 });
                 let y_star: [T; N] = if th == 0.0 {
                     y
@@ -1023,7 +1039,7 @@ where
             if times.get(out.next_sample).is_some_and(|&ts| ts <= t1) {
                 prepare(&mut stepper, &mut dense_ready);
                 out.emit(times, t, t1, mode, |ts| {
-                    stepper.interpolate(((ts - t) / step).min(1.0))
+                    dense_at(&stepper, ((ts - t) / step).min(1.0), positions_only)
                 });
             }
             for (st, &(g1, gdot1)) in gs.iter_mut().zip(&new_g) {

@@ -120,6 +120,9 @@ pub struct Request {
     /// Integrate the friction work and the pivot's damping work alongside the state (for
     /// energy balances).
     pub friction_work: bool,
+    /// Only the positions (x, theta) are wanted at the samples: the velocities in them are
+    /// NaN, and the dense output skips half its work (the fit's markers need no more).
+    pub positions_only: bool,
 }
 
 /// Why an event happened.

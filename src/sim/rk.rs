@@ -49,6 +49,14 @@ pub trait Stepper<T: Scalar, const N: usize> {
     /// The state at fraction `theta` in [0, 1] of the prepared step.
     fn interpolate(&self, theta: f64) -> [T; N];
 
+    /// [`Stepper::interpolate`] of the positions (the first two components) only, the rest
+    /// NaN: samples that feed marker positions need no more.
+    fn interpolate_positions(&self, theta: f64) -> [T; N] {
+        let mut y = self.interpolate(theta);
+        y.iter_mut().skip(2).for_each(|v| *v = T::from(f64::NAN));
+        y
+    }
+
     /// Right-hand-side evaluations so far.
     fn rhs_evals(&self) -> usize;
 }
@@ -315,6 +323,21 @@ impl<T: Scalar, const N: usize> Stepper<T, N> for Dop853<T, N> {
         }
         for i in 0..N {
             y[i] += self.y0[i];
+        }
+        y
+    }
+
+    fn interpolate_positions(&self, theta: f64) -> [T; N] {
+        let mut y = [T::from(f64::NAN); N];
+        let mut acc = [T::from(0.0); 2];
+        for (idx, f) in self.dense.iter().rev().enumerate() {
+            let factor = if idx % 2 == 0 { theta } else { 1.0 - theta };
+            for i in 0..2 {
+                acc[i] = (acc[i] + f[i]) * factor;
+            }
+        }
+        for i in 0..2 {
+            y[i] = acc[i] + self.y0[i];
         }
         y
     }

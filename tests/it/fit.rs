@@ -317,6 +317,73 @@ fn jacobian_matches_finite_differences() {
     }
 }
 
+/// The camera's columns taken from the observation model alone (the score test's shortcut)
+/// equal those of dual numbers carried through the whole run with the camera's parameters
+/// free, on a rig that slides and sticks, with every camera term away from zero (a lag too).
+#[test]
+fn camera_columns_from_the_observation_model_match_the_full_run() {
+    let rig = Rig::new(0.5, 0.2, 0.3, 9.81, 0.12, Some(0.15)).unwrap();
+    let y0 = [0.0, FRAC_PI_2 - 0.9, 0.05, 0.3];
+    let obs = Arc::new(synthetic(&rig, y0, 500.0, 1.5, 2e-4, 0, 0, 3));
+    let base = vec![
+        Param::MuKinetic,
+        Param::X,
+        Param::Theta,
+        Param::ThetaDot,
+        Param::RailTilt,
+    ];
+    let extra = [
+        Param::ScaleError,
+        Param::BobAcross,
+        Param::SliderDy,
+        Param::Lag,
+    ];
+    let mut pr = TrajectoryProblem::new(obs, rig, y0, base.clone(), Options::default());
+    pr.camera.scale_error = 0.01;
+    pr.camera.bob_along = 0.004;
+    pr.camera.bob_across = -0.003;
+    pr.camera.slider_dx = 0.002;
+    pr.camera.slider_dy = 0.001;
+    pr.camera.lag = 0.0015;
+    pr.rig.rail_tilt = 0.004;
+    pr.sigma = [2e-4, 3e-4];
+    let split = pr.normal_equations_observed(&pr.values(), &extra).unwrap();
+    let mut full = pr.clone();
+    full.free = base.iter().chain(&extra).copied().collect();
+    let whole = full.normal_equations(&full.values()).unwrap();
+    let rel = |a: f64, b: f64| (a - b).abs() / b.abs().max(1e-300);
+    assert!(rel(split.cost, whole.cost) < 1e-12);
+    for a in 0..full.free.len() {
+        assert!(
+            // |J'r| <= |J_a| |r| (Cauchy-Schwarz): the scale of the entry.
+            (split.jtr[a] - whole.jtr[a]).abs()
+                <= 1e-9 * (whole.jtj[(a, a)] * 2.0 * whole.cost).sqrt(),
+            "J'r {:?}: {} vs {}",
+            full.free[a],
+            split.jtr[a],
+            whole.jtr[a]
+        );
+        for b in 0..full.free.len() {
+            let scale = (whole.jtj[(a, a)] * whole.jtj[(b, b)]).sqrt();
+            assert!(
+                (split.jtj[(a, b)] - whole.jtj[(a, b)]).abs() <= 1e-9 * scale,
+                "J'J ({:?}, {:?}): {} vs {}",
+                full.free[a],
+                full.free[b],
+                split.jtj[(a, b)],
+                whole.jtj[(a, b)]
+            );
+        }
+    }
+    // A parameter of the motion, or one already free, is refused rather than mis-derived.
+    assert!(pr
+        .normal_equations_observed(&pr.values(), &[Param::RailTilt])
+        .is_err());
+    assert!(full
+        .normal_equations_observed(&full.values(), &[Param::Lag])
+        .is_err());
+}
+
 /// A long recording (20 s at 1 kHz of the paper scene's stick-slip, 0.5 mm noise) fitted the
 /// long way (starts on the first 4000 frames, then carried over the rest by doubling, profile
 /// checked at the Wald ends) lands on the optimum of the whole-recording fit from every start,

@@ -44,6 +44,7 @@ fn record(
         &Request {
             sample_times: times.clone(),
             friction_work: false,
+            positions_only: false,
         },
     )
     .unwrap();

@@ -176,6 +176,7 @@ pub fn synthetic(
         &Request {
             sample_times: times.clone(),
             friction_work: false,
+            positions_only: false,
         },
     );
     assert_eq!(sol.samples.len(), times.len());

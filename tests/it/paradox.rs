@@ -85,6 +85,7 @@ fn energy_balance_through_impulsive_and_sudden_stops() {
     let req = Request {
         sample_times: vec![],
         friction_work: true,
+        positions_only: false,
     };
     let mut impulses = 0;
     for (rig, thr) in [

@@ -104,6 +104,7 @@ fn energy_balance_closes_with_friction_and_damping_work() {
                     &Request {
                         sample_times: times,
                         friction_work: true,
+                        positions_only: false,
                     },
                 );
                 let unit = (r.slider_mass + r.bob_mass) * r.gravity * r.rod_length;
@@ -173,6 +174,7 @@ fn tilted_stuck_pendulum_swings_about_gravity_with_the_level_period() {
             &Request {
                 sample_times: times,
                 friction_work: false,
+                positions_only: false,
             },
         );
         assert!(sol.events.is_empty(), "stays stuck: {:?}", sol.events);
@@ -222,6 +224,7 @@ fn damped_stuck_pendulum_decays_at_the_closed_form_rate() {
             &Request {
                 sample_times: times,
                 friction_work: false,
+                positions_only: false,
             },
         );
         assert!(sol.events.is_empty());
@@ -422,6 +425,7 @@ fn dual_matches_finite_differences(rig: &Rig<f64>, params: &[NewParam]) {
     let req = Request {
         sample_times: times.clone(),
         friction_work: false,
+        positions_only: false,
     };
     let opts = Options {
         rtol: 1e-12,

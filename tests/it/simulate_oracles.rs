@@ -24,6 +24,7 @@ fn energy_change_equals_friction_work() {
             let req = Request {
                 sample_times: (0..=40).map(|k| k as f64 * 0.05).collect(),
                 friction_work: true,
+                positions_only: false,
             };
             let sol = run(&rig, y0, 2.0, 1e-12, method, &req);
             assert!(
@@ -60,6 +61,7 @@ fn frictionless_conserves_momentum_and_energy() {
         let req = Request {
             sample_times: (0..=100).map(|k| k as f64 * 0.03).collect(),
             friction_work: false,
+            positions_only: false,
         };
         let sol = run(&rig, y0, 3.0, 1e-11, Method::Dop853, &req);
         let (p0, e0) = (momentum(&rig, &y0), energy(&rig, &y0));
@@ -442,5 +444,42 @@ fn proven_stick_skips_monitoring_without_changing_the_answer() {
                 monitored.final_state
             );
         }
+    }
+}
+
+/// Samples asked for positions only carry exactly the positions of a full run (same steps,
+/// same dense output) and NaN velocities, so nothing can read a velocity it did not ask for;
+/// both methods, through stick-slip events.
+#[test]
+fn positions_only_samples_are_the_full_runs_positions() {
+    let rig = unequal_rig(0.12);
+    let y0 = [0.0, FRAC_PI_2 - 0.9, 0.0, 0.0];
+    for method in Method::ALL {
+        let full = Request {
+            sample_times: (0..=400).map(|k| k as f64 * 0.005).collect(),
+            friction_work: false,
+            positions_only: false,
+        };
+        let positions = Request {
+            positions_only: true,
+            ..full.clone()
+        };
+        let a = run(&rig, y0, 2.0, 1e-10, method, &full);
+        let b = run(&rig, y0, 2.0, 1e-10, method, &positions);
+        assert!(a.events.len() > 2, "{method:?}: stick-slip expected");
+        assert_eq!(a.samples.len(), b.samples.len());
+        for (s, p) in a.samples.iter().zip(&b.samples) {
+            assert_eq!(s.mode, p.mode);
+            assert_eq!(s.state[0].to_bits(), p.state[0].to_bits(), "x at {}", s.t);
+            assert_eq!(
+                s.state[1].to_bits(),
+                p.state[1].to_bits(),
+                "theta at {}",
+                s.t
+            );
+            // At t = 0 and at events the state is known whole; between, velocities are NaN.
+            assert!(p.t == 0.0 || p.state[2].is_nan() || s.state[2] == p.state[2]);
+        }
+        assert!(b.samples.iter().filter(|p| p.state[3].is_nan()).count() > 300);
     }
 }

@@ -29,6 +29,7 @@ fn with_work(t_end: f64, n: usize) -> Request {
     Request {
         sample_times: frames(t_end, n),
         friction_work: true,
+        positions_only: false,
     }
 }
 
@@ -266,6 +267,7 @@ fn ten_thousand_periods_stuck() {
     let req = Request {
         sample_times: (0..=100).map(|k| t_end * k as f64 / 100.0).collect(),
         friction_work: false,
+        positions_only: false,
     };
     let sol = simulate(&rig, &y0, t_end, &options, &req).unwrap();
     assert!(sol.events.is_empty());
@@ -354,6 +356,7 @@ fn frictionless_rotation_conserves_momentum() {
         &Request {
             sample_times: frames(2.0, 400),
             friction_work: false,
+            positions_only: false,
         },
     );
     let (p0, e0) = (momentum(&rig, &y0), energy(&rig, &y0));
@@ -379,6 +382,7 @@ fn huge_friction_is_the_exact_pendulum() {
         let req = Request {
             sample_times: frames(3.0, 60),
             friction_work: false,
+            positions_only: false,
         };
         let sol = run(&rig, y0, 3.0, 1e-11, Method::Dop853, &req);
         assert!(sol.events.is_empty(), "v={v}: {:?}", sol.events);
@@ -411,6 +415,7 @@ fn theta_near_hanging_and_near_horizontal() {
         &Request {
             sample_times: frames(2.0, 40),
             friction_work: false,
+            positions_only: false,
         },
     );
     assert!(sol.events.is_empty());
