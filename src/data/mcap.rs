@@ -960,6 +960,453 @@ fn plain(err: &McapError) -> String {
     out.trim().trim_end_matches(':').to_string()
 }
 
+/// What one record came to.
+enum Step {
+    /// Read on.
+    Next,
+    /// The file is damaged here (why); what was read before is kept.
+    Damage(String),
+    /// Past the time window: stop reading.
+    Stop,
+}
+
+/// The bytes of a chunk record before its records field: start and end time, uncompressed
+/// size, CRC and compression length (8 + 8 + 8 + 4 + 4), the compression string, then the
+/// compressed size (8).
+const CHUNK_FIXED: usize = 32;
+
+/// Decoders and buffer reused across chunks, so a file of many chunks allocates once.
+#[derive(Default)]
+struct ChunkBuffers {
+    zstd: Option<::zstd::zstd_safe::DCtx<'static>>,
+    records: Vec<u8>,
+}
+
+/// Decompress `src` (one chunk's compressed records) into `out`, at most `size` bytes, the way
+/// the mcap crate's decoders do (frames after frames until `size` bytes; bytes past that are
+/// ignored). Whatever came out before an error is kept in `out`; the error is returned.
+fn decompress_chunk(
+    compression: &str,
+    src: &[u8],
+    size: usize,
+    bufs: &mut ChunkBuffers,
+    out: &mut Vec<u8>,
+) -> Option<String> {
+    use ::zstd::zstd_safe::{get_error_name, DCtx, InBuffer, OutBuffer, ResetDirective};
+    out.clear();
+    // Only `size` bytes are asked for; the capacity bounds what the decoder may write.
+    out.reserve_exact(size);
+    let short = match compression {
+        "zstd" => {
+            let dctx = bufs.zstd.get_or_insert_with(DCtx::create);
+            let mut input = InBuffer::around(src);
+            let mut output = OutBuffer::around(out);
+            let mut failed = None;
+            while output.pos() < size && input.pos < src.len() {
+                let before = (input.pos, output.pos());
+                if let Err(code) = dctx.decompress_stream(&mut output, &mut input) {
+                    failed = Some(McapError::DecompressionError(get_error_name(code).into()));
+                    break;
+                }
+                if (input.pos, output.pos()) == before {
+                    break;
+                }
+            }
+            // A frame cut short or an error leaves the context mid-frame: the next chunk starts
+            // clean.
+            let _ = dctx.reset(ResetDirective::SessionOnly);
+            failed
+        }
+        "lz4" => {
+            let mut rest = src;
+            let mut failed = None;
+            // One lz4 decoder per frame: a chunk may hold several frames back to back.
+            while out.len() < size && !rest.is_empty() {
+                let before = (rest.len(), out.len());
+                let read = ::lz4::Decoder::new(rest).and_then(|mut dec| {
+                    let want = (size - out.len()) as u64;
+                    let read = Read::by_ref(&mut dec).take(want).read_to_end(out);
+                    rest = dec.finish().0;
+                    read
+                });
+                if let Err(e) = read {
+                    failed = Some(McapError::Io(e));
+                    break;
+                }
+                if (rest.len(), out.len()) == before {
+                    break;
+                }
+            }
+            failed
+        }
+        _ => unreachable!("compression checked by the caller"),
+    };
+    out.truncate(size);
+    short.map(|e| plain(&e))
+}
+
+/// Where the next record of a chunk ends, or why it cannot be read: `left` bytes of the
+/// chunk's records remain (as declared), of which `avail` are at hand. Checked arithmetic
+/// only: every length is compared with what remains, nothing is subtracted past zero.
+enum NextRecord {
+    /// The record's opcode and body length; its body follows the 9-byte opcode and length.
+    Record(u8, usize),
+    /// The 9-byte opcode and length, or the body, run past the chunk's end: the chunk is
+    /// damaged.
+    Beyond(String),
+    /// The body is longer than the record limit.
+    TooLarge(u8, u64),
+    /// The bytes at hand end first (a truncated file or a decompression error).
+    Short,
+}
+
+/// The record at the start of `rest` (`left` bytes of the chunk remain, `rest.len()` of them
+/// at hand), checked against the chunk and the record `limit`.
+fn next_in_chunk(rest: &[u8], left: u64, limit: usize) -> NextRecord {
+    const HEAD: u64 = 9;
+    if left < HEAD {
+        return NextRecord::Beyond(format!(
+            "its opcode and length: 9 bytes, beyond the {left} byte(s) left in the chunk"
+        ));
+    }
+    let Some((&[opcode], tail)) = rest.split_first_chunk::<1>() else {
+        return NextRecord::Short;
+    };
+    let Some(len) = tail.first_chunk::<8>().map(|b| u64::from_le_bytes(*b)) else {
+        return NextRecord::Short;
+    };
+    // The limit first, as the mcap crate's reader checks it.
+    let Some(body) = usize::try_from(len).ok().filter(|&n| n <= limit) else {
+        return NextRecord::TooLarge(opcode, len);
+    };
+    let room = left - HEAD;
+    if len > room {
+        return NextRecord::Beyond(format!(
+            "length {len} bytes, beyond the {room} byte(s) left in the chunk after its opcode and length"
+        ));
+    }
+    if (rest.len() - 9) < body {
+        return NextRecord::Short;
+    }
+    NextRecord::Record(opcode, body)
+}
+
+/// The decoding state of one read: channels, samples and counts, fed record by record.
+struct Reading<'a> {
+    path: &'a Path,
+    opts: &'a ReadOptions,
+    limit: usize,
+    budget: u64,
+    schemas: HashMap<u16, (String, String, Vec<u8>)>,
+    channels: BTreeMap<u16, Channel>,
+    acc: Acc,
+    parsed: Parsed,
+    records: u64,
+    messages: u64,
+    record_bytes: u64,
+    unsupported_compression: Option<String>,
+    window_end: Option<f64>,
+    first_log_time: Option<u64>,
+    stopped_at: Option<f64>,
+    bufs: ChunkBuffers,
+}
+
+impl Reading<'_> {
+    /// The damage text of a record longer than the limit.
+    fn too_large(&self, opcode: u8, len: u64) -> String {
+        format!(
+            "record (opcode {opcode:#04x}) of {len} bytes: more than the {}-byte limit for a file of this size",
+            self.limit
+        )
+    }
+
+    /// Read one record (outside chunks or inside one).
+    fn record(&mut self, opcode: u8, data: &[u8]) -> Result<Step, DataError> {
+        let (path, opts) = (self.path, self.opts);
+        self.records += 1;
+        let records = self.records;
+        self.record_bytes += data.len() as u64;
+        if self.record_bytes > self.budget {
+            return Ok(Step::Damage(format!(
+                "records decompress to more than {} bytes (1024 times the file plus 64 MiB)",
+                self.budget
+            )));
+        }
+        // Only these records are used; the mcap crate sizes strings from their length
+        // fields before checking them, so their lengths are checked here first.
+        if ![op::SCHEMA, op::CHANNEL, op::MESSAGE, op::METADATA].contains(&opcode) {
+            return Ok(Step::Next);
+        }
+        if let Err(why) = check_lengths(opcode, data) {
+            return Ok(Step::Damage(format!(
+                "record {records} (opcode {opcode:#04x}): {why}"
+            )));
+        }
+        // A message's header is four fixed fields (check_lengths saw its 22 bytes):
+        // read here, the payload borrowed, as parse_record would give them.
+        let parsed_record = if opcode == op::MESSAGE {
+            Ok(message_record(data))
+        } else {
+            ::mcap::parse_record(opcode, data)
+        };
+        let record = match parsed_record {
+            Ok(r) => r,
+            Err(e) => return Ok(Step::Damage(plain(&e))),
+        };
+        match record {
+            Record::Schema { header, data } => {
+                // Only protobuf needs the schema's bytes; keep memory bounded otherwise.
+                let data = if header.encoding == "protobuf" {
+                    data.into_owned()
+                } else {
+                    Vec::new()
+                };
+                self.schemas
+                    .insert(header.id, (header.name, header.encoding, data));
+            }
+            Record::Channel(c) => {
+                let (sname, senc, sdata) = self
+                    .schemas
+                    .get(&c.schema_id)
+                    .map(|(n, e, d)| (n.as_str(), e.as_str(), d.as_slice()))
+                    .unwrap_or_default();
+                let state = if !opts.topics.is_empty() && !opts.topics.contains(&c.topic) {
+                    ChannelState::Ignored("not chosen by --topic".into())
+                } else {
+                    match decoder_for(&c.message_encoding, sname, senc, sdata) {
+                        Ok(d) => ChannelState::Markers(d),
+                        Err(Reject::Unsupported(why)) => {
+                            ChannelState::Ignored(format!("{why} is not supported"))
+                        }
+                        Err(Reject::Invalid(why)) => ChannelState::Ignored(why),
+                    }
+                };
+                self.channels.entry(c.id).or_insert(Channel {
+                    topic: c.topic,
+                    state,
+                    decoded: 0,
+                });
+            }
+            Record::Message { header, data } => {
+                self.messages += 1;
+                let messages = self.messages;
+                let Some(ch) = self.channels.get_mut(&header.channel_id) else {
+                    return Err(DataError::parse(
+                        path,
+                        format!("record {records}"),
+                        "channel id",
+                        "a channel defined before its messages",
+                        header.channel_id.to_string(),
+                    ));
+                };
+                let ChannelState::Markers(dec) = &ch.state else {
+                    return Ok(Step::Next);
+                };
+                if let Some(end) = self.window_end {
+                    let first = *self.first_log_time.get_or_insert(header.log_time);
+                    let since = header.log_time.saturating_sub(first) as f64 * 1e-9;
+                    if since > end {
+                        self.stopped_at = Some(since);
+                        return Ok(Step::Stop);
+                    }
+                }
+                let result = match i64::try_from(header.log_time) {
+                    Ok(log_time) => {
+                        decode(dec, &ch.topic, &data, log_time, opts.plane, &mut self.acc)
+                    }
+                    Err(_) => Err(format!(
+                        "a log_time below 2^63 ns (year 2262), found {}",
+                        header.log_time
+                    )),
+                };
+                match result {
+                    Ok(_) => ch.decoded += 1,
+                    Err(why) if ch.decoded == 0 => {
+                        ch.state = ChannelState::Ignored(format!(
+                            "its first message is not marker data: {why}"
+                        ));
+                    }
+                    Err(why) => {
+                        return Err(DataError::parse(
+                            path,
+                            format!("message {messages} (record {records}) on {}", ch.topic),
+                            "message",
+                            "marker data like the channel's earlier messages",
+                            why,
+                        ))
+                    }
+                }
+            }
+            Record::Metadata(Metadata { name, metadata }) => {
+                for (k, v) in metadata {
+                    self.parsed.metadata.insert(format!("{name}.{k}"), v);
+                }
+            }
+            _ => {}
+        }
+        Ok(Step::Next)
+    }
+
+    /// Read a chunk record's `body` (everything after its opcode and length `len`; fewer bytes
+    /// than `len` when the file ends inside it): check its header, decompress its records in one
+    /// go, check their CRC, and read them one by one. `start` is the chunk's offset in the
+    /// file. Besides the step, the file offset the damage is reported at when it is not the
+    /// bytes read so far: in an uncompressed chunk, where the record at fault ends, as when the
+    /// mcap crate read such chunks record by record.
+    fn chunk(
+        &mut self,
+        body: &[u8],
+        len: u64,
+        start: u64,
+    ) -> Result<(Step, Option<u64>), DataError> {
+        let complete = body.len() as u64 == len;
+        let eof = || plain(&McapError::UnexpectedEof);
+        let damage = |why: String| Ok((Step::Damage(why), None));
+        let at_chunk = |why: String| format!("chunk at byte {start}: {why}");
+        // The fixed fields and the compression string's length.
+        let Some(cl) = body.get(CHUNK_FIXED - 4..CHUNK_FIXED) else {
+            return if complete {
+                damage(at_chunk(plain(&McapError::BadChunkLength {
+                    header: (CHUNK_FIXED + 8) as u64,
+                    available: len,
+                })))
+            } else {
+                damage(eof())
+            };
+        };
+        let cl = u32::from_le_bytes(cl.try_into().expect("4 bytes"));
+        let header_len = (CHUNK_FIXED as u64 + 8).saturating_add(u64::from(cl));
+        if header_len > len {
+            return damage(plain(&McapError::BadChunkLength {
+                header: header_len,
+                available: len,
+            }));
+        }
+        // header_len <= len, which the reader held in memory: it fits in usize.
+        let header_len = header_len as usize;
+        let Some(header) = body.get(..header_len) else {
+            return damage(eof());
+        };
+        let le64 = |at: usize| u64::from_le_bytes(header[at..at + 8].try_into().expect("8 bytes"));
+        let uncompressed_size = le64(16);
+        let crc = u32::from_le_bytes(header[24..28].try_into().expect("4 bytes"));
+        let compressed_size = le64(header_len - 8);
+        let Ok(compression) = std::str::from_utf8(&header[CHUNK_FIXED..header_len - 8]) else {
+            return damage(at_chunk("compression: not UTF-8".into()));
+        };
+        if compressed_size > len - header_len as u64 {
+            return damage(at_chunk(format!(
+                "compressed size {compressed_size} bytes, beyond the record's {} byte(s) after the chunk header",
+                len - header_len as u64
+            )));
+        }
+        let src = &body[header_len..body.len().min(header_len + compressed_size as usize)];
+        let mut out = std::mem::take(&mut self.bufs.records);
+        let (declared, short, in_file) = match compression {
+            // Records of an uncompressed chunk lie in the file from here.
+            "" => (
+                compressed_size,
+                (!complete).then(eof),
+                Some(start + 9 + header_len as u64),
+            ),
+            "zstd" | "lz4" => {
+                // Checked before allocating: the declared size is untrusted.
+                let room = self.budget.saturating_sub(self.record_bytes);
+                let size = match usize::try_from(uncompressed_size) {
+                    Ok(size) if uncompressed_size <= room => size,
+                    _ => {
+                        self.bufs.records = out;
+                        return damage(format!(
+                            "records decompress to more than {} bytes (1024 times the file plus 64 MiB): the chunk at byte {start} declares {uncompressed_size}",
+                            self.budget
+                        ));
+                    }
+                };
+                let failed = decompress_chunk(compression, src, size, &mut self.bufs, &mut out);
+                // Fewer bytes than declared: the file ended inside the chunk, or its data is bad.
+                let short = (out.len() < size).then(|| match failed {
+                    _ if !complete => eof(),
+                    Some(why) => why,
+                    None => plain(&McapError::DecompressionError(
+                        "decompressor made no progress".into(),
+                    )),
+                });
+                (uncompressed_size, short, None)
+            }
+            other => {
+                self.bufs.records = out;
+                self.unsupported_compression = Some(other.to_string());
+                return damage(plain(&McapError::UnsupportedCompression(other.into())));
+            }
+        };
+        let records = if in_file.is_some() { src } else { &out[..] };
+        let result = self.chunk_records(records, declared, crc, short, in_file, start);
+        self.bufs.records = out;
+        result
+    }
+
+    /// Check the CRC of a chunk's `records` (all of them when `short` is None) and read them.
+    fn chunk_records(
+        &mut self,
+        records: &[u8],
+        declared: u64,
+        crc: u32,
+        short: Option<String>,
+        in_file: Option<u64>,
+        start: u64,
+    ) -> Result<(Step, Option<u64>), DataError> {
+        // A CRC of 0 means none was written; a partial chunk has nothing to check it against.
+        if crc != 0 && short.is_none() {
+            let calculated = crc32fast::hash(records);
+            if calculated != crc {
+                let err = McapError::BadChunkCrc {
+                    saved: crc,
+                    calculated,
+                };
+                return Ok((
+                    Step::Damage(format!("chunk at byte {start}: {}", plain(&err))),
+                    None,
+                ));
+            }
+        }
+        let mut at = 0usize;
+        loop {
+            // at <= records.len() <= declared throughout.
+            let left = declared - at as u64;
+            if left == 0 {
+                return Ok((Step::Next, None));
+            }
+            let rest = &records[at..];
+            // Where the record's opcode and length end in the file (uncompressed chunks).
+            let head_end = in_file.map(|f| f + at as u64 + 9);
+            match next_in_chunk(rest, left, self.limit) {
+                NextRecord::Record(opcode, len) => {
+                    let data = &rest[9..9 + len];
+                    at += 9 + len;
+                    let step = self.record(opcode, data)?;
+                    if !matches!(step, Step::Next) {
+                        return Ok((step, in_file.map(|f| f + at as u64)));
+                    }
+                }
+                NextRecord::TooLarge(opcode, len) => {
+                    return Ok((Step::Damage(self.too_large(opcode, len)), head_end));
+                }
+                NextRecord::Beyond(why) => {
+                    let n = self.records + 1;
+                    return Ok((
+                        Step::Damage(format!("record {n} (in the chunk at byte {start}): {why}")),
+                        head_end.filter(|_| rest.len() >= 9),
+                    ));
+                }
+                NextRecord::Short => {
+                    let why = short.unwrap_or_else(|| plain(&McapError::UnexpectedEoc));
+                    return Ok((Step::Damage(why), None));
+                }
+            }
+        }
+    }
+}
+
 /// Read MCAP bytes from any reader, streaming; `path` labels errors; `size` (the file's
 /// length, when known) bounds every length the file declares.
 pub(crate) fn read_from(
@@ -970,35 +1417,69 @@ pub(crate) fn read_from(
 ) -> Result<Parsed, DataError> {
     let limit = record_limit(size);
     let budget = decompressed_limit(size);
+    // Chunks come whole and are read here: decompressed in one call and walked with checked
+    // lengths (the crate's record-by-record decompression is slower, and its walk through
+    // uncompressed chunks can overflow).
     let mut reader = LinearReader::new_with_options(
-        LinearReaderOptions::default().with_record_length_limit(limit),
+        LinearReaderOptions::default()
+            .with_record_length_limit(limit)
+            .with_emit_chunks(true),
     );
-    let mut schemas: HashMap<u16, (String, String, Vec<u8>)> = HashMap::new();
-    let mut channels: BTreeMap<u16, Channel> = BTreeMap::new();
-    let mut acc = Acc::default();
-    let mut parsed = Parsed::default();
-    let mut records = 0u64;
-    let mut messages = 0u64;
+    let mut st = Reading {
+        path,
+        opts,
+        limit,
+        budget,
+        schemas: HashMap::new(),
+        channels: BTreeMap::new(),
+        acc: Acc::default(),
+        parsed: Parsed::default(),
+        records: 0,
+        messages: 0,
+        record_bytes: 0,
+        unsupported_compression: None,
+        // With a time window, reading stops once marker messages are past its end (by
+        // log_time, with a second of margin for stamps that differ from it): the rest is never
+        // decoded.
+        window_end: opts.time_window.map(|(_, end)| end + 1.0),
+        first_log_time: None,
+        stopped_at: None,
+        bufs: ChunkBuffers::default(),
+    };
     let mut bytes = 0u64;
-    let mut record_bytes = 0u64;
     let mut damage: Option<String> = None;
-    let mut unsupported_compression: Option<String> = None;
-    // With a time window, reading stops once marker messages are past its end (by log_time,
-    // with a second of margin for stamps that differ from it): the rest is never decoded.
-    let window_end = opts.time_window.map(|(_, end)| end + 1.0);
-    let mut first_log_time: Option<u64> = None;
-    let mut stopped_at: Option<f64> = None;
+    // Where the damage is reported when not at `bytes` (see `Reading::chunk`).
+    let mut damage_at: Option<u64> = None;
+    // The reader asks for exactly the bytes the next record needs, so the bytes read since
+    // it last gave a record are the record in progress (after the magic, at first). They are
+    // kept while that record is a chunk: when the file ends inside it, its records before the
+    // cut are still read, as the crate's record-by-record reading did.
+    let mut pending: Vec<u8> = Vec::new();
+    let mut skip = ::mcap::MAGIC.len();
+    let mut record_start = skip as u64;
     'records: while let Some(event) = reader.next_event() {
         let event = match event {
             Ok(e) => e,
             Err(e) => {
-                if let McapError::UnsupportedCompression(c) = &e {
-                    unsupported_compression = Some(c.clone());
+                let in_progress = pending.get(skip..).unwrap_or_default();
+                if let (McapError::UnexpectedEof, Some((&[op::CHUNK], rest))) =
+                    (&e, in_progress.split_first_chunk::<1>())
+                {
+                    if let Some((len, body)) = rest.split_first_chunk::<8>() {
+                        let len = u64::from_le_bytes(*len);
+                        match st.chunk(body, len, record_start)? {
+                            (Step::Next, _) => {}
+                            (Step::Damage(why), at) => {
+                                damage = Some(why);
+                                damage_at = at;
+                                break;
+                            }
+                            (Step::Stop, _) => break,
+                        }
+                    }
                 }
                 damage = Some(match e {
-                    McapError::RecordTooLarge { opcode, len } => format!(
-                        "record (opcode {opcode:#04x}) of {len} bytes: more than the {limit}-byte limit for a file of this size"
-                    ),
+                    McapError::RecordTooLarge { opcode, len } => st.too_large(opcode, len),
                     McapError::ChunkTooLarge(len) => format!(
                         "chunk of {len} bytes: more than the {limit}-byte limit for a file of this size"
                     ),
@@ -1009,141 +1490,49 @@ pub(crate) fn read_from(
         };
         match event {
             LinearReadEvent::ReadRequest(need) => {
-                let n = input
-                    .read(reader.insert(need))
-                    .map_err(|source| DataError::Io {
-                        path: path.to_owned(),
-                        source,
-                    })?;
+                let buf = reader.insert(need);
+                let n = input.read(buf).map_err(|source| DataError::Io {
+                    path: path.to_owned(),
+                    source,
+                })?;
+                if pending.get(skip).is_none_or(|&o| o == op::CHUNK) {
+                    pending.extend_from_slice(&buf[..n]);
+                }
                 bytes += n as u64;
                 reader.notify_read(n);
             }
             LinearReadEvent::Record { opcode, data } => {
-                records += 1;
-                record_bytes += data.len() as u64;
-                if record_bytes > budget {
-                    damage = Some(format!(
-                        "records decompress to more than {budget} bytes (1024 times the file plus 64 MiB)"
-                    ));
-                    break;
-                }
-                // Only these records are used; the mcap crate sizes strings from their length
-                // fields before checking them, so their lengths are checked here first.
-                if ![op::SCHEMA, op::CHANNEL, op::MESSAGE, op::METADATA].contains(&opcode) {
-                    continue;
-                }
-                if let Err(why) = check_lengths(opcode, data) {
-                    damage = Some(format!("record {records} (opcode {opcode:#04x}): {why}"));
-                    break;
-                }
-                // A message's header is four fixed fields (check_lengths saw its 22 bytes):
-                // read here, the payload borrowed, as parse_record would give them.
-                let parsed_record = if opcode == op::MESSAGE {
-                    Ok(message_record(data))
+                pending.clear();
+                skip = 0;
+                let start = std::mem::replace(&mut record_start, bytes);
+                let step = if opcode == op::CHUNK {
+                    st.chunk(data, data.len() as u64, start)?
                 } else {
-                    ::mcap::parse_record(opcode, data)
+                    (st.record(opcode, data)?, None)
                 };
-                let record = match parsed_record {
-                    Ok(r) => r,
-                    Err(e) => {
-                        damage = Some(plain(&e));
+                match step {
+                    (Step::Next, _) => {}
+                    (Step::Damage(why), at) => {
+                        damage = Some(why);
+                        damage_at = at;
                         break;
                     }
-                };
-                match record {
-                    Record::Schema { header, data } => {
-                        // Only protobuf needs the schema's bytes; keep memory bounded otherwise.
-                        let data = if header.encoding == "protobuf" {
-                            data.into_owned()
-                        } else {
-                            Vec::new()
-                        };
-                        schemas.insert(header.id, (header.name, header.encoding, data));
-                    }
-                    Record::Channel(c) => {
-                        let (sname, senc, sdata) = schemas
-                            .get(&c.schema_id)
-                            .map(|(n, e, d)| (n.as_str(), e.as_str(), d.as_slice()))
-                            .unwrap_or_default();
-                        let state = if !opts.topics.is_empty() && !opts.topics.contains(&c.topic) {
-                            ChannelState::Ignored("not chosen by --topic".into())
-                        } else {
-                            match decoder_for(&c.message_encoding, sname, senc, sdata) {
-                                Ok(d) => ChannelState::Markers(d),
-                                Err(Reject::Unsupported(why)) => {
-                                    ChannelState::Ignored(format!("{why} is not supported"))
-                                }
-                                Err(Reject::Invalid(why)) => ChannelState::Ignored(why),
-                            }
-                        };
-                        channels.entry(c.id).or_insert(Channel {
-                            topic: c.topic,
-                            state,
-                            decoded: 0,
-                        });
-                    }
-                    Record::Message { header, data } => {
-                        messages += 1;
-                        let Some(ch) = channels.get_mut(&header.channel_id) else {
-                            return Err(DataError::parse(
-                                path,
-                                format!("record {records}"),
-                                "channel id",
-                                "a channel defined before its messages",
-                                header.channel_id.to_string(),
-                            ));
-                        };
-                        let ChannelState::Markers(dec) = &ch.state else {
-                            continue;
-                        };
-                        if let Some(end) = window_end {
-                            let first = *first_log_time.get_or_insert(header.log_time);
-                            let since = header.log_time.saturating_sub(first) as f64 * 1e-9;
-                            if since > end {
-                                stopped_at = Some(since);
-                                break 'records;
-                            }
-                        }
-                        let result = match i64::try_from(header.log_time) {
-                            Ok(log_time) => {
-                                decode(dec, &ch.topic, &data, log_time, opts.plane, &mut acc)
-                            }
-                            Err(_) => Err(format!(
-                                "a log_time below 2^63 ns (year 2262), found {}",
-                                header.log_time
-                            )),
-                        };
-                        match result {
-                            Ok(_) => ch.decoded += 1,
-                            Err(why) if ch.decoded == 0 => {
-                                ch.state = ChannelState::Ignored(format!(
-                                    "its first message is not marker data: {why}"
-                                ));
-                            }
-                            Err(why) => {
-                                return Err(DataError::parse(
-                                    path,
-                                    format!(
-                                        "message {messages} (record {records}) on {}",
-                                        ch.topic
-                                    ),
-                                    "message",
-                                    "marker data like the channel's earlier messages",
-                                    why,
-                                ))
-                            }
-                        }
-                    }
-                    Record::Metadata(Metadata { name, metadata }) => {
-                        for (k, v) in metadata {
-                            parsed.metadata.insert(format!("{name}.{k}"), v);
-                        }
-                    }
-                    _ => {}
+                    (Step::Stop, _) => break 'records,
                 }
             }
         }
     }
+    let bytes = damage_at.unwrap_or(bytes);
+    let Reading {
+        channels,
+        mut acc,
+        mut parsed,
+        records,
+        messages,
+        unsupported_compression,
+        stopped_at,
+        ..
+    } = st;
     let channel_list = || {
         let mut v: Vec<String> = channels
             .values()
@@ -1517,5 +1906,83 @@ mod tests {
             );
             assert_eq!(d, data);
         }
+    }
+
+    /// A record of `opcode` with `body`, as MCAP frames it.
+    fn framed(opcode: u8, body: &[u8]) -> Vec<u8> {
+        let mut v = vec![opcode];
+        v.extend_from_slice(&(body.len() as u64).to_le_bytes());
+        v.extend_from_slice(body);
+        v
+    }
+
+    /// An uncompressed chunk record holding `records` (CRC 0: none written).
+    fn uncompressed_chunk(records: &[u8]) -> Vec<u8> {
+        let mut body = Vec::new();
+        body.extend_from_slice(&0u64.to_le_bytes()); // start time
+        body.extend_from_slice(&0u64.to_le_bytes()); // end time
+        body.extend_from_slice(&(records.len() as u64).to_le_bytes());
+        body.extend_from_slice(&0u32.to_le_bytes()); // CRC
+        body.extend_from_slice(&0u32.to_le_bytes()); // compression ""
+        body.extend_from_slice(&(records.len() as u64).to_le_bytes());
+        body.extend_from_slice(records);
+        framed(op::CHUNK, &body)
+    }
+
+    #[test]
+    fn chunk_walk_rejects_lengths_past_the_chunk_without_wrapping() {
+        // A record claiming 100 bytes with 10 left after its opcode and length.
+        let mut rest = framed(op::MESSAGE, &[0; 10]);
+        rest[1..9].copy_from_slice(&100u64.to_le_bytes());
+        assert!(matches!(
+            next_in_chunk(&rest, rest.len() as u64, 1 << 20),
+            NextRecord::Beyond(why) if why.contains("length 100 bytes, beyond the 10 byte(s)")
+        ));
+        // Fewer than 9 bytes left in the chunk: no room for an opcode and length.
+        assert!(matches!(
+            next_in_chunk(&rest, 5, 1 << 20),
+            NextRecord::Beyond(why) if why.contains("beyond the 5 byte(s)")
+        ));
+        // The largest length: the limit catches it first, nothing overflows.
+        rest[1..9].copy_from_slice(&u64::MAX.to_le_bytes());
+        assert!(matches!(
+            next_in_chunk(&rest, rest.len() as u64, 1 << 20),
+            NextRecord::TooLarge(op::MESSAGE, u64::MAX)
+        ));
+        // Within the chunk but past the bytes at hand (a cut file): short, not beyond.
+        rest[1..9].copy_from_slice(&10u64.to_le_bytes());
+        assert!(matches!(
+            next_in_chunk(&rest[..12], rest.len() as u64, 1 << 20),
+            NextRecord::Short
+        ));
+        assert!(matches!(
+            next_in_chunk(&rest, rest.len() as u64, 1 << 20),
+            NextRecord::Record(op::MESSAGE, 10)
+        ));
+    }
+
+    #[test]
+    fn a_record_longer_than_its_uncompressed_chunk_is_a_clear_error() {
+        // Magic, a record inside an uncompressed chunk claiming 1000 bytes where 20 are left,
+        // then bytes after the chunk that a reader going past its end would take for records.
+        let mut inner = framed(op::METADATA, &[0; 20]);
+        inner[1..9].copy_from_slice(&1000u64.to_le_bytes());
+        let mut file = ::mcap::MAGIC.to_vec();
+        file.extend(uncompressed_chunk(&inner));
+        file.extend([0xff; 64]);
+        let e = read_from(
+            &file[..],
+            Path::new("hand.mcap"),
+            &ReadOptions::default(),
+            Some(file.len() as u64),
+        )
+        .unwrap_err();
+        let text = e.to_string();
+        assert!(text.contains("hand.mcap"), "{text}");
+        assert!(
+            text.contains("after 0 record(s), 66 byte(s)")
+                && text.contains("record 1 (in the chunk at byte 8): length 1000 bytes, beyond the 20 byte(s) left in the chunk"),
+            "{text}"
+        );
     }
 }
