@@ -178,14 +178,15 @@ struct CanonicalFrame<'a> {
 /// A byte cursor over one message for [`canonical_frame`]; every method returns `None` (the
 /// message then goes to serde) at anything outside the narrow layout it accepts.
 struct Bytes<'a> {
-    text: &'a str,
     d: &'a [u8],
     at: usize,
 }
 
 impl<'a> Bytes<'a> {
-    fn lit(&mut self, s: &[u8]) -> Option<()> {
-        self.d[self.at..].starts_with(s).then(|| self.at += s.len())
+    /// The literal `s` (a fixed-size array, compared without a library call).
+    fn lit<const N: usize>(&mut self, s: &[u8; N]) -> Option<()> {
+        let w: &[u8; N] = self.d.get(self.at..self.at + N)?.try_into().ok()?;
+        (w == s).then(|| self.at += N)
     }
 
     fn digits(&self, from: usize) -> usize {
@@ -207,8 +208,8 @@ impl<'a> Bytes<'a> {
             return None;
         }
         self.at = start + len + 1;
-        // Quotes are ASCII, so both ends are character boundaries.
-        Some(&self.text[start..start + len])
+        // Only strings may hold other than ASCII: each is checked for UTF-8 here.
+        std::str::from_utf8(&self.d[start..start + len]).ok()
     }
 
     /// A JSON integer of at most 18 digits (no `-0`, which serde reads as a float).
@@ -281,7 +282,7 @@ impl<'a> Bytes<'a> {
         if !(fraction || exponent) || significant > 19 {
             return None;
         }
-        let v: f64 = self.text[start..i].parse().ok()?;
+        let v: f64 = std::str::from_utf8(&self.d[start..i]).ok()?.parse().ok()?;
         if !v.is_finite() {
             return None;
         }
@@ -294,13 +295,9 @@ impl<'a> Bytes<'a> {
 /// (spaces, other keys or key order, escapes, integers where floats are written, more
 /// markers), which serde then reads. What this accepts, serde reads to the same values.
 fn canonical_frame(data: &[u8]) -> Option<CanonicalFrame<'_>> {
-    // One UTF-8 check for the whole message; its pieces are then sliced out as text.
-    let text = std::str::from_utf8(data).ok()?;
-    let mut b = Bytes {
-        text,
-        d: data,
-        at: 0,
-    };
+    // Outside its strings a frame is ASCII literals and digits, matched byte by byte; the
+    // strings are checked for UTF-8 as they are read.
+    let mut b = Bytes { d: data, at: 0 };
     b.lit(b"{\"timestamp\":{\"sec\":")?;
     let sec = b.int()?;
     b.lit(b",\"nsec\":")?;
@@ -333,6 +330,59 @@ fn canonical_frame(data: &[u8]) -> Option<CanonicalFrame<'_>> {
     }
     b.lit(b"]}")?;
     (b.at == data.len()).then_some(frame)
+}
+
+/// One marker of a frame parsed ahead: where its name lies in the message, and x, y.
+type PreMarker = (std::ops::Range<usize>, Option<f64>, Option<f64>);
+
+/// A chunk's canonical JSON frames, parsed ahead on the thread pool while the chunks before
+/// are read (see [`Reading::chunk`]): per message record in chunk order, its stamp's parts and
+/// its markers' span in `markers`, or `None` when the message is not a canonical frame (it is
+/// then decoded as before, in order).
+#[derive(Default)]
+struct PreParsed {
+    frames: Vec<Option<(i64, i64, std::ops::Range<usize>)>>,
+    markers: Vec<PreMarker>,
+}
+
+impl PreParsed {
+    /// Parse the payloads of `messages` (each a message record's body) with
+    /// [`canonical_frame`].
+    fn parse(messages: &[&[u8]]) -> PreParsed {
+        let mut out = PreParsed::default();
+        for body in messages {
+            let frame = body.get(22..).and_then(|payload| {
+                let f = canonical_frame(payload)?;
+                let first = out.markers.len();
+                for &(id, x, y) in &f.markers[..f.len] {
+                    // The name is a slice of the payload: its offset locates it.
+                    let at = id.as_ptr() as usize - payload.as_ptr() as usize;
+                    out.markers.push((at..at + id.len(), x, y));
+                }
+                Some((f.sec, f.nsec, first..out.markers.len()))
+            });
+            out.frames.push(frame);
+        }
+        out
+    }
+
+    /// The `k`-th message's frame, when it was canonical.
+    fn frame(&self, k: usize) -> Option<PreFrame<'_>> {
+        let (sec, nsec, r) = self.frames.get(k)?.as_ref()?;
+        Some(PreFrame {
+            sec: *sec,
+            nsec: *nsec,
+            markers: &self.markers[r.clone()],
+        })
+    }
+}
+
+/// A message's canonical frame parsed ahead (see [`PreParsed`]).
+#[derive(Clone, Copy)]
+struct PreFrame<'a> {
+    sec: i64,
+    nsec: i64,
+    markers: &'a [PreMarker],
 }
 
 /// How a channel's messages are decoded. The protobuf ones carry the message descriptor built
@@ -703,10 +753,27 @@ fn decode(
     log_time: i64,
     plane: Option<Plane>,
     acc: &mut Acc,
+    pre: Option<PreFrame<'_>>,
 ) -> Result<usize, String> {
     let p3 = |p: [f64; 3]| xy(Some(p[0]), Some(p[1]), Some(p[2]), plane);
     match dec {
         Decoder::Json => {
+            if let Some(f) = pre {
+                // Parsed ahead by canonical_frame from these same bytes.
+                let stamp = JStamp::Parts {
+                    sec: f.sec,
+                    nsec: f.nsec,
+                }
+                .ns()?;
+                for (at, x, y) in f.markers {
+                    let id = data
+                        .get(at.clone())
+                        .and_then(|b| std::str::from_utf8(b).ok())
+                        .ok_or("a marker name parsed ahead is not in the message")?;
+                    acc.push(topic, id, stamp, xy(*x, *y, None, plane));
+                }
+                return Ok(f.markers.len());
+            }
             if let Some(f) = canonical_frame(data) {
                 let stamp = JStamp::Parts {
                     sec: f.sec,
@@ -970,16 +1037,27 @@ enum Step {
     Stop,
 }
 
+/// The records read; the others are only counted.
+const USED_RECORDS: [u8; 4] = [op::SCHEMA, op::CHANNEL, op::MESSAGE, op::METADATA];
+
 /// The bytes of a chunk record before its records field: start and end time, uncompressed
 /// size, CRC and compression length (8 + 8 + 8 + 4 + 4), the compression string, then the
 /// compressed size (8).
 const CHUNK_FIXED: usize = 32;
 
-/// Decoders and buffer reused across chunks, so a file of many chunks allocates once.
+/// Buffers reused across chunks, so a file of many chunks allocates a few times only.
 #[derive(Default)]
 struct ChunkBuffers {
-    zstd: Option<::zstd::zstd_safe::DCtx<'static>>,
-    records: Vec<u8>,
+    spare: Vec<Vec<u8>>,
+}
+
+/// Chunks read while others are prepared on the thread pool.
+const CHUNKS_AHEAD: usize = 3;
+
+thread_local! {
+    /// Each pool thread's zstd decoder, reused across chunks.
+    static ZSTD: std::cell::RefCell<Option<::zstd::zstd_safe::DCtx<'static>>> =
+        const { std::cell::RefCell::new(None) };
 }
 
 /// Decompress `src` (one chunk's compressed records) into `out`, at most `size` bytes, the way
@@ -989,7 +1067,7 @@ fn decompress_chunk(
     compression: &str,
     src: &[u8],
     size: usize,
-    bufs: &mut ChunkBuffers,
+    zstd: &mut Option<::zstd::zstd_safe::DCtx<'static>>,
     out: &mut Vec<u8>,
 ) -> Option<String> {
     use ::zstd::zstd_safe::{get_error_name, DCtx, InBuffer, OutBuffer, ResetDirective};
@@ -998,7 +1076,7 @@ fn decompress_chunk(
     out.reserve_exact(size);
     let short = match compression {
         "zstd" => {
-            let dctx = bufs.zstd.get_or_insert_with(DCtx::create);
+            let dctx = zstd.get_or_insert_with(DCtx::create);
             let mut input = InBuffer::around(src);
             let mut output = OutBuffer::around(out);
             let mut failed = None;
@@ -1109,6 +1187,8 @@ struct Reading<'a> {
     first_log_time: Option<u64>,
     stopped_at: Option<f64>,
     bufs: ChunkBuffers,
+    /// The chunks taken, in preparation or prepared, not yet read, in file order.
+    deferred: std::collections::VecDeque<Deferred>,
 }
 
 impl Reading<'_> {
@@ -1120,21 +1200,34 @@ impl Reading<'_> {
         )
     }
 
-    /// Read one record (outside chunks or inside one).
-    fn record(&mut self, opcode: u8, data: &[u8]) -> Result<Step, DataError> {
-        let (path, opts) = (self.path, self.opts);
+    /// Count a record of `len` bytes against the budget of decompressed bytes.
+    fn tally(&mut self, len: usize) -> Option<Step> {
         self.records += 1;
-        let records = self.records;
-        self.record_bytes += data.len() as u64;
-        if self.record_bytes > self.budget {
-            return Ok(Step::Damage(format!(
+        self.record_bytes += len as u64;
+        (self.record_bytes > self.budget).then(|| {
+            Step::Damage(format!(
                 "records decompress to more than {} bytes (1024 times the file plus 64 MiB)",
                 self.budget
-            )));
+            ))
+        })
+    }
+
+    /// Read one record (outside chunks or inside one); `pre` is the message's canonical frame
+    /// when it was parsed ahead.
+    fn record(
+        &mut self,
+        opcode: u8,
+        data: &[u8],
+        pre: Option<PreFrame<'_>>,
+    ) -> Result<Step, DataError> {
+        let (path, opts) = (self.path, self.opts);
+        if let Some(damage) = self.tally(data.len()) {
+            return Ok(damage);
         }
+        let records = self.records;
         // Only these records are used; the mcap crate sizes strings from their length
         // fields before checking them, so their lengths are checked here first.
-        if ![op::SCHEMA, op::CHANNEL, op::MESSAGE, op::METADATA].contains(&opcode) {
+        if !USED_RECORDS.contains(&opcode) {
             return Ok(Step::Next);
         }
         if let Err(why) = check_lengths(opcode, data) {
@@ -1211,9 +1304,15 @@ impl Reading<'_> {
                     }
                 }
                 let result = match i64::try_from(header.log_time) {
-                    Ok(log_time) => {
-                        decode(dec, &ch.topic, &data, log_time, opts.plane, &mut self.acc)
-                    }
+                    Ok(log_time) => decode(
+                        dec,
+                        &ch.topic,
+                        &data,
+                        log_time,
+                        opts.plane,
+                        &mut self.acc,
+                        pre,
+                    ),
                     Err(_) => Err(format!(
                         "a log_time below 2^63 ns (year 2262), found {}",
                         header.log_time
@@ -1247,129 +1346,129 @@ impl Reading<'_> {
         Ok(Step::Next)
     }
 
-    /// Read a chunk record's `body` (everything after its opcode and length `len`; fewer bytes
-    /// than `len` when the file ends inside it): check its header, decompress its records in one
-    /// go, check their CRC, and read them one by one. `start` is the chunk's offset in the
-    /// file. Besides the step, the file offset the damage is reported at when it is not the
-    /// bytes read so far: in an uncompressed chunk, where the record at fault ends, as when the
-    /// mcap crate read such chunks record by record.
+    /// Take a chunk record's `body` (everything after its opcode and length `len`; fewer bytes
+    /// than `len` when the file ends inside it; `start` is its offset in the file, `bytes` the
+    /// bytes read so far). It is prepared ([`prepare_chunk`]: header, decompression, CRC,
+    /// canonical frames) on the thread pool while the reader reads on, and read in order once
+    /// [`CHUNKS_AHEAD`] chunks are taken after it, or by [`Reading::flush`]. Returns what
+    /// reading the chunk that came due came to: the step, and the file offset the damage is
+    /// reported at.
     fn chunk(
         &mut self,
         body: &[u8],
         len: u64,
         start: u64,
+        bytes: u64,
     ) -> Result<(Step, Option<u64>), DataError> {
-        let complete = body.len() as u64 == len;
-        let eof = || plain(&McapError::UnexpectedEof);
-        let damage = |why: String| Ok((Step::Damage(why), None));
-        let at_chunk = |why: String| format!("chunk at byte {start}: {why}");
-        // The fixed fields and the compression string's length.
-        let Some(cl) = body.get(CHUNK_FIXED - 4..CHUNK_FIXED) else {
-            return if complete {
-                damage(at_chunk(plain(&McapError::BadChunkLength {
-                    header: (CHUNK_FIXED + 8) as u64,
-                    available: len,
-                })))
-            } else {
-                damage(eof())
-            };
-        };
-        let cl = u32::from_le_bytes(cl.try_into().expect("4 bytes"));
-        let header_len = (CHUNK_FIXED as u64 + 8).saturating_add(u64::from(cl));
-        if header_len > len {
-            return damage(plain(&McapError::BadChunkLength {
-                header: header_len,
-                available: len,
-            }));
+        // The budget left before the chunks ahead are read: looser than when this chunk is
+        // read (checked again then), so at most CHUNKS_AHEAD + 1 budgets are held at once.
+        let room = self.budget.saturating_sub(self.record_bytes);
+        let (budget, limit) = (self.budget, self.limit);
+        let out = self.bufs.spare.pop().unwrap_or_default();
+        // The reader's buffer moves on: the chunk is copied for the pool.
+        let body = body.to_vec();
+        let (tx, ready) = std::sync::mpsc::sync_channel(1);
+        rayon::spawn(move || {
+            let prepared = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+                let mut zstd = ZSTD.take();
+                let prepared =
+                    prepare_chunk(&body, len, start, (room, budget, limit), &mut zstd, out);
+                ZSTD.set(zstd);
+                prepared
+            }))
+            .unwrap_or_else(|_| Prepared::Damage(format!("chunk at byte {start}: unreadable")));
+            // The receiver is gone only when reading stopped before this chunk.
+            let _ = tx.send(prepared);
+        });
+        self.deferred.push_back(Deferred {
+            ready,
+            start,
+            bytes,
+            counted: Vec::new(),
+        });
+        if self.deferred.len() > CHUNKS_AHEAD {
+            let due = self.deferred.pop_front().expect("more than CHUNKS_AHEAD");
+            return self.finish_chunk(due);
         }
-        // header_len <= len, which the reader held in memory: it fits in usize.
-        let header_len = header_len as usize;
-        let Some(header) = body.get(..header_len) else {
-            return damage(eof());
-        };
-        let le64 = |at: usize| u64::from_le_bytes(header[at..at + 8].try_into().expect("8 bytes"));
-        let uncompressed_size = le64(16);
-        let crc = u32::from_le_bytes(header[24..28].try_into().expect("4 bytes"));
-        let compressed_size = le64(header_len - 8);
-        let Ok(compression) = std::str::from_utf8(&header[CHUNK_FIXED..header_len - 8]) else {
-            return damage(at_chunk("compression: not UTF-8".into()));
-        };
-        if compressed_size > len - header_len as u64 {
-            return damage(at_chunk(format!(
-                "compressed size {compressed_size} bytes, beyond the record's {} byte(s) after the chunk header",
-                len - header_len as u64
-            )));
-        }
-        let src = &body[header_len..body.len().min(header_len + compressed_size as usize)];
-        let mut out = std::mem::take(&mut self.bufs.records);
-        let (declared, short, in_file) = match compression {
-            // Records of an uncompressed chunk lie in the file from here.
-            "" => (
-                compressed_size,
-                (!complete).then(eof),
-                Some(start + 9 + header_len as u64),
-            ),
-            "zstd" | "lz4" => {
-                // Checked before allocating: the declared size is untrusted.
-                let room = self.budget.saturating_sub(self.record_bytes);
-                let size = match usize::try_from(uncompressed_size) {
-                    Ok(size) if uncompressed_size <= room => size,
-                    _ => {
-                        self.bufs.records = out;
-                        return damage(format!(
-                            "records decompress to more than {} bytes (1024 times the file plus 64 MiB): the chunk at byte {start} declares {uncompressed_size}",
-                            self.budget
-                        ));
-                    }
-                };
-                let failed = decompress_chunk(compression, src, size, &mut self.bufs, &mut out);
-                // Fewer bytes than declared: the file ended inside the chunk, or its data is bad.
-                let short = (out.len() < size).then(|| match failed {
-                    _ if !complete => eof(),
-                    Some(why) => why,
-                    None => plain(&McapError::DecompressionError(
-                        "decompressor made no progress".into(),
-                    )),
-                });
-                (uncompressed_size, short, None)
-            }
-            other => {
-                self.bufs.records = out;
-                self.unsupported_compression = Some(other.to_string());
-                return damage(plain(&McapError::UnsupportedCompression(other.into())));
-            }
-        };
-        let records = if in_file.is_some() { src } else { &out[..] };
-        let result = self.chunk_records(records, declared, crc, short, in_file, start);
-        self.bufs.records = out;
-        result
+        Ok((Step::Next, None))
     }
 
-    /// Check the CRC of a chunk's `records` (all of them when `short` is None) and read them.
-    fn chunk_records(
-        &mut self,
-        records: &[u8],
-        declared: u64,
-        crc: u32,
-        short: Option<String>,
-        in_file: Option<u64>,
-        start: u64,
-    ) -> Result<(Step, Option<u64>), DataError> {
-        // A CRC of 0 means none was written; a partial chunk has nothing to check it against.
-        if crc != 0 && short.is_none() {
-            let calculated = crc32fast::hash(records);
-            if calculated != crc {
-                let err = McapError::BadChunkCrc {
-                    saved: crc,
-                    calculated,
-                };
-                return Ok((
-                    Step::Damage(format!("chunk at byte {start}: {}", plain(&err))),
-                    None,
-                ));
+    /// Read the chunks taken and not yet read, in order (before any record that is read, and
+    /// at the end); those after a chunk that stops the reading are dropped.
+    fn flush(&mut self) -> Result<(Step, Option<u64>), DataError> {
+        while let Some(d) = self.deferred.pop_front() {
+            let read = self.finish_chunk(d)?;
+            if !matches!(read.0, Step::Next) {
+                self.deferred.clear();
+                return Ok(read);
             }
         }
+        Ok((Step::Next, None))
+    }
+
+    /// Read a prepared chunk's records in order. Damage is reported at the bytes read when
+    /// the chunk was (the reader has read on since), unless a place in the file is known.
+    fn finish_chunk(&mut self, d: Deferred) -> Result<(Step, Option<u64>), DataError> {
+        let prepared = d
+            .ready
+            .recv()
+            .unwrap_or_else(|_| Prepared::Damage(format!("chunk at byte {}: unreadable", d.start)));
+        let (step, at) = match prepared {
+            Prepared::Damage(why) => (Step::Damage(why), None),
+            Prepared::Unsupported(c) => {
+                let why = plain(&McapError::UnsupportedCompression(c.clone()));
+                self.unsupported_compression = Some(c);
+                (Step::Damage(why), None)
+            }
+            Prepared::Records(r) => {
+                let room = self.budget.saturating_sub(self.record_bytes);
+                let result = match r.uncompressed {
+                    Some(size) if size > room => Ok((
+                        Step::Damage(format!(
+                            "records decompress to more than {} bytes (1024 times the file plus 64 MiB): the chunk at byte {} declares {size}",
+                            self.budget, d.start
+                        )),
+                        None,
+                    )),
+                    _ => self.chunk_records(&r, d.start),
+                };
+                self.bufs.spare.push(r.out);
+                result?
+            }
+        };
+        if let Step::Damage(_) = step {
+            return Ok((step, at.or(Some(d.bytes))));
+        }
+        if let Step::Next = step {
+            for (len, bytes) in d.counted {
+                if let Some(damage) = self.tally(len) {
+                    return Ok((damage, Some(bytes)));
+                }
+            }
+        }
+        Ok((step, at))
+    }
+
+    /// Check the CRC of a chunk's records (all of them when none are short) and read them.
+    fn chunk_records(
+        &mut self,
+        r: &ChunkRecords,
+        start: u64,
+    ) -> Result<(Step, Option<u64>), DataError> {
+        let (records, declared, in_file) = (&r.out[..], r.declared, r.in_file);
+        if let Some(calculated) = r.calculated_crc.filter(|&c| c != r.crc) {
+            let err = McapError::BadChunkCrc {
+                saved: r.crc,
+                calculated,
+            };
+            return Ok((
+                Step::Damage(format!("chunk at byte {start}: {}", plain(&err))),
+                None,
+            ));
+        }
         let mut at = 0usize;
+        // Message records read so far: the index of the next one's frame parsed ahead.
+        let mut message = 0usize;
         loop {
             // at <= records.len() <= declared throughout.
             let left = declared - at as u64;
@@ -1383,7 +1482,13 @@ impl Reading<'_> {
                 NextRecord::Record(opcode, len) => {
                     let data = &rest[9..9 + len];
                     at += 9 + len;
-                    let step = self.record(opcode, data)?;
+                    let pre = if opcode == op::MESSAGE {
+                        message += 1;
+                        r.pre.frame(message - 1)
+                    } else {
+                        None
+                    };
+                    let step = self.record(opcode, data, pre)?;
                     if !matches!(step, Step::Next) {
                         return Ok((step, in_file.map(|f| f + at as u64)));
                     }
@@ -1399,12 +1504,178 @@ impl Reading<'_> {
                     ));
                 }
                 NextRecord::Short => {
-                    let why = short.unwrap_or_else(|| plain(&McapError::UnexpectedEoc));
+                    let why = r
+                        .short
+                        .clone()
+                        .unwrap_or_else(|| plain(&McapError::UnexpectedEoc));
                     return Ok((Step::Damage(why), None));
                 }
             }
         }
     }
+}
+
+/// A chunk taken by [`Reading::chunk`], waiting to be read in order.
+struct Deferred {
+    /// Where the pool sends the chunk prepared.
+    ready: std::sync::mpsc::Receiver<Prepared>,
+    /// The chunk's offset in the file.
+    start: u64,
+    /// The bytes read when the chunk was taken.
+    bytes: u64,
+    /// Records after it that are only counted (message indexes follow every chunk): their
+    /// lengths and the bytes read when each was, counted once the chunk is read, so the
+    /// chunk is read beside the next one.
+    counted: Vec<(usize, u64)>,
+}
+
+/// A chunk made ready to read by [`prepare_chunk`].
+enum Prepared {
+    /// Damaged before its records (why).
+    Damage(String),
+    /// Its compression is not supported (the name).
+    Unsupported(String),
+    /// Its records.
+    Records(ChunkRecords),
+}
+
+/// A chunk's records, decompressed (or copied, when stored uncompressed), as far as they
+/// could be had.
+struct ChunkRecords {
+    out: Vec<u8>,
+    /// The records' length as the chunk declares it.
+    declared: u64,
+    /// A compressed chunk's declared uncompressed size, checked against the budget again when
+    /// the chunk is read.
+    uncompressed: Option<u64>,
+    /// The CRC the chunk declares (0: none).
+    crc: u32,
+    /// The CRC of the records, computed when all are at hand and one is declared.
+    calculated_crc: Option<u32>,
+    /// Why fewer bytes than declared are at hand.
+    short: Option<String>,
+    /// Where the records lie in the file (uncompressed chunks).
+    in_file: Option<u64>,
+    /// The message records' canonical frames, parsed ahead.
+    pre: PreParsed,
+}
+
+/// Prepare a chunk record's `body` (see [`Reading::chunk`]): check its header, decompress its
+/// records in one go into `out` (at most `room` bytes of the `budget`), compute their CRC and
+/// parse the canonical JSON frames of its messages (records longer than `limit` are left to
+/// the ordered read, which reports them). Touches no reading state, so it runs beside the
+/// ordered read of the chunk before.
+fn prepare_chunk(
+    body: &[u8],
+    len: u64,
+    start: u64,
+    (room, budget, limit): (u64, u64, usize),
+    zstd: &mut Option<::zstd::zstd_safe::DCtx<'static>>,
+    mut out: Vec<u8>,
+) -> Prepared {
+    let complete = body.len() as u64 == len;
+    let eof = || plain(&McapError::UnexpectedEof);
+    let at_chunk = |why: String| format!("chunk at byte {start}: {why}");
+    // The fixed fields and the compression string's length.
+    let Some(cl) = body.get(CHUNK_FIXED - 4..CHUNK_FIXED) else {
+        return Prepared::Damage(if complete {
+            at_chunk(plain(&McapError::BadChunkLength {
+                header: (CHUNK_FIXED + 8) as u64,
+                available: len,
+            }))
+        } else {
+            eof()
+        });
+    };
+    let cl = u32::from_le_bytes(cl.try_into().expect("4 bytes"));
+    let header_len = (CHUNK_FIXED as u64 + 8).saturating_add(u64::from(cl));
+    if header_len > len {
+        return Prepared::Damage(plain(&McapError::BadChunkLength {
+            header: header_len,
+            available: len,
+        }));
+    }
+    // header_len <= len, which the reader held in memory: it fits in usize.
+    let header_len = header_len as usize;
+    let Some(header) = body.get(..header_len) else {
+        return Prepared::Damage(eof());
+    };
+    let le64 = |at: usize| u64::from_le_bytes(header[at..at + 8].try_into().expect("8 bytes"));
+    let uncompressed_size = le64(16);
+    let crc = u32::from_le_bytes(header[24..28].try_into().expect("4 bytes"));
+    let compressed_size = le64(header_len - 8);
+    let Ok(compression) = std::str::from_utf8(&header[CHUNK_FIXED..header_len - 8]) else {
+        return Prepared::Damage(at_chunk("compression: not UTF-8".into()));
+    };
+    if compressed_size > len - header_len as u64 {
+        return Prepared::Damage(at_chunk(format!(
+            "compressed size {compressed_size} bytes, beyond the record's {} byte(s) after the chunk header",
+            len - header_len as u64
+        )));
+    }
+    let src = &body[header_len..body.len().min(header_len + compressed_size as usize)];
+    let (declared, short, in_file, uncompressed) = match compression {
+        // Records of an uncompressed chunk lie in the file from here; copied, as the reader's
+        // buffer moves on before they are read.
+        "" => {
+            out.clear();
+            out.extend_from_slice(src);
+            (
+                compressed_size,
+                (!complete).then(eof),
+                Some(start + 9 + header_len as u64),
+                None,
+            )
+        }
+        "zstd" | "lz4" => {
+            // Checked before allocating: the declared size is untrusted.
+            let size = match usize::try_from(uncompressed_size) {
+                Ok(size) if uncompressed_size <= room => size,
+                _ => {
+                    return Prepared::Damage(format!(
+                        "records decompress to more than {budget} bytes (1024 times the file plus 64 MiB): the chunk at byte {start} declares {uncompressed_size}"
+                    ));
+                }
+            };
+            let failed = decompress_chunk(compression, src, size, zstd, &mut out);
+            // Fewer bytes than declared: the file ended inside the chunk, or its data is bad.
+            let short = (out.len() < size).then(|| match failed {
+                _ if !complete => eof(),
+                Some(why) => why,
+                None => plain(&McapError::DecompressionError(
+                    "decompressor made no progress".into(),
+                )),
+            });
+            (uncompressed_size, short, None, Some(uncompressed_size))
+        }
+        other => return Prepared::Unsupported(other.to_string()),
+    };
+    // A CRC of 0 means none was written; a partial chunk has nothing to check it against.
+    let calculated_crc = (crc != 0 && short.is_none()).then(|| crc32fast::hash(&out));
+    // The message records, walked as the ordered read walks them, up to where it would stop.
+    let mut messages = Vec::new();
+    let mut at = 0usize;
+    while let NextRecord::Record(opcode, n) = next_in_chunk(&out[at..], declared - at as u64, limit)
+    {
+        if opcode == op::MESSAGE {
+            messages.push(&out[at + 9..at + 9 + n]);
+        }
+        at += 9 + n;
+        if at as u64 == declared {
+            break;
+        }
+    }
+    let pre = PreParsed::parse(&messages);
+    Prepared::Records(ChunkRecords {
+        declared,
+        uncompressed,
+        crc,
+        calculated_crc,
+        short,
+        in_file,
+        pre,
+        out,
+    })
 }
 
 /// Read MCAP bytes from any reader, streaming; `path` labels errors; `size` (the file's
@@ -1445,6 +1716,7 @@ pub(crate) fn read_from(
         first_log_time: None,
         stopped_at: None,
         bufs: ChunkBuffers::default(),
+        deferred: Default::default(),
     };
     let mut bytes = 0u64;
     let mut damage: Option<String> = None;
@@ -1457,34 +1729,49 @@ pub(crate) fn read_from(
     let mut pending: Vec<u8> = Vec::new();
     let mut skip = ::mcap::MAGIC.len();
     let mut record_start = skip as u64;
-    'records: while let Some(event) = reader.next_event() {
+    // What a step came to: read on, or stop with the damage (and where it is reported).
+    let mut settle = |step: (Step, Option<u64>)| match step {
+        (Step::Next, _) => false,
+        (Step::Damage(why), at) => {
+            damage = Some(why);
+            damage_at = at;
+            true
+        }
+        (Step::Stop, _) => true,
+    };
+    loop {
+        let Some(event) = reader.next_event() else {
+            // The end: the chunk taken last is read.
+            settle(st.flush()?);
+            break;
+        };
         let event = match event {
             Ok(e) => e,
             Err(e) => {
+                // The chunk taken before comes first.
+                if settle(st.flush()?) {
+                    break;
+                }
                 let in_progress = pending.get(skip..).unwrap_or_default();
                 if let (McapError::UnexpectedEof, Some((&[op::CHUNK], rest))) =
                     (&e, in_progress.split_first_chunk::<1>())
                 {
                     if let Some((len, body)) = rest.split_first_chunk::<8>() {
                         let len = u64::from_le_bytes(*len);
-                        match st.chunk(body, len, record_start)? {
-                            (Step::Next, _) => {}
-                            (Step::Damage(why), at) => {
-                                damage = Some(why);
-                                damage_at = at;
-                                break;
-                            }
-                            (Step::Stop, _) => break,
+                        let taken = st.chunk(body, len, record_start, bytes)?;
+                        if settle(taken) || settle(st.flush()?) {
+                            break;
                         }
                     }
                 }
-                damage = Some(match e {
+                let why = match e {
                     McapError::RecordTooLarge { opcode, len } => st.too_large(opcode, len),
                     McapError::ChunkTooLarge(len) => format!(
                         "chunk of {len} bytes: more than the {limit}-byte limit for a file of this size"
                     ),
                     other => plain(&other),
-                });
+                };
+                settle((Step::Damage(why), None));
                 break;
             }
         };
@@ -1506,18 +1793,22 @@ pub(crate) fn read_from(
                 skip = 0;
                 let start = std::mem::replace(&mut record_start, bytes);
                 let step = if opcode == op::CHUNK {
-                    st.chunk(data, data.len() as u64, start)?
+                    st.chunk(data, data.len() as u64, start, bytes)?
+                } else if let (Some(d), false) =
+                    (st.deferred.back_mut(), USED_RECORDS.contains(&opcode))
+                {
+                    // Only counted: after the chunk taken before it is read.
+                    d.counted.push((data.len(), bytes));
+                    (Step::Next, None)
                 } else {
-                    (st.record(opcode, data)?, None)
-                };
-                match step {
-                    (Step::Next, _) => {}
-                    (Step::Damage(why), at) => {
-                        damage = Some(why);
-                        damage_at = at;
-                        break;
+                    // Records read come after the chunk taken before them.
+                    match st.flush()? {
+                        (Step::Next, _) => (st.record(opcode, data, None)?, None),
+                        other => other,
                     }
-                    (Step::Stop, _) => break 'records,
+                };
+                if settle(step) {
+                    break;
                 }
             }
         }
@@ -1778,19 +2069,27 @@ mod tests {
             .collect())
     }
 
-    /// What `decode` gives (the canonical layout first, then serde).
+    /// What `decode` gives (the canonical layout first, then serde); the same as when the
+    /// frame is parsed ahead in a message record, as chunks are.
     fn by_decode(data: &[u8]) -> Result<Samples, String> {
-        let mut acc = Acc::default();
-        decode(&Decoder::Json, "/markers", data, 0, None, &mut acc)?;
-        let mut out = Vec::new();
-        for (_, name, s) in acc.series {
-            for (ns, p) in s {
-                out.push((name.clone(), ns, p.map(|p| p.map(f64::to_bits))));
+        let samples = |pre: Option<PreFrame<'_>>| -> Result<Samples, String> {
+            let mut acc = Acc::default();
+            decode(&Decoder::Json, "/markers", data, 0, None, &mut acc, pre)?;
+            let mut out = Vec::new();
+            for (_, name, s) in acc.series {
+                for (ns, p) in s {
+                    out.push((name.clone(), ns, p.map(|p| p.map(f64::to_bits))));
+                }
             }
-        }
-        // decode groups by marker; by_serde lists in message order: compare as sets by name.
-        out.sort_by(|a, b| a.0.cmp(&b.0));
-        Ok(out)
+            // decode groups by marker; by_serde lists in message order: compare by name.
+            out.sort_by(|a, b| a.0.cmp(&b.0));
+            Ok(out)
+        };
+        let record = [&[0u8; 22][..], data].concat();
+        let ahead = PreParsed::parse(&[&record]);
+        let direct = samples(None);
+        assert_eq!(samples(ahead.frame(0)), direct, "parsed ahead");
+        direct
     }
 
     fn frame(sec: &str, nsec: &str, x: &str, y: &str) -> String {
@@ -1850,6 +2149,33 @@ mod tests {
             });
             assert_eq!(by_decode(m.as_bytes()), want, "{m}");
         }
+    }
+
+    #[test]
+    fn canonical_names_are_checked_for_utf8_as_serde_checks_them() {
+        // Non-ASCII names are read by the canonical layout, as serde reads them.
+        let m = frame("3", "7", "0.5", "-0.25").replace("slider", "sl\u{e9}der");
+        assert!(canonical_frame(m.as_bytes()).is_some(), "{m}");
+        let mut want = by_serde(m.as_bytes()).unwrap();
+        want.sort_by(|a, b| a.0.cmp(&b.0));
+        assert_eq!(by_decode(m.as_bytes()).unwrap(), want);
+        // Bytes that are not UTF-8, in a name or elsewhere: not the layout, and serde's error.
+        let good = frame("3", "7", "0.5", "-0.25").into_bytes();
+        for (at, byte) in [(good.len() / 2, 0xffu8), (1, 0xc3), (good.len() - 3, 0x80)] {
+            let mut bad = good.clone();
+            bad[at] = byte;
+            assert!(canonical_frame(&bad).is_none());
+            assert!(
+                by_decode(&bad).is_err(),
+                "{}",
+                String::from_utf8_lossy(&bad)
+            );
+        }
+        let mut bad = good.clone();
+        let name = good.windows(6).position(|w| w == b"slider").unwrap();
+        bad[name + 2] = 0xff;
+        assert!(canonical_frame(&bad).is_none());
+        assert_eq!(by_decode(&bad), by_serde(&bad));
     }
 
     #[test]
