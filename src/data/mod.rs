@@ -7,6 +7,7 @@
 
 pub mod calibrate;
 mod csv_formats;
+mod dlc;
 mod error;
 mod kinovea_xml;
 pub mod mcap;
