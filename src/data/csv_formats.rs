@@ -28,10 +28,10 @@ pub(crate) fn read_from(
         Format::Wide => read_wide(input, path, opts),
         Format::Long => read_long(input, path, opts),
         Format::Tracker => read_tracker_any(input, path),
-        Format::DeepLabCut => read_dlc(input, path, opts),
+        Format::DeepLabCut => read_h5_or(input, path, opts, |i| read_dlc(i, path, opts)),
         Format::Motive => read_motive(input, path, opts),
         Format::Vicon => read_vicon(input, path, opts),
-        Format::Sleap => read_sleap_any(input, path, opts),
+        Format::Sleap => read_h5_or(input, path, opts, |i| read_sleap_csv(i, path, opts)),
         Format::Qualisys => read_qualisys(input, path, opts),
         Format::Kinovea => read_kinovea_any(input, path, opts),
         Format::Trex => read_trex(input, path),
@@ -589,8 +589,14 @@ pub(crate) fn tracker_header_delimiter(line: &str) -> Option<u8> {
     })
 }
 
-/// A SLEAP analysis CSV, or (HDF5) a SLEAP analysis file.
-fn read_sleap_any(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {
+/// An HDF5 file (SLEAP's analysis file or DeepLabCut's DataFrame, told apart by content), or
+/// else the CSV that `csv` reads.
+fn read_h5_or<R: Read>(
+    input: R,
+    path: &Path,
+    opts: &ReadOptions,
+    csv: impl FnOnce(BufReader<R>) -> Result<Parsed, DataError>,
+) -> Result<Parsed, DataError> {
     let mut input = BufReader::new(input);
     let io = |source| DataError::Io {
         path: path.to_owned(),
@@ -601,23 +607,39 @@ fn read_sleap_any(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<P
         .map_err(io)?
         .starts_with(super::sleap_h5::MAGIC)
     {
-        let mut bytes = Vec::new();
-        input
-            .take(super::sleap_h5::MAX_H5_BYTES as u64 + 1)
-            .read_to_end(&mut bytes)
-            .map_err(io)?;
-        if bytes.len() > super::sleap_h5::MAX_H5_BYTES {
-            return Err(DataError::parse(
-                path,
-                "the HDF5 file",
-                "file",
-                format!("at most {} bytes", super::sleap_h5::MAX_H5_BYTES),
-                "more",
-            ));
-        }
+        let bytes = read_h5_bytes(input, path)?;
         return super::sleap_h5::read(bytes, path, opts);
     }
-    read_sleap_csv(input, path, opts)
+    csv(input)
+}
+
+/// The bytes of `input`, at most `max` + 1 of them (one more than a reader takes, so that it can
+/// tell a file that is too large).
+fn read_at_most(input: impl Read, path: &Path, max: usize) -> Result<Vec<u8>, DataError> {
+    let mut bytes = Vec::new();
+    input
+        .take(max as u64 + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|source| DataError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+    Ok(bytes)
+}
+
+/// An HDF5 file's bytes, refused past [`super::sleap_h5::MAX_H5_BYTES`].
+pub(crate) fn read_h5_bytes(input: impl Read, path: &Path) -> Result<Vec<u8>, DataError> {
+    let bytes = read_at_most(input, path, super::sleap_h5::MAX_H5_BYTES)?;
+    if bytes.len() > super::sleap_h5::MAX_H5_BYTES {
+        return Err(DataError::parse(
+            path,
+            "the HDF5 file",
+            "file",
+            format!("at most {} bytes", super::sleap_h5::MAX_H5_BYTES),
+            "more",
+        ));
+    }
+    Ok(bytes)
 }
 
 /// A Kinovea text export, or (XML) its spreadsheet export.
@@ -638,11 +660,7 @@ fn read_kinovea_any(
         .trim_start()
         .starts_with("<?xml")
     {
-        let mut bytes = Vec::new();
-        input
-            .take(super::kinovea_xml::MAX_XML_BYTES as u64 + 1)
-            .read_to_end(&mut bytes)
-            .map_err(io)?;
+        let bytes = read_at_most(input, path, super::kinovea_xml::MAX_XML_BYTES)?;
         return super::kinovea_xml::read(&bytes, path, opts);
     }
     read_kinovea(input, path)
@@ -661,14 +679,7 @@ fn read_tracker_any(input: impl Read, path: &Path) -> Result<Parsed, DataError> 
         .trim_start()
         .starts_with("<?xml")
     {
-        let mut bytes = Vec::new();
-        input
-            .take(super::tracker_project::MAX_TRK_BYTES as u64 + 1)
-            .read_to_end(&mut bytes)
-            .map_err(|source| DataError::Io {
-                path: path.to_owned(),
-                source,
-            })?;
+        let bytes = read_at_most(input, path, super::tracker_project::MAX_TRK_BYTES)?;
         return super::tracker_project::read(&bytes, path);
     }
     read_tracker(input, path)
