@@ -2,7 +2,7 @@
 //! and Vicon Nexus. Each streams its rows through the `csv` crate and returns marker series in
 //! file units.
 
-use super::{DataError, Format, Parsed, Plane, ReadOptions, Series};
+use super::{dlc, DataError, Format, Parsed, Plane, ReadOptions, Series};
 use csv::StringRecord;
 use std::collections::HashMap;
 use std::io::{BufRead, BufReader, Read};
@@ -28,10 +28,10 @@ pub(crate) fn read_from(
         Format::Wide => read_wide(input, path, opts),
         Format::Long => read_long(input, path, opts),
         Format::Tracker => read_tracker_any(input, path),
-        Format::DeepLabCut => read_dlc(input, path, opts),
+        Format::DeepLabCut => read_h5_or(input, path, opts, |i| read_dlc(i, path, opts)),
         Format::Motive => read_motive(input, path, opts),
         Format::Vicon => read_vicon(input, path, opts),
-        Format::Sleap => read_sleap_any(input, path, opts),
+        Format::Sleap => read_h5_or(input, path, opts, |i| read_sleap_csv(i, path, opts)),
         Format::Qualisys => read_qualisys(input, path, opts),
         Format::Kinovea => read_kinovea_any(input, path, opts),
         Format::Trex => read_trex(input, path),
@@ -161,27 +161,21 @@ impl<R: Read> Rows<R> {
         name: &str,
         decimal_comma: bool,
     ) -> Result<Option<[f64; N]>, DataError> {
-        let mut out = [0.0; N];
-        let mut present = 0;
+        let mut cells = [None; N];
         for (k, &i) in idx.iter().enumerate() {
-            if let Some(v) = self.num_named(
+            cells[k] = self.num_named(
                 i,
                 || format!("{name} {}", ["x", "y", "z"][k]),
                 decimal_comma,
-            )? {
-                out[k] = v;
-                present += 1;
-            }
+            )?;
         }
-        match present {
-            0 => Ok(None),
-            p if p == N => Ok(Some(out)),
-            _ => Err(self.err(
+        all_or_none(cells).map_err(|present| {
+            self.err(
                 name,
                 "all coordinates or none",
                 format!("{present} of {N} cells filled"),
-            )),
-        }
+            )
+        })
     }
 
     /// Reject a row that is shorter than the header.
@@ -202,15 +196,33 @@ impl<R: Read> Rows<R> {
 /// beyond any recording, and small enough that differences of times stay exact to 1e-7 s.
 pub(crate) const MAX_SECONDS: f64 = 1e9;
 
+/// A point from its coordinates: all missing is `None`; some missing is `Err(how many are
+/// present)`.
+pub(crate) fn all_or_none<const N: usize>(
+    cells: [Option<f64>; N],
+) -> Result<Option<[f64; N]>, usize> {
+    let present = cells.iter().flatten().count();
+    match present {
+        0 => Ok(None),
+        p if p == N => Ok(Some(cells.map(|c| c.unwrap_or_default()))),
+        p => Err(p),
+    }
+}
+
 /// Checks that one track's times increase.
 #[derive(Default)]
-struct Clock {
+pub(crate) struct Clock {
     prev: Option<f64>,
 }
 
 impl Clock {
     /// Check `t` against the previous time; `at` (called only for an error) says where.
-    fn check(&mut self, path: &Path, at: impl FnOnce() -> String, t: f64) -> Result<(), DataError> {
+    pub(crate) fn check(
+        &mut self,
+        path: &Path,
+        at: impl FnOnce() -> String,
+        t: f64,
+    ) -> Result<(), DataError> {
         if t.is_finite() && t.abs() < MAX_SECONDS && self.prev.is_none_or(|prev| t > prev) {
             self.prev = Some(t);
             return Ok(());
@@ -577,8 +589,14 @@ pub(crate) fn tracker_header_delimiter(line: &str) -> Option<u8> {
     })
 }
 
-/// A SLEAP analysis CSV, or (HDF5) a SLEAP analysis file.
-fn read_sleap_any(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {
+/// An HDF5 file (SLEAP's analysis file or DeepLabCut's DataFrame, told apart by content), or
+/// else the CSV that `csv` reads.
+fn read_h5_or<R: Read>(
+    input: R,
+    path: &Path,
+    opts: &ReadOptions,
+    csv: impl FnOnce(BufReader<R>) -> Result<Parsed, DataError>,
+) -> Result<Parsed, DataError> {
     let mut input = BufReader::new(input);
     let io = |source| DataError::Io {
         path: path.to_owned(),
@@ -589,23 +607,39 @@ fn read_sleap_any(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<P
         .map_err(io)?
         .starts_with(super::sleap_h5::MAGIC)
     {
-        let mut bytes = Vec::new();
-        input
-            .take(super::sleap_h5::MAX_H5_BYTES as u64 + 1)
-            .read_to_end(&mut bytes)
-            .map_err(io)?;
-        if bytes.len() > super::sleap_h5::MAX_H5_BYTES {
-            return Err(DataError::parse(
-                path,
-                "the HDF5 file",
-                "file",
-                format!("at most {} bytes", super::sleap_h5::MAX_H5_BYTES),
-                "more",
-            ));
-        }
+        let bytes = read_h5_bytes(input, path)?;
         return super::sleap_h5::read(bytes, path, opts);
     }
-    read_sleap_csv(input, path, opts)
+    csv(input)
+}
+
+/// The bytes of `input`, at most `max` + 1 of them (one more than a reader takes, so that it can
+/// tell a file that is too large).
+fn read_at_most(input: impl Read, path: &Path, max: usize) -> Result<Vec<u8>, DataError> {
+    let mut bytes = Vec::new();
+    input
+        .take(max as u64 + 1)
+        .read_to_end(&mut bytes)
+        .map_err(|source| DataError::Io {
+            path: path.to_owned(),
+            source,
+        })?;
+    Ok(bytes)
+}
+
+/// An HDF5 file's bytes, refused past [`super::sleap_h5::MAX_H5_BYTES`].
+pub(crate) fn read_h5_bytes(input: impl Read, path: &Path) -> Result<Vec<u8>, DataError> {
+    let bytes = read_at_most(input, path, super::sleap_h5::MAX_H5_BYTES)?;
+    if bytes.len() > super::sleap_h5::MAX_H5_BYTES {
+        return Err(DataError::parse(
+            path,
+            "the HDF5 file",
+            "file",
+            format!("at most {} bytes", super::sleap_h5::MAX_H5_BYTES),
+            "more",
+        ));
+    }
+    Ok(bytes)
 }
 
 /// A Kinovea text export, or (XML) its spreadsheet export.
@@ -626,11 +660,7 @@ fn read_kinovea_any(
         .trim_start()
         .starts_with("<?xml")
     {
-        let mut bytes = Vec::new();
-        input
-            .take(super::kinovea_xml::MAX_XML_BYTES as u64 + 1)
-            .read_to_end(&mut bytes)
-            .map_err(io)?;
+        let bytes = read_at_most(input, path, super::kinovea_xml::MAX_XML_BYTES)?;
         return super::kinovea_xml::read(&bytes, path, opts);
     }
     read_kinovea(input, path)
@@ -649,14 +679,7 @@ fn read_tracker_any(input: impl Read, path: &Path) -> Result<Parsed, DataError> 
         .trim_start()
         .starts_with("<?xml")
     {
-        let mut bytes = Vec::new();
-        input
-            .take(super::tracker_project::MAX_TRK_BYTES as u64 + 1)
-            .read_to_end(&mut bytes)
-            .map_err(|source| DataError::Io {
-                path: path.to_owned(),
-                source,
-            })?;
+        let bytes = read_at_most(input, path, super::tracker_project::MAX_TRK_BYTES)?;
         return super::tracker_project::read(&bytes, path);
     }
     read_tracker(input, path)
@@ -862,71 +885,25 @@ fn read_dlc(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed,
         (None, r1)
     };
     let coords = next_header(&mut rows, &["coords"])?;
-    let fps = opts.fps.ok_or_else(|| DataError::Options {
-        path: path.to_owned(),
-        message: "DeepLabCut files have no time column: give the video's frame rate with --fps HZ"
-            .into(),
-    })?;
     // Index columns come first: the frame number, or (labelled data) the image path, in one
     // column or three.
     let first_data = (1..coords.len())
         .find(|&j| ["x", "y", "z", "likelihood"].contains(&coords[j].to_lowercase().as_str()))
         .unwrap_or(1);
-    // name -> [x, y, likelihood, z] columns
-    let mut markers: Vec<(String, [Option<usize>; 4])> = Vec::new();
-    for j in first_data..coords.len() {
-        let part = bodyparts.get(j).cloned().unwrap_or_default();
-        let name = match &individuals {
-            Some(ind) if !ind.get(j).is_none_or(|i| i.is_empty() || i == "single") => {
-                format!("{}/{part}", ind[j])
-            }
-            _ => part,
-        };
-        let k = match markers.iter().position(|(n, _)| *n == name) {
-            Some(k) => k,
-            None => {
-                markers.push((name, [None; 4]));
-                markers.len() - 1
-            }
-        };
-        let slot = match coords[j].to_lowercase().as_str() {
-            "x" => 0,
-            "y" => 1,
-            "likelihood" => 2,
-            "z" => 3,
-            other => {
-                return Err(rows.err(
-                    format!("coords column {}", j + 1),
-                    "x, y, z or likelihood",
-                    format!("{other:?}"),
-                ))
-            }
-        };
-        markers[k].1[slot] = Some(j);
+    fn label(row: &[String], j: usize) -> &str {
+        row.get(j).map_or("", |c| c.as_str())
     }
-    let mut cols = Vec::new();
-    for (name, [x, y, l, z]) in &markers {
-        let (Some(x), Some(y)) = (x, y) else {
-            return Err(rows.err(
-                "coords",
-                format!("x and y columns for {name:?}"),
-                "only some",
-            ));
-        };
-        cols.push((*x, *y, *l, *z));
-    }
-    let three_d = cols.iter().any(|c| c.3.is_some());
-    let plane = opts.plane.unwrap_or(Plane::Xy);
-    let mut series: Vec<Series> = markers
-        .iter()
-        .map(|(n, _)| Series {
-            name: n.clone(),
-            ..Series::default()
-        })
-        .collect();
-    let mut times = Vec::new();
-    let mut clock = Clock::default();
-    let mut dropped = 0usize;
+    let columns = (first_data..coords.len()).map(|j| {
+        (
+            j,
+            individuals.as_ref().map(|ind| label(ind, j)),
+            label(&bodyparts, j),
+            coords[j].as_str(),
+        )
+    });
+    let mut dlc = dlc::Builder::new(columns, path, opts, |field, expected, found| {
+        rows.err(field, expected, found)
+    })?;
     while rows.next()? {
         if rows.is_blank() {
             continue;
@@ -936,47 +913,25 @@ fn read_dlc(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed,
         let frame = if first_data == 1 && rows.num(0, "frame index", false).is_ok() {
             rows.req(0, "frame index", false)?
         } else {
-            times.len() as f64
+            dlc.frames() as f64
         };
-        let t = frame / fps;
-        clock.check(path, || rows.at(), t)?;
-        times.push(t);
-        for (k, &(x, y, l, z)) in cols.iter().enumerate() {
-            let mut p = match z {
-                Some(z) => rows
-                    .point([x, y, z], &series[k].name, false)?
-                    .map(|p| plane.project(p)),
-                None => rows.point([x, y], &series[k].name, false)?,
-            };
-            if let (Some(_), Some(l)) = (p, l) {
-                if rows.num(l, "likelihood", false)?.unwrap_or(0.0) < opts.min_likelihood {
-                    p = None;
-                    dropped += 1;
-                }
-            }
-            series[k].points.push(p);
-        }
+        dlc.row(path, frame, &rows)?;
     }
-    if times.is_empty() {
-        return Err(DataError::NoFrames {
-            path: path.to_owned(),
-            what: "DeepLabCut header rows".into(),
-        });
+    dlc.finish(path, "DeepLabCut header rows")
+}
+
+impl<R: Read> dlc::Cells for Rows<R> {
+    fn number(&self, j: usize, field: &dyn Fn() -> String) -> Result<Option<f64>, DataError> {
+        self.num_named(j, field, false)
     }
-    for s in &mut series {
-        s.times = times.clone();
+
+    fn error(&self, field: &str, expected: &str, found: String) -> DataError {
+        self.err(field, expected, found)
     }
-    Ok(Parsed {
-        series,
-        scale: None,
-        // 3-D triangulations are in the calibration's frame, not image pixels.
-        y_down: !three_d,
-        notes: vec![format!(
-            "DeepLabCut: pixels with y down, t = frame / {fps} Hz; {dropped} point(s) under likelihood {} counted as missing",
-            opts.min_likelihood
-        )],
-        ..Parsed::default()
-    })
+
+    fn at(&self) -> String {
+        Rows::at(self)
+    }
 }
 
 fn unit_scale(unit: &str) -> Option<f64> {

@@ -7,6 +7,8 @@
 
 pub mod calibrate;
 mod csv_formats;
+mod dlc;
+mod dlc_h5;
 mod error;
 mod kinovea_xml;
 pub mod mcap;
@@ -501,10 +503,17 @@ fn read_sized(
             source,
         })?;
     let detected = opts.format.is_none();
-    let format = match opts.format {
+    let mut format = match opts.format {
         Some(f) => f,
         None => detect_head(&head, label)?,
     };
+    if detected && head.starts_with(sleap_h5::MAGIC) {
+        // Which HDF5 layout it is takes the whole file to tell.
+        let bytes = csv_formats::read_h5_bytes(head.as_slice().chain(input), label)?;
+        format = sleap_h5::detect_bytes(&bytes);
+        let parsed = sleap_h5::read(bytes, label, opts)?;
+        return assemble(&[label.to_owned()], format, detected, parsed, opts);
+    }
     let chained = head.as_slice().chain(input);
     let parsed = match format {
         Format::Mcap => mcap::read_from(chained, label, opts, size)?,
@@ -513,7 +522,8 @@ fn read_sized(
     assemble(&[label.to_owned()], format, detected, parsed, opts)
 }
 
-/// Tell the format from the file's first bytes and lines.
+/// Tell the format from the file's first bytes and lines; for HDF5, from its groups and datasets
+/// (DeepLabCut's pandas DataFrame, else SLEAP).
 pub fn detect(path: &Path) -> Result<Format, DataError> {
     let mut head = Vec::with_capacity(4096);
     std::fs::File::open(path)
@@ -522,10 +532,14 @@ pub fn detect(path: &Path) -> Result<Format, DataError> {
             path: path.to_owned(),
             source,
         })?;
+    if head.starts_with(sleap_h5::MAGIC) {
+        return Ok(sleap_h5::detect_file(path));
+    }
     detect_head(&head, path)
 }
 
-/// Tell the format from a file's first bytes (up to 4 KiB); `path` names it in errors.
+/// Tell the format from a file's first bytes (up to 4 KiB); `path` names it in errors. HDF5 is
+/// taken for SLEAP here: [`detect`] looks inside it.
 pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     if head.starts_with(::mcap::MAGIC) {
         return Ok(Format::Mcap);

@@ -18,7 +18,7 @@ pub enum Format {
     Long,
     /// Open Source Physics Tracker export: one file per marker.
     Tracker,
-    /// DeepLabCut CSV: 3 or 4 header rows, pixels, frame index.
+    /// DeepLabCut CSV (3 or 4 header rows) or HDF5 (its pandas DataFrame): pixels, frame index.
     DeepLabCut,
     /// OptiTrack Motive CSV export.
     Motive,

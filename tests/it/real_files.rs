@@ -677,3 +677,217 @@ fn ros2_tf_is_composed_to_the_tree_root_as_an_independent_decoder_composes_it() 
     assert!(rec.provenance.notes.iter().any(|n| n.contains("\"map\"")));
     check(&rec, &want);
 }
+
+/// DeepLabCut's marker names in the order of a CSV's columns (`individual/bodypart` when the
+/// header has an individuals row), parsed here from the header alone.
+fn dlc_markers(csv: &str, header_rows: usize) -> Vec<String> {
+    let t = text(csv);
+    let rows: Vec<Vec<&str>> = t
+        .lines()
+        .take(header_rows)
+        .map(|l| l.split(',').collect())
+        .collect();
+    let (parts, inds) = (&rows[header_rows - 2], (header_rows == 4).then(|| &rows[1]));
+    let mut names: Vec<String> = Vec::new();
+    for j in 1..parts.len() {
+        let name = match inds {
+            Some(i) if !i[j].is_empty() && i[j] != "single" => format!("{}/{}", i[j], parts[j]),
+            _ => parts[j].to_string(),
+        };
+        if !names.contains(&name) {
+            names.push(name);
+        }
+    }
+    names
+}
+
+/// The HDF5 files DeepLabCut writes (tests/data/make_dlc_h5.py made these from the CSVs as
+/// DeepLabCut does): each with its source CSV and header rows.
+const DLC_H5: [(&str, &str, usize); 4] = [
+    (
+        "dlc_reachingvideo1shortDLC_resnet50_TESTNov4shuffle1_10.h5",
+        "dlc_reachingvideo1shortDLC_resnet50_TESTNov4shuffle1_10.csv",
+        3,
+    ),
+    (
+        "dlc_movementdata_mouse_multi_4row.h5",
+        "dlc_movementdata_mouse_multi_4row.csv",
+        4,
+    ),
+    (
+        "dlc_labeled_CollectedData_Mackenzie.h5",
+        "dlc_labeled_CollectedData_Mackenzie.csv",
+        3,
+    ),
+    (
+        "dlc_labeled_CollectedData_Mackenzie_fixed.h5",
+        "dlc_labeled_CollectedData_Mackenzie.csv",
+        3,
+    ),
+];
+
+#[test]
+fn deeplabcut_hdf5_converts_as_its_source_csv_for_every_marker() {
+    for (h5, csv, hdr) in DLC_H5 {
+        let markers = dlc_markers(csv, hdr);
+        assert!(markers.len() >= 4, "{csv}: {markers:?}");
+        let mut compared = 0;
+        for (k, s) in markers.iter().enumerate() {
+            let b = &markers[(k + 1) % markers.len()];
+            for min_likelihood in [0.6, 0.0] {
+                let opts = ReadOptions {
+                    min_likelihood,
+                    ..px(s, b)
+                };
+                match (read(&[h5], opts.clone()), read(&[csv], opts)) {
+                    (Ok(a), Ok(c)) => {
+                        let canonical = |r: &Recording| {
+                            let mut out = Vec::new();
+                            r.write_csv(&mut out).unwrap();
+                            String::from_utf8(out).unwrap()
+                        };
+                        assert_eq!(canonical(&a), canonical(&c), "{h5}: {s}, {b}");
+                        assert_eq!(a.provenance.format, Some(Format::DeepLabCut));
+                        assert!(a.provenance.detected);
+                        assert_eq!(a.provenance.notes, c.provenance.notes, "{h5}");
+                        assert_eq!(a.provenance.warnings, c.provenance.warnings, "{h5}");
+                        compared += 1;
+                    }
+                    (Err(a), Err(c)) => {
+                        assert_eq!(a.to_string().replace(h5, csv), c.to_string(), "{h5}");
+                    }
+                    (a, c) => panic!("{h5}: {s}, {b}: {:?} but the CSV {:?}", a.err(), c.err()),
+                }
+            }
+        }
+        assert!(
+            compared >= markers.len(),
+            "{h5}: only {compared} pairs read"
+        );
+    }
+}
+
+#[test]
+fn deeplabcut_hdf5_holds_the_values_of_its_source_csv() {
+    // The first two markers' columns in the CSV, parsed here; their likelihood follows x, y
+    // where the file has one.
+    for (h5, csv, hdr) in DLC_H5 {
+        let markers = dlc_markers(csv, hdr);
+        let labelled = csv.contains("labeled");
+        let (bc, lik) = if labelled { (3, None) } else { (4, Some(0.6)) };
+        let rec = read(&[h5], px(&markers[0], &markers[1])).unwrap();
+        check(&rec, &dlc_want(csv, hdr, 1, bc, lik, 30.0));
+        assert!(rec.slider.iter().flatten().count() > 0, "{h5}");
+    }
+}
+
+#[test]
+fn deeplabcut_hdf5_with_other_columns_than_x_y_likelihood_says_which() {
+    let e = read(
+        &["DERIVED_dlc_coords_x_y_speed.h5"],
+        px("bodypart1", "bodypart2"),
+    )
+    .unwrap_err()
+    .to_string();
+    for part in [
+        "DERIVED_dlc_coords_x_y_speed.h5",
+        "/df_with_missing/table attribute values_block_0_kind",
+        "coords column 3",
+        "expected x, y, z or likelihood",
+        "\"speed\"",
+    ] {
+        assert!(e.contains(part), "{part:?} not in {e}");
+    }
+}
+
+#[test]
+fn truncated_deeplabcut_hdf5_is_an_error_naming_the_file_never_a_panic() {
+    let name = "dlc_movementdata_mouse_multi_4row.h5";
+    let whole = std::fs::read(data(name)).unwrap();
+    let opts = px("individual1/snout", "individual1/leftear");
+    let label = Path::new("cut.h5");
+    let mut errors = 0;
+    for n in (0..whole.len()).step_by(211) {
+        if let Err(e) = appell::data::read_recording_bytes(&whole[..n], label, &opts) {
+            assert!(e.to_string().starts_with("cut.h5: "), "{n}: {e}");
+            errors += 1;
+        }
+    }
+    assert!(errors > 100, "{errors}");
+    // Through the command line: exit code 2 and one line that names the file and the field.
+    let dir = tempfile::tempdir().unwrap();
+    let cut = dir.path().join("cut.h5");
+    std::fs::write(&cut, &whole[..20_000]).unwrap();
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_appell"))
+        .args(["convert", cut.to_str().unwrap()])
+        .arg(dir.path().join("out.csv"))
+        .args(["--fps", "30", "--scale", "1"])
+        .args([
+            "--slider",
+            "individual1/snout",
+            "--bob",
+            "individual1/leftear",
+        ])
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(
+        err.contains("cut.h5: /df_with_missing/table: table: expected a readable dataset"),
+        "{err}"
+    );
+}
+
+#[test]
+fn deeplabcut_hdf5_with_bytes_changed_reads_or_errs_never_panics() {
+    // A fixed pseudo-random walk over the files: set one byte, read, restore.
+    let n: usize = std::env::var("APPELL_H5_MUTATIONS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(300);
+    let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+    for (h5, _, _) in DLC_H5 {
+        let mut bytes = std::fs::read(data(h5)).unwrap();
+        let opts = ReadOptions {
+            fps: Some(30.0),
+            scale: Some(1.0),
+            ..ReadOptions::default()
+        };
+        for _ in 0..n {
+            seed = seed
+                .wrapping_mul(6_364_136_223_846_793_005)
+                .wrapping_add(1_442_695_040_888_963_407);
+            let at = (seed >> 33) as usize % bytes.len();
+            let old = bytes[at];
+            bytes[at] = (seed >> 13) as u8;
+            let _ = appell::data::read_recording_bytes(&bytes, Path::new("m.h5"), &opts);
+            bytes[at] = old;
+        }
+    }
+}
+
+#[test]
+fn deeplabcut_hdf5_declaring_more_rows_than_it_holds_is_refused_before_reading() {
+    // The table's dataspace: 12 rows, unlimited at most; declare 2^40 rows instead.
+    let name = "dlc_reachingvideo1shortDLC_resnet50_TESTNov4shuffle1_10.h5";
+    let mut bytes = std::fs::read(data(name)).unwrap();
+    let dims = [12u64.to_le_bytes(), [0xff; 8]].concat();
+    let at: Vec<usize> = (0..bytes.len() - 16)
+        .filter(|&i| bytes[i..i + 16] == dims[..])
+        .collect();
+    assert_eq!(at.len(), 1, "the table's dataspace");
+    bytes[at[0]..at[0] + 8].copy_from_slice(&(1u64 << 40).to_le_bytes());
+    let e = appell::data::read_recording_bytes(
+        &bytes,
+        Path::new("huge.h5"),
+        &px("bodypart1", "bodypart2"),
+    )
+    .unwrap_err()
+    .to_string();
+    assert!(
+        e.starts_with("huge.h5: /df_with_missing/table: table: expected at most"),
+        "{e}"
+    );
+    assert!(e.contains("times the file's size"), "{e}");
+}
