@@ -56,6 +56,8 @@ impl<R: Read> Rows<R> {
                 .has_headers(false)
                 .flexible(true)
                 .delimiter(delimiter)
+                // Large reads: the input is the file itself, read straight into this buffer.
+                .buffer_capacity(1 << 18)
                 .from_reader(input),
             rec: StringRecord::new(),
             path: path.to_owned(),
@@ -326,6 +328,9 @@ struct TimeReader {
     fps: Option<f64>,
     base: Option<f64>,
     base_ns: Option<i64>,
+    /// The last time cell read and what it came to: long files repeat a frame's time on
+    /// every marker's row.
+    last: Option<(String, f64)>,
 }
 
 impl TimeReader {
@@ -343,10 +348,27 @@ impl TimeReader {
             fps: opts.fps,
             base: None,
             base_ns: None,
+            last: None,
         })
     }
 
     fn read<R: Read>(&mut self, rows: &Rows<R>) -> Result<f64, DataError> {
+        let raw = rows.cell(self.col);
+        if let Some((text, t)) = &self.last {
+            if text == raw {
+                return Ok(*t);
+            }
+        }
+        let t = self.parse(rows)?;
+        let (text, last) = self.last.get_or_insert_with(|| (String::new(), t));
+        text.clear();
+        text.push_str(raw);
+        *last = t;
+        Ok(t)
+    }
+
+    /// A time cell in seconds from the first (after it, the same cell gives the same time).
+    fn parse<R: Read>(&mut self, rows: &Rows<R>) -> Result<f64, DataError> {
         if self.unit == TimeUnit::Scaled(1e-9) {
             let raw = rows.cell(self.col).trim();
             if let Ok(ns) = raw.parse::<i64>() {
