@@ -1368,7 +1368,7 @@ impl Reading<'_> {
         // The reader's buffer moves on: the chunk is copied for the pool.
         let body = body.to_vec();
         let (tx, ready) = std::sync::mpsc::sync_channel(1);
-        rayon::spawn(move || {
+        let prepare = move || {
             let prepared = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                 let mut zstd = ZSTD.take();
                 let prepared =
@@ -1379,7 +1379,14 @@ impl Reading<'_> {
             .unwrap_or_else(|_| Prepared::Damage(format!("chunk at byte {start}: unreadable")));
             // The receiver is gone only when reading stopped before this chunk.
             let _ = tx.send(prepared);
-        });
+        };
+        // On a pool thread (a directory's recordings are read in parallel) the chunk is
+        // prepared here: waiting there for the pool could leave no thread to prepare it.
+        if rayon::current_thread_index().is_some() {
+            prepare();
+        } else {
+            rayon::spawn(prepare);
+        }
         self.deferred.push_back(Deferred {
             ready,
             start,
@@ -2148,6 +2155,61 @@ mod tests {
                 v
             });
             assert_eq!(by_decode(m.as_bytes()), want, "{m}");
+        }
+    }
+
+    /// A recording of `frames` frames at 10 kHz, both markers moving, as MCAP bytes.
+    fn multi_chunk_mcap(frames: usize) -> (Vec<u8>, Recording) {
+        let mut rec = Recording::default();
+        for k in 0..frames {
+            let t = k as f64 * 1e-4;
+            rec.times.push(t);
+            rec.slider.push(Some([0.01 * (3.0 * t).sin(), 0.0]));
+            rec.bob.push(Some([0.3 * t.cos(), -0.3 * t.sin()]));
+        }
+        let mut bytes = Vec::new();
+        write_json(
+            &mut bytes,
+            &rec,
+            1_700_000_000_000_000_000,
+            &BTreeMap::new(),
+        )
+        .unwrap();
+        (bytes, rec)
+    }
+
+    #[test]
+    fn chunks_read_on_a_pool_thread_do_not_wait_for_the_pool() {
+        // 60,000 frames: tens of chunks, more than are prepared ahead.
+        let (bytes, rec) = multi_chunk_mcap(60_000);
+        // Top-level records: opcode, length, body; chunks counted until the footer.
+        let (mut at, mut chunks) = (::mcap::MAGIC.len(), 0);
+        while bytes[at] != op::FOOTER {
+            chunks += usize::from(bytes[at] == op::CHUNK);
+            at += 9 + u64::from_le_bytes(bytes[at + 1..at + 9].try_into().unwrap()) as usize;
+        }
+        assert!(chunks > CHUNKS_AHEAD, "{chunks}");
+        let read = |bytes: &[u8]| {
+            read_from(bytes, Path::new("t.mcap"), &ReadOptions::default(), None).unwrap()
+        };
+        let outside = read(&bytes);
+        // A pool of one thread, busy reading: its chunks cannot be handed to it.
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(1)
+            .build()
+            .unwrap();
+        let inside = pool.install(|| read(&bytes));
+        for parsed in [&outside, &inside] {
+            assert_eq!(parsed.series.len(), 2);
+            for s in &parsed.series {
+                assert_eq!(s.times.len(), rec.times.len());
+                let truth = if s.name == "slider" {
+                    &rec.slider
+                } else {
+                    &rec.bob
+                };
+                assert_eq!(&s.points, truth, "{}", s.name);
+            }
         }
     }
 
