@@ -1430,13 +1430,9 @@ impl Reading<'_> {
             Prepared::Records(r) => {
                 let room = self.budget.saturating_sub(self.record_bytes);
                 let result = match r.uncompressed {
-                    Some(size) if size > room => Ok((
-                        Step::Damage(format!(
-                            "records decompress to more than {} bytes (1024 times the file plus 64 MiB): the chunk at byte {} declares {size}",
-                            self.budget, d.start
-                        )),
-                        None,
-                    )),
+                    Some(size) if size > room => {
+                        Ok((Step::Damage(over_budget(self.budget, d.start, size)), None))
+                    }
                     _ => self.chunk_records(&r, d.start),
                 };
                 self.bufs.spare.push(r.out);
@@ -1520,6 +1516,13 @@ impl Reading<'_> {
             }
         }
     }
+}
+
+/// The damage text of a chunk at `start` declaring `size` decompressed bytes, past `budget`.
+fn over_budget(budget: u64, start: u64, size: u64) -> String {
+    format!(
+        "records decompress to more than {budget} bytes (1024 times the file plus 64 MiB): the chunk at byte {start} declares {size}"
+    )
 }
 
 /// A chunk taken by [`Reading::chunk`], waiting to be read in order.
@@ -1639,9 +1642,7 @@ fn prepare_chunk(
             let size = match usize::try_from(uncompressed_size) {
                 Ok(size) if uncompressed_size <= room => size,
                 _ => {
-                    return Prepared::Damage(format!(
-                        "records decompress to more than {budget} bytes (1024 times the file plus 64 MiB): the chunk at byte {start} declares {uncompressed_size}"
-                    ));
+                    return Prepared::Damage(over_budget(budget, start, uncompressed_size));
                 }
             };
             let failed = decompress_chunk(compression, src, size, zstd, &mut out);
