@@ -25,9 +25,16 @@ pub trait Scalar: DualNum<f64> + Copy + Send + Sync {
     /// zero is skipped for speed, but a fit that frees the coefficient at zero needs its
     /// derivative: num-dual's `is_zero` looks at the value only, so it must not decide.
     fn is_exact_zero(&self) -> bool;
+
+    /// True for `f64` only. The simulator compiles a second copy of its stepper for plain
+    /// rigs, with the real-rig tests gone from the right-hand side, for this type alone: the
+    /// dual types' runs are few and their copies would only lengthen the build.
+    const SPECIALISE_PLAIN: bool = false;
 }
 
 impl Scalar for f64 {
+    const SPECIALISE_PLAIN: bool = true;
+
     #[inline(always)]
     fn is_exact_zero(&self) -> bool {
         *self == 0.0

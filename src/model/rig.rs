@@ -3,6 +3,9 @@
 use super::Scalar;
 use thiserror::Error;
 
+/// (|x'| / v_s)^2 past which the Stribeck hump, e^-(|x'|/v_s)^2 < 2e-22, is left out.
+const STRIBECK_TAIL: f64 = 50.0;
+
 /// A Painleve-Appell rig. Generic over the scalar so the fit can carry derivatives with
 /// respect to mu or the rod length through every formula.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -286,7 +289,14 @@ impl<T: Scalar> Rig<T> {
             FrictionLaw::Coulomb => self.mu_kinetic,
             FrictionLaw::Stribeck => {
                 let u = speed / self.stribeck_velocity;
-                self.mu_kinetic + (self.mu_static - self.mu_kinetic) * (-(u * u)).exp()
+                let u2 = u * u;
+                if u2.re() > STRIBECK_TAIL {
+                    // The hump is below e^-50 = 2e-22 of mu_s - mu_k here: mu_k to far
+                    // below any friction measurement, without an exp on every evaluation
+                    // of a fast slide.
+                    return self.mu_kinetic;
+                }
+                self.mu_kinetic + (self.mu_static - self.mu_kinetic) * (-u2).exp()
             }
         }
     }

@@ -558,3 +558,34 @@ fn damped_stick_intervals_match_a_brute_force_scan() {
         }
     }
 }
+
+/// The Stribeck law written out here, mu_k + (mu_s - mu_k) exp(-(v/v_s)^2), against the
+/// model's, which leaves the exponential out far in the tail: at every speed across the cut
+/// the two agree to rounding, in value and in the derivative with respect to mu_s.
+#[test]
+fn stribeck_tail_left_out_only_where_it_is_below_rounding() {
+    let v_s = 0.05;
+    let rig = Rig::new(0.1, 0.1, 0.3, 9.81, 0.3, Some(0.9))
+        .unwrap()
+        .with_stribeck(v_s);
+    let mut dual = rig.lift::<Dual64>();
+    dual.mu_static = Dual64::new(0.9, 1.0);
+    for i in 0..=400 {
+        let v = v_s * 10.0 * f64::from(i) / 400.0;
+        let u = v / v_s;
+        let oracle = 0.3 + 0.6 * (-u * u).exp();
+        let mu = rig.friction_mu(v);
+        assert!(
+            (mu - oracle).abs() <= 2.0 * f64::EPSILON * oracle,
+            "v {v}: {mu} vs {oracle}"
+        );
+        let d = dual.friction_mu(Dual64::from(v));
+        // exp magnifies the rounding of u^2 by u^2.
+        let e = (-u * u).exp();
+        assert!(
+            (d.eps - e).abs() <= 4.0 * (1.0 + u * u) * f64::EPSILON * e + 1e-21,
+            "v {v}: d/dmu_s {} vs {e}",
+            d.eps
+        );
+    }
+}
