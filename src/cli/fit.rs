@@ -142,6 +142,10 @@ fn settings(args: &Args) -> Result<FitSettings, String> {
 /// Recordings in a directory: files with a recording extension, sorted. Without `--format`,
 /// a file whose format cannot be told from its start (a `notes.txt`) is not a recording: it
 /// is skipped with a note on stderr and the rest are fitted.
+/// The file endings a directory's recordings may have: the CSV family, MCAP, HDF5 (DeepLabCut,
+/// SLEAP), Tracker projects and Kinovea XML; the content decides the format.
+const RECORDING_EXTENSIONS: [&str; 8] = ["csv", "mcap", "txt", "tsv", "h5", "hdf5", "trk", "xml"];
+
 fn directory_files(dir: &Path, format_given: bool) -> Result<Vec<PathBuf>, Failure> {
     let entries = std::fs::read_dir(dir)
         .map_err(|e| Failure::Input(anyhow!("{}: cannot list: {e}", dir.display())))?;
@@ -154,9 +158,9 @@ fn directory_files(dir: &Path, format_given: bool) -> Result<Vec<PathBuf>, Failu
                 .is_some_and(|n| n.starts_with('.'))
         })
         .filter(|p| {
-            p.extension().and_then(|e| e.to_str()).is_some_and(|e| {
-                ["csv", "mcap", "txt", "tsv"].contains(&e.to_ascii_lowercase().as_str())
-            })
+            p.extension()
+                .and_then(|e| e.to_str())
+                .is_some_and(|e| RECORDING_EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
         })
         .collect();
     files.sort();
@@ -171,8 +175,9 @@ fn directory_files(dir: &Path, format_given: bool) -> Result<Vec<PathBuf>, Failu
     }
     if files.is_empty() {
         return Err(Failure::Input(anyhow!(
-            "{}: no recordings (.csv, .mcap, .txt, .tsv) in this directory",
-            dir.display()
+            "{}: no recordings (.{}) in this directory",
+            dir.display(),
+            RECORDING_EXTENSIONS.join(", .")
         )));
     }
     Ok(files)

@@ -1160,6 +1160,8 @@ fn read_motive(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Pars
         },
         false,
     )?;
+    let mut series = series;
+    let (join_notes, joined) = join_renamed_unlabeled(&mut series);
     let time_note = match rate_hz {
         Some(hz) => format!("t = (Frame - first frame) / Export Frame Rate {hz} Hz from the header (the Time column is rounded)"),
         None => "t from the Time column (no Export Frame Rate in the header)".to_string(),
@@ -1178,12 +1180,129 @@ fn read_motive(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Pars
             None => (1.0, "metres assumed: no Length Units in the file".into()),
         }),
         time_base: base.unwrap_or(0.0),
-        notes: vec![format!(
+        notes: std::iter::once(format!(
             "Motive: plane {} (Motive's y is up; --plane to change); {time_note}",
             plane.name(),
-        )],
+        ))
+        .chain(join_notes)
+        .collect(),
+        joined,
         ..Parsed::default()
     })
+}
+
+/// A marker hidden longer than this (seconds) is taken for a new marker when it reappears,
+/// wherever it is.
+const MAX_REAPPEAR_S: f64 = 0.5;
+/// Motive names a marker it has lost and found again anew ("Unlabeled 1036" comes back as
+/// "Unlabeled 1052"): its track is split into a column that ends and one that starts later.
+/// Join such pairs under the first name when the join is unambiguous: the new track starts
+/// after the old one ends, at most [`MAX_REAPPEAR_S`] later, where the old one was heading
+/// (its last velocity carried over the gap), nearer to that point than half the distance
+/// from the old track's last position to any other marker then visible; the closest pairs
+/// are joined first, each track at most once at either end. Returns a note per joined
+/// marker and the (later name, kept name) pairs.
+fn join_renamed_unlabeled(series: &mut Vec<Series>) -> (Vec<String>, Vec<(String, String)>) {
+    let unlabeled = |s: &Series| s.name.to_lowercase().starts_with("unlabeled");
+    let spans: Vec<Option<(usize, usize)>> = series
+        .iter()
+        .map(|s| {
+            let first = s.points.iter().position(Option::is_some)?;
+            Some((first, s.points.iter().rposition(Option::is_some)?))
+        })
+        .collect();
+    let frames = series.first().map_or(0, |s| s.points.len());
+    // Only tracks that end early can have a successor, only late starters a predecessor.
+    let ends: Vec<usize> = (0..series.len())
+        .filter(|&k| unlabeled(&series[k]) && spans[k].is_some_and(|(_, e)| e + 1 < frames))
+        .collect();
+    let starts: Vec<usize> = (0..series.len())
+        .filter(|&k| unlabeled(&series[k]) && spans[k].is_some_and(|(s, _)| s > 0))
+        .collect();
+    let mut pairs = Vec::new();
+    for &a in &ends {
+        let Some((_, end)) = spans[a] else { continue };
+        let (times, pa) = (
+            &series[a].times,
+            series[a].points[end].expect("end of a span"),
+        );
+        // The last velocity (per frame), when the frame before the end has a position.
+        let v = match end.checked_sub(1).and_then(|i| series[a].points[i]) {
+            Some(p) => [pa[0] - p[0], pa[1] - p[1]],
+            None => [0.0, 0.0],
+        };
+        let room = series
+            .iter()
+            .enumerate()
+            .filter(|&(k, _)| k != a)
+            .filter_map(|(_, s)| s.points[end])
+            .map(|p| (p[0] - pa[0]).hypot(p[1] - pa[1]))
+            .fold(f64::INFINITY, f64::min)
+            / 2.0;
+        for &b in &starts {
+            let Some((start, _)) = spans[b] else { continue };
+            if start <= end || times[start] - times[end] > MAX_REAPPEAR_S {
+                continue;
+            }
+            let pb = series[b].points[start].expect("start of a span");
+            let g = (start - end) as f64;
+            let d = (pb[0] - pa[0] - v[0] * g).hypot(pb[1] - pa[1] - v[1] * g);
+            if d < room {
+                pairs.push((d, a, b));
+            }
+        }
+    }
+    pairs.sort_by(|x, y| x.0.total_cmp(&y.0));
+    // successor[a] = b; each track gets at most one successor and one predecessor.
+    let mut successor: Vec<Option<usize>> = vec![None; series.len()];
+    let mut has_predecessor = vec![false; series.len()];
+    // For each joined track: the frames missing before it and its distance from where the
+    // track before it was heading.
+    let mut joins: Vec<Option<(usize, f64)>> = vec![None; series.len()];
+    for (d, a, b) in pairs {
+        if successor[a].is_some() || has_predecessor[b] {
+            continue;
+        }
+        successor[a] = Some(b);
+        has_predecessor[b] = true;
+        let ((_, end), (start, _)) = (spans[a].expect("a span"), spans[b].expect("a span"));
+        joins[b] = Some((start - end - 1, d));
+    }
+    // Fill each chain's head from its successors, then drop the successors.
+    let (mut notes, mut joined) = (Vec::new(), Vec::new());
+    for head in (0..series.len()).filter(|&k| !has_predecessor[k]) {
+        let mut next = successor[head];
+        let mut parts = Vec::new();
+        while let Some(b) = next {
+            let (missing, d) = joins[b].expect("a joined track");
+            joined.push((series[b].name.clone(), series[head].name.clone()));
+            parts.push(format!(
+                "{:?} after {missing} missing frames ({d:.3} file units from where it was heading)",
+                series[b].name
+            ));
+            let tail = std::mem::take(&mut series[b].points);
+            for (slot, p) in series[head].points.iter_mut().zip(tail) {
+                if p.is_some() {
+                    *slot = p;
+                }
+            }
+            next = successor[b];
+        }
+        if !parts.is_empty() {
+            notes.push(format!(
+                "Motive: {:?} continues as {}: Motive renamed the marker when it reappeared; \
+                 joined under the first name",
+                series[head].name,
+                parts.join(", then ")
+            ));
+        }
+    }
+    let mut k = 0;
+    series.retain(|_| {
+        k += 1;
+        !has_predecessor[k - 1]
+    });
+    (notes, joined)
 }
 
 fn read_vicon(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {

@@ -142,6 +142,9 @@ pub(crate) struct Parsed {
     pub notes: Vec<String>,
     pub warnings: Vec<String>,
     pub metadata: BTreeMap<String, String>,
+    /// Names a reader joined into another series (a later name, the name it is kept under):
+    /// asking for the later name selects the joined series.
+    pub joined: Vec<(String, String)>,
 }
 
 /// Read a recording from one file, or from one file per marker (Tracker), and calibrate it
@@ -300,8 +303,8 @@ fn assemble(
             available: format!("{:?}", parsed.series[0].name),
         });
     }
-    let si = select(&label, &parsed.series, "slider", opts.slider.as_deref())?;
-    let bi = select(&label, &parsed.series, "bob", opts.bob.as_deref())?;
+    let si = select(&label, &parsed, "slider", opts.slider.as_deref())?;
+    let bi = select(&label, &parsed, "bob", opts.bob.as_deref())?;
     if si == bi {
         return Err(DataError::AmbiguousMarker {
             path: label,
@@ -382,15 +385,21 @@ fn paths_label(paths: &[PathBuf]) -> PathBuf {
     )
 }
 
-/// The index of the series for `role`: an exact name, else the one name containing `wanted`
-/// (or the role itself), case-insensitively.
+/// The index of the series for `role`: an exact name (or a name joined into a series), else
+/// the one name containing `wanted` (or the role itself), case-insensitively.
 fn select(
     path: &Path,
-    series: &[Series],
+    parsed: &Parsed,
     role: &'static str,
     wanted: Option<&str>,
 ) -> Result<usize, DataError> {
+    let series = &parsed.series;
     let needle = wanted.unwrap_or(role);
+    let needle = parsed
+        .joined
+        .iter()
+        .find(|(later, _)| later == needle)
+        .map_or(needle, |(_, kept)| kept.as_str());
     if let Some(i) = series.iter().position(|s| s.name == needle) {
         return Ok(i);
     }

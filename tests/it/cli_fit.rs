@@ -146,3 +146,28 @@ fn bad_rig_or_recording_exits_2_with_the_cause() {
     assert_eq!(out.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&out.stderr).contains("empty.csv"));
 }
+
+/// A directory's HDF5 recordings (DeepLabCut, SLEAP) are read like its CSVs, not passed over:
+/// with only a SLEAP analysis file in it, the directory is not "without recordings", and the
+/// file is named in what the fit reports.
+#[test]
+fn directory_reads_hdf5_recordings_too() {
+    let dir = tempfile::tempdir().unwrap();
+    let name = "sleap_three-mice_Aeon.analysis.h5";
+    std::fs::copy(path(&format!("tests/data/{name}")), dir.path().join(name)).unwrap();
+    let out = appell(&[
+        "fit",
+        dir.path().to_str().unwrap(),
+        "--rig",
+        &path("configs/rig_example.toml"),
+        "--json",
+        "--no-profile",
+    ]);
+    let all = format!(
+        "{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(!all.contains("no recordings"), "{all}");
+    assert!(all.contains(name), "{all}");
+}

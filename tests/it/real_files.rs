@@ -190,18 +190,24 @@ fn tracker_multi_track_export_reads_each_track() {
     check(&rec, &want);
 }
 
-#[test]
-fn motive_times_come_from_frame_and_export_rate() {
-    let t = text("motive_v1.23_ha5dzs_markers_mm_360Hz.csv");
+/// Markers 1036 and 1037 of the real Motive export, written out from its text: t = frame /
+/// 360 Hz, millimetres to metres.
+fn motive_1036_1037(t: &str) -> Vec<Row> {
     let lines: Vec<&str> = t.lines().skip(7).collect();
-    let want = rows(
+    rows(
         &lines,
         ',',
         |c, _| num(c[0]).unwrap() / 360.0,
         [2, 3],
         [5, 6],
         |p| [p[0] / 1000.0, p[1] / 1000.0],
-    );
+    )
+}
+
+#[test]
+fn motive_times_come_from_frame_and_export_rate() {
+    let t = text("motive_v1.23_ha5dzs_markers_mm_360Hz.csv");
+    let want = motive_1036_1037(&t);
     let rec = read(
         &["motive_v1.23_ha5dzs_markers_mm_360Hz.csv"],
         with("Unlabeled 1036", "Unlabeled 1037"),
@@ -890,4 +896,102 @@ fn deeplabcut_hdf5_declaring_more_rows_than_it_holds_is_refused_before_reading()
         "{e}"
     );
     assert!(e.contains("times the file's size"), "{e}");
+}
+
+/// The real Motive export with markers split the way Motive splits a marker it loses and
+/// finds again: the columns of `old` keep frames before `at`, a new column `new` (appended)
+/// holds frames from `at + gap` on, shifted by `shift` (file units, X), and the frames
+/// between are missing everywhere.
+fn motive_split(t: &str, splits: &[(&str, &str, usize, usize, f64)]) -> String {
+    let lines: Vec<&str> = t.lines().collect();
+    let names: Vec<&str> = lines[3].split(',').collect();
+    let mut out: Vec<String> = lines.iter().map(|l| l.to_string()).collect();
+    for &(old, new, at, gap, shift) in splits {
+        let j = names.iter().position(|n| *n == old).expect("marker column");
+        for (k, extra) in [(2, "Marker"), (3, new), (4, "\"X\""), (5, "Position")] {
+            out[k].push_str(&format!(",{extra},{extra},{extra}"));
+        }
+        out[6].push_str(",X,Y,Z");
+        for (i, line) in out.iter_mut().enumerate().skip(7) {
+            let frame = i - 7;
+            let mut c: Vec<String> = line.split(',').map(str::to_string).collect();
+            let xyz: Vec<String> = c[j..j + 3].to_vec();
+            if frame >= at {
+                c[j..j + 3].iter_mut().for_each(|v| v.clear());
+            }
+            let moved: Vec<String> = if frame >= at + gap {
+                let x: f64 = xyz[0].parse().unwrap();
+                vec![format!("{}", x + shift), xyz[1].clone(), xyz[2].clone()]
+            } else {
+                vec![String::new(); 3]
+            };
+            c.extend(moved);
+            *line = c.join(",");
+        }
+    }
+    out.join("\n") + "\n"
+}
+
+/// Motive renames a marker it loses and finds again, so one track becomes two columns. A
+/// reader that keeps them apart loses the bob at the first dropout. Split the real export's
+/// "Unlabeled 1037" at frame 600, back as "Unlabeled 1054" at frame 610: read under the old
+/// name it is the whole track again, with the ten frames missing, and a note names both.
+/// "Unlabeled 1040", split the same way but back 500 mm from where it was heading, is a new
+/// marker and stays apart.
+#[test]
+fn motive_renamed_unlabeled_marker_is_joined_only_where_it_was_heading() {
+    let t = text("motive_v1.23_ha5dzs_markers_mm_360Hz.csv");
+    let split = motive_split(
+        &t,
+        &[
+            ("Unlabeled 1037", "Unlabeled 1054", 600, 10, 0.0),
+            ("Unlabeled 1040", "Unlabeled 1055", 800, 10, 500.0),
+        ],
+    );
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("motive_split.csv");
+    std::fs::write(&path, split).unwrap();
+    let mut want = motive_1036_1037(&t);
+    for row in &mut want[600..610] {
+        row.2 = None;
+    }
+    let rec = read_recording(
+        std::slice::from_ref(&path),
+        &with("Unlabeled 1036", "Unlabeled 1037"),
+    )
+    .unwrap();
+    check(&rec, &want);
+    let notes = rec.provenance.notes.join("\n");
+    assert!(
+        notes
+            .contains("\"Unlabeled 1037\" continues as \"Unlabeled 1054\" after 10 missing frames"),
+        "{notes}"
+    );
+    assert!(!notes.contains("Unlabeled 1055"), "{notes}");
+    // Asked for by its later name, the joined marker is the same whole track.
+    let later = read_recording(
+        std::slice::from_ref(&path),
+        &with("Unlabeled 1036", "Unlabeled 1054"),
+    )
+    .unwrap();
+    assert_eq!(later.bob, rec.bob);
+    // The far one is still its own marker: readable under its new name, from frame 810.
+    let far = read_recording(
+        std::slice::from_ref(&path),
+        &with("Unlabeled 1036", "Unlabeled 1055"),
+    )
+    .unwrap();
+    let first = far.bob.iter().position(Option::is_some).unwrap();
+    assert_eq!(first, 810);
+    // The export as Motive wrote it has no such pair: nothing is joined.
+    let rec = read(
+        &["motive_v1.23_ha5dzs_markers_mm_360Hz.csv"],
+        with("Unlabeled 1036", "Unlabeled 1037"),
+    )
+    .unwrap();
+    assert!(
+        !rec.provenance.notes.iter().any(|n| n.contains("continues")),
+        "{:?}",
+        rec.provenance.notes
+    );
 }
