@@ -1255,22 +1255,20 @@ fn join_renamed_unlabeled(series: &mut Vec<Series>) -> (Vec<String>, Vec<(String
     pairs.sort_by(|x, y| x.0.total_cmp(&y.0));
     // successor[a] = b; each track gets at most one successor and one predecessor.
     let mut successor: Vec<Option<usize>> = vec![None; series.len()];
-    let mut has_predecessor = vec![false; series.len()];
-    // For each joined track: the frames missing before it and its distance from where the
-    // track before it was heading.
+    // For each joined track (each track with a predecessor): the frames missing before it and
+    // its distance from where the track before it was heading.
     let mut joins: Vec<Option<(usize, f64)>> = vec![None; series.len()];
     for (d, a, b) in pairs {
-        if successor[a].is_some() || has_predecessor[b] {
+        if successor[a].is_some() || joins[b].is_some() {
             continue;
         }
         successor[a] = Some(b);
-        has_predecessor[b] = true;
         let ((_, end), (start, _)) = (spans[a].expect("a span"), spans[b].expect("a span"));
         joins[b] = Some((start - end - 1, d));
     }
     // Fill each chain's head from its successors, then drop the successors.
     let (mut notes, mut joined) = (Vec::new(), Vec::new());
-    for head in (0..series.len()).filter(|&k| !has_predecessor[k]) {
+    for head in (0..series.len()).filter(|&k| joins[k].is_none()) {
         let mut next = successor[head];
         let mut parts = Vec::new();
         while let Some(b) = next {
@@ -1297,11 +1295,8 @@ fn join_renamed_unlabeled(series: &mut Vec<Series>) -> (Vec<String>, Vec<(String
             ));
         }
     }
-    let mut k = 0;
-    series.retain(|_| {
-        k += 1;
-        !has_predecessor[k - 1]
-    });
+    let mut heads = joins.iter().map(Option::is_none);
+    series.retain(|_| heads.next().unwrap_or(true));
     (notes, joined)
 }
 
