@@ -3,7 +3,7 @@
 //! All functions are generic over [`Scalar`] so that the same formulas serve the simulator in
 //! `f64` and the fit in dual numbers.
 
-use super::{sign, Mode, Rig, Scalar, State, THETA, THETA_DOT, X, X_DOT};
+use super::{sign, Mode, Rig, RigConstants, Scalar, State, THETA, THETA_DOT, X, X_DOT};
 
 /// The shorthands D, a, b, c, Q and A of PHYSICS.md at one (theta, theta'), with sin and cos
 /// kept because every acceleration needs them again. With tilt and pivot damping they are the
@@ -34,16 +34,16 @@ impl<T: Scalar> Shorthands<T> {
     /// Evaluate the shorthands at angle `theta` and angular velocity `w`.
     #[inline(always)]
     pub fn new(rig: &Rig<T>, theta: T, w: T) -> Self {
-        Self::new_on(rig, theta, w, false, rig.gravity_components())
+        Self::new_on(rig, theta, w, false, &rig.constants())
     }
 
     /// [`Shorthands::new`] for a caller that already knows whether the rig is plain
-    /// ([`Rig::is_plain`]) and has gravity's components ([`Rig::gravity_components`]) at
-    /// hand: `plain = true` skips the per-call tests of tilt and damping, and the tilt's sine
-    /// and cosine are not recomputed, which the simulator's inner loop would otherwise do on
-    /// every right-hand side.
+    /// ([`Rig::is_plain`]) and has the rig's constants ([`Rig::constants`]) at hand:
+    /// `plain = true` skips the per-call tests of tilt and damping, and the tilt's sine and
+    /// cosine and the damping's divisions are not recomputed, which the simulator's inner
+    /// loop would otherwise do on every right-hand side.
     #[inline(always)]
-    pub fn new_on(rig: &Rig<T>, theta: T, w: T, plain: bool, (gx, gy): (T, T)) -> Self {
+    pub fn new_on(rig: &Rig<T>, theta: T, w: T, plain: bool, k: &RigConstants<T>) -> Self {
         let (sin, cos) = theta.sin_cos();
         let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);
         let lw2 = l * w * w;
@@ -65,10 +65,11 @@ impl<T: Scalar> Shorthands<T> {
         }
         // The ideal rig's forms, which keep full precision for a light slider (b never
         // subtracts (m1 + m2) g from m2 g cos^2), plus the drive of tilt and damping.
-        let e = rig.extra_drive(sin, w, gx).unwrap_or_else(T::zero);
+        let (gx, gy) = (k.gx, k.gy);
+        let e = rig.extra_drive(sin, w, k).unwrap_or_else(T::zero);
         let b = -(m1 * gy + m2 * sin * (gy * sin + lw2)) + m2 * cos * e;
         let c = m2 * cos * (gy * sin + lw2) + m2 * sin * e + (m1 + m2) * gx;
-        let q = rig.normal_numerator_sc(sin, cos, w, gy);
+        let q = rig.normal_numerator_sc(sin, cos, w, gy, k);
         Shorthands {
             d,
             a,
@@ -140,24 +141,23 @@ impl<T: Scalar> Rig<T> {
     /// N's sign evaluates it every step).
     #[inline]
     pub fn normal_numerator(&self, y: &[T]) -> T {
-        self.normal_numerator_on(y, false)
+        self.normal_numerator_on(y, false, &self.constants())
     }
 
     /// [`Rig::normal_numerator`] with the plain-rig tests hoisted out (`plain = true` only on
-    /// a [`Rig::is_plain`] rig).
+    /// a [`Rig::is_plain`] rig) and the rig's constants at hand.
     #[inline(always)]
-    pub fn normal_numerator_on(&self, y: &[T], plain: bool) -> T {
+    pub fn normal_numerator_on(&self, y: &[T], plain: bool, k: &RigConstants<T>) -> T {
         let (theta, w) = (y[THETA], y[THETA_DOT]);
         if plain {
-            return self.normal_numerator_sc(theta.sin(), T::zero(), w, self.gravity);
+            return self.normal_numerator_sc(theta.sin(), T::zero(), w, self.gravity, k);
         }
-        let gy = self.gravity_components().1;
         if self.pivot_damping.is_exact_zero() && self.viscous_friction.is_exact_zero() {
             // Only sin(theta) is needed: half the trigonometry.
-            return self.normal_numerator_sc(theta.sin(), T::zero(), w, gy);
+            return self.normal_numerator_sc(theta.sin(), T::zero(), w, k.gy, k);
         }
         let (sin, cos) = theta.sin_cos();
-        let q = self.normal_numerator_sc(sin, cos, w, gy);
+        let q = self.normal_numerator_sc(sin, cos, w, k.gy, k);
         if self.viscous_friction.is_exact_zero() {
             q
         } else {
@@ -167,20 +167,20 @@ impl<T: Scalar> Rig<T> {
 
     /// Q from sin and cos of theta (cos is unused on a rig without pivot damping).
     #[inline(always)]
-    fn normal_numerator_sc(&self, sin: T, cos: T, w: T, gy: T) -> T {
+    fn normal_numerator_sc(&self, sin: T, cos: T, w: T, gy: T, k: &RigConstants<T>) -> T {
         let (m1, m2) = (self.slider_mass, self.bob_mass);
         let q = -m1 * ((m1 + m2) * gy + m2 * self.rod_length * w * w * sin);
         if self.pivot_damping.is_exact_zero() {
             q
         } else {
-            q - (m1 + m2) * self.pivot_damping * w * cos / self.rod_length
+            q - k.damping_normal * w * cos
         }
     }
 
     /// The part of A = g_y cos(theta) - g_x sin(theta) - c_p w / (m2 l) that a level, undamped
     /// rail lacks: -g_x sin(theta) - c_p w / (m2 l); `None` on such a rail.
     #[inline(always)]
-    fn extra_drive(&self, sin: T, w: T, gx: T) -> Option<T> {
+    fn extra_drive(&self, sin: T, w: T, k: &RigConstants<T>) -> Option<T> {
         let tilt = !self.rail_tilt.is_exact_zero();
         let damped = !self.pivot_damping.is_exact_zero();
         if !(tilt || damped) {
@@ -188,10 +188,10 @@ impl<T: Scalar> Rig<T> {
         }
         let mut e = T::zero();
         if tilt {
-            e -= gx * sin;
+            e -= k.gx * sin;
         }
         if damped {
-            e -= self.pivot_damping * w / (self.bob_mass * self.rod_length);
+            e -= k.damping_drive * w;
         }
         Some(e)
     }
@@ -200,25 +200,31 @@ impl<T: Scalar> Rig<T> {
     /// other shorthands (the stick phase's right-hand side needs nothing else).
     #[inline(always)]
     pub fn stick_angular_acceleration(&self, theta: T, w: T) -> T {
-        self.stick_angular_acceleration_on(theta, w, false, self.gravity_components())
+        self.stick_angular_acceleration_on(theta, w, false, &self.constants())
     }
 
-    /// [`Rig::stick_angular_acceleration`] with the plain-rig test and gravity's components
-    /// hoisted out (`plain = true` only on a [`Rig::is_plain`] rig).
+    /// [`Rig::stick_angular_acceleration`] with the plain-rig test hoisted out (`plain =
+    /// true` only on a [`Rig::is_plain`] rig) and the rig's constants at hand.
     #[inline(always)]
     pub fn stick_angular_acceleration_on(
         &self,
         theta: T,
         w: T,
         plain: bool,
-        (gx, gy): (T, T),
+        k: &RigConstants<T>,
     ) -> T {
-        if plain || (self.rail_tilt.is_exact_zero() && self.pivot_damping.is_exact_zero()) {
-            return self.gravity * theta.cos() / self.rod_length;
+        let tilted = !plain && !self.rail_tilt.is_exact_zero();
+        let damped = !plain && !self.pivot_damping.is_exact_zero();
+        // g_y cos(theta) - g_x sin(theta) = g cos(theta + alpha): one cosine, no sine.
+        let mut a = if tilted {
+            self.gravity * (theta + self.rail_tilt).cos()
+        } else {
+            self.gravity * theta.cos()
+        };
+        if damped {
+            a -= k.damping_drive * w;
         }
-        let (sin, cos) = theta.sin_cos();
-        let extra = self.extra_drive(sin, w, gx).unwrap_or_else(T::zero);
-        (gy * cos + extra) / self.rod_length
+        a / self.rod_length
     }
 
     /// Angular acceleration of the pendulum model: theta'' = A / l.
@@ -233,11 +239,12 @@ impl<T: Scalar> Rig<T> {
     /// = (Q - a c_v x') / (same), l theta'' = A + sin(theta) x''.
     #[inline(always)]
     pub fn slide(&self, sh: &Shorthands<T>, s: f64, sigma: f64, x_dot: T) -> SlideDynamics<T> {
-        self.slide_on(sh, (s, sigma), x_dot, false)
+        self.slide_on(sh, (s, sigma), x_dot, false, &self.constants())
     }
 
     /// [`Rig::slide`] with the plain-rig tests hoisted out: `plain = true` (only on a
-    /// [`Rig::is_plain`] rig) skips the friction law and the viscous term.
+    /// [`Rig::is_plain`] rig) skips the friction law and the viscous term; `k` holds the
+    /// rig's constants.
     #[inline(always)]
     pub fn slide_on(
         &self,
@@ -245,11 +252,12 @@ impl<T: Scalar> Rig<T> {
         (s, sigma): (f64, f64),
         x_dot: T,
         plain: bool,
+        k: &RigConstants<T>,
     ) -> SlideDynamics<T> {
         let mu = if plain {
             self.mu_kinetic
         } else {
-            self.friction_mu(x_dot * s)
+            self.friction_mu_on(x_dot * s, k)
         };
         let ms = mu * (s * sigma);
         let delta = sh.d + ms * sh.a;

@@ -35,6 +35,24 @@ pub struct Rig<T> {
     pub stribeck_velocity: T,
 }
 
+/// Factors of the real-rig terms that depend only on the rig, computed once per run
+/// ([`Rig::constants`]) because the right-hand side and the guards would otherwise repeat a
+/// tilt's sine and cosine and three divisions on every evaluation. One place computes them;
+/// the model's functions take them from here.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RigConstants<T> {
+    /// g_x = g sin(alpha): gravity along the rail (downhill +x).
+    pub gx: T,
+    /// g_y = g cos(alpha): gravity across the rail.
+    pub gy: T,
+    /// c_p / (m2 l): the pivot damping's part of A per unit theta'.
+    pub damping_drive: T,
+    /// (m1 + m2) c_p / l: the pivot damping's part of Q per unit theta' cos(theta).
+    pub damping_normal: T,
+    /// 1 / v_s under Stribeck's law (zero under Coulomb's, where v_s is not used).
+    pub inverse_stribeck_velocity: T,
+}
+
 /// How the friction coefficient of a slide depends on the slider's speed v = |x'|.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
@@ -282,13 +300,38 @@ impl<T: Scalar> Rig<T> {
         }
     }
 
+    /// The per-rig factors of the real-rig terms ([`RigConstants`]), for a caller that
+    /// evaluates the model many times on one rig.
+    #[inline]
+    pub fn constants(&self) -> RigConstants<T> {
+        let (gx, gy) = self.gravity_components();
+        let (m1, m2, l) = (self.slider_mass, self.bob_mass, self.rod_length);
+        let c_p = self.pivot_damping;
+        RigConstants {
+            gx,
+            gy,
+            damping_drive: c_p / (m2 * l),
+            damping_normal: (m1 + m2) * c_p / l,
+            inverse_stribeck_velocity: match self.friction_law {
+                FrictionLaw::Coulomb => T::zero(),
+                FrictionLaw::Stribeck => self.stribeck_velocity.recip(),
+            },
+        }
+    }
+
     /// The sliding friction coefficient at speed `speed` = |x'| under the rig's law.
     #[inline(always)]
     pub fn friction_mu(&self, speed: T) -> T {
+        self.friction_mu_on(speed, &self.constants())
+    }
+
+    /// [`Rig::friction_mu`] with the rig's constants at hand (1 / v_s without a division).
+    #[inline(always)]
+    pub fn friction_mu_on(&self, speed: T, k: &RigConstants<T>) -> T {
         match self.friction_law {
             FrictionLaw::Coulomb => self.mu_kinetic,
             FrictionLaw::Stribeck => {
-                let u = speed / self.stribeck_velocity;
+                let u = speed * k.inverse_stribeck_velocity;
                 let u2 = u * u;
                 if u2.re() > STRIBECK_TAIL {
                     // The hump is below e^-50 = 2e-22 of mu_s - mu_k here: mu_k to far

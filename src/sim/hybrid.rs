@@ -7,8 +7,8 @@ use super::{
     Solution, Stats,
 };
 use crate::model::{
-    choose_at_rest, re_state, regions, Direction, Mode, RestChoice, Rig, Scalar, Shorthands, State,
-    THETA, THETA_DOT, X_DOT,
+    choose_at_rest, re_state, regions, Direction, Mode, RestChoice, Rig, RigConstants, Scalar,
+    Shorthands, State, THETA, THETA_DOT, X_DOT,
 };
 use num_dual::Dual64;
 use std::any::TypeId;
@@ -88,8 +88,9 @@ struct ModeSystem<'a, T, const PLAIN: bool = false> {
     sigma: f64,
     /// [`Rig::is_plain`], tested once here rather than in every right-hand side.
     plain: bool,
-    /// Gravity's components along and across the rail (a tilt's sine and cosine once).
-    gravity: (T, T),
+    /// The rig's constants (a tilt's sine and cosine and the damping and Stribeck factors,
+    /// once per mode rather than in every right-hand side).
+    constants: RigConstants<T>,
 }
 
 impl<'a, T: Scalar> ModeSystem<'a, T> {
@@ -99,7 +100,7 @@ impl<'a, T: Scalar> ModeSystem<'a, T> {
             mode,
             sigma,
             plain: rig.is_plain(),
-            gravity: rig.gravity_components(),
+            constants: rig.constants(),
         }
     }
 
@@ -111,7 +112,7 @@ impl<'a, T: Scalar> ModeSystem<'a, T> {
             mode: self.mode,
             sigma: self.sigma,
             plain: true,
-            gravity: self.gravity,
+            constants: self.constants,
         }
     }
 }
@@ -128,7 +129,7 @@ impl<T: Scalar, const N: usize, const PLAIN: bool> OdeSystem<T, N> for ModeSyste
                 dy[2] = T::from(0.0);
                 dy[3] = self
                     .rig
-                    .stick_angular_acceleration_on(y[1], y[3], plain, self.gravity);
+                    .stick_angular_acceleration_on(y[1], y[3], plain, &self.constants);
                 if N > 4 {
                     dy[4] = T::from(0.0);
                     dy[5] = self.rig.damping_power(y[3]);
@@ -136,8 +137,9 @@ impl<T: Scalar, const N: usize, const PLAIN: bool> OdeSystem<T, N> for ModeSyste
             }
             Mode::Slide(dir) => {
                 let s = dir.sign();
-                let sh = Shorthands::new_on(self.rig, y[1], y[3], plain, self.gravity);
-                let dynamics = self.rig.slide_on(&sh, (s, self.sigma), y[2], plain);
+                let k = &self.constants;
+                let sh = Shorthands::new_on(self.rig, y[1], y[3], plain, k);
+                let dynamics = self.rig.slide_on(&sh, (s, self.sigma), y[2], plain, k);
                 dy[2] = dynamics.x_ddot;
                 dy[3] = dynamics.theta_ddot;
                 if N > 4 {
@@ -170,17 +172,15 @@ impl Guard {
     #[inline(always)]
     fn value<S: Scalar>(
         self,
-        rig: &Rig<S>,
+        (rig, k): (&Rig<S>, &RigConstants<S>),
         y: &[S],
         (mode, sigma): (Mode, f64),
         thr: f64,
         plain: bool,
     ) -> S {
         match self {
-            Guard::StickMargin => {
-                Shorthands::new_on(rig, y[THETA], y[THETA_DOT], plain, rig.gravity_components())
-                    .stick_margin(rig.mu_static)
-            }
+            Guard::StickMargin => Shorthands::new_on(rig, y[THETA], y[THETA_DOT], plain, k)
+                .stick_margin(rig.mu_static),
             Guard::Stop => {
                 let s = match mode {
                     Mode::Slide(d) => d.sign(),
@@ -188,20 +188,14 @@ impl Guard {
                 };
                 y[X_DOT] * s
             }
-            Guard::NormalSign => rig.normal_numerator_on(y, plain) * sigma,
+            Guard::NormalSign => rig.normal_numerator_on(y, plain, k) * sigma,
             Guard::Denominator => {
                 let s = match mode {
                     Mode::Slide(d) => d.sign(),
                     Mode::Stick => 1.0,
                 };
-                let sh = Shorthands::new_on(
-                    rig,
-                    y[THETA],
-                    y[THETA_DOT],
-                    plain,
-                    rig.gravity_components(),
-                );
-                let delta = sh.d + sh.a * (rig.friction_mu(y[X_DOT] * s) * (s * sigma));
+                let sh = Shorthands::new_on(rig, y[THETA], y[THETA_DOT], plain, k);
+                let delta = sh.d + sh.a * (rig.friction_mu_on(y[X_DOT] * s, k) * (s * sigma));
                 delta.abs() - (rig.slider_mass + rig.bob_mass) * thr
             }
         }
@@ -228,6 +222,12 @@ struct Ctx<'a, T> {
     thr: f64,
     /// [`Rig::is_plain`] of `rig`: the guards skip the real-rig terms' tests.
     plain: bool,
+    /// [`Rig::constants`] of `rig`, `rig_re` and `rig_dual`, for the guards.
+    k: RigConstants<T>,
+    /// See `k`.
+    k_re: RigConstants<f64>,
+    /// See `k`.
+    k_dual: RigConstants<Dual64>,
 }
 
 impl<T: Scalar> Ctx<'_, T> {
@@ -241,7 +241,13 @@ impl<T: Scalar> Ctx<'_, T> {
         sigma: f64,
     ) -> (f64, f64) {
         let yd: [Dual64; 4] = std::array::from_fn(|i| Dual64::new(y[i], f[i]));
-        let g = guard.value(&self.rig_dual, &yd, (mode, sigma), self.thr, self.plain);
+        let g = guard.value(
+            (&self.rig_dual, &self.k_dual),
+            &yd,
+            (mode, sigma),
+            self.thr,
+            self.plain,
+        );
         (g.re, g.eps)
     }
 
@@ -716,10 +722,14 @@ where
         ));
     }
     let rig_re = rig.re();
+    let rig_dual = rig_re.lift();
     let ctx = Ctx {
         rig,
         rig_re,
-        rig_dual: rig_re.lift(),
+        rig_dual,
+        k: rig.constants(),
+        k_re: rig_re.constants(),
+        k_dual: rig_dual.constants(),
         paradox_possible: rig_re.mu_slide_max() > regions::mu_critical(rig_re.mass_ratio()),
         thr: options.stop_threshold,
         plain: rig.is_plain(),
@@ -794,6 +804,7 @@ where
         let sys = ModeSystem::new(rig, mode, sigma);
         // The plain rig's own copy of the stepper, for f64 runs (see Scalar::SPECIALISE_PLAIN).
         let fast = T::SPECIALISE_PLAIN && sys.plain;
+        let plain_sys = fast.then(|| sys.as_plain());
         let t_segment = t;
         stepper.reset(&sys, &y);
         // A new mode has new dynamics: the step carried over from the old one is only an upper
@@ -847,10 +858,9 @@ where
             if last {
                 h = t_end - t;
             }
-            let (y1, err) = if fast {
-                stepper.try_step(&sys.as_plain(), &y, h, options.rtol, options.atol)
-            } else {
-                stepper.try_step(&sys, &y, h, options.rtol, options.atol)
+            let (y1, err) = match &plain_sys {
+                Some(plain) => stepper.try_step(plain, &y, h, options.rtol, options.atol),
+                None => stepper.try_step(&sys, &y, h, options.rtol, options.atol),
             };
             if !(err.is_finite() && finite(&y1)) || err > 1.0 {
                 out.stats.rejected += 1;
@@ -880,10 +890,9 @@ where
             let mut dense_ready = false;
             let prepare = |stepper: &mut M, ready: &mut bool| {
                 if !*ready {
-                    if fast {
-                        stepper.prepare_dense(&sys.as_plain(), &y, &y1, step);
-                    } else {
-                        stepper.prepare_dense(&sys, &y, &y1, step);
+                    match &plain_sys {
+                        Some(plain) => stepper.prepare_dense(plain, &y, &y1, step),
+                        None => stepper.prepare_dense(&sys, &y, &y1, step),
                     }
                     *ready = true;
                 }
@@ -900,7 +909,7 @@ where
                 new_g[gi] = (g1, gdot1);
                 let g_at = |stepper: &M, th: f64| {
                     st.guard.value(
-                        &ctx.rig_re,
+                        (&ctx.rig_re, &ctx.k_re),
                         &re_vec(&stepper.interpolate(th))[..4],
                         (mode, sigma),
                         ctx.thr,
@@ -1130,7 +1139,7 @@ fn jump_with_sensitivity<T: Scalar, const N: usize>(
     let mut f_old = *y_star;
     OdeSystem::<T, N>::rhs(&old, y_star, &mut f_old);
     let g = guard.value(
-        ctx.rig,
+        (ctx.rig, &ctx.k),
         &y_star[..4],
         (old_mode, old_sigma),
         ctx.thr,
