@@ -139,13 +139,13 @@ fn settings(args: &Args) -> Result<FitSettings, String> {
     })
 }
 
-/// Recordings in a directory: files with a recording extension, sorted. Without `--format`,
-/// a file whose format cannot be told from its start (a `notes.txt`) is not a recording: it
-/// is skipped with a note on stderr and the rest are fitted.
 /// The file endings a directory's recordings may have: the CSV family, MCAP, HDF5 (DeepLabCut,
 /// SLEAP), Tracker projects and Kinovea XML; the content decides the format.
 const RECORDING_EXTENSIONS: [&str; 8] = ["csv", "mcap", "txt", "tsv", "h5", "hdf5", "trk", "xml"];
 
+/// Recordings in a directory: files with a recording extension, sorted. Without `--format`,
+/// a file whose format cannot be told from its start (a `notes.txt`) is not a recording: it
+/// is skipped with a note on stderr and the rest are fitted.
 fn directory_files(dir: &Path, format_given: bool) -> Result<Vec<PathBuf>, Failure> {
     let entries = std::fs::read_dir(dir)
         .map_err(|e| Failure::Input(anyhow!("{}: cannot list: {e}", dir.display())))?;

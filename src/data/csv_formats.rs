@@ -1141,7 +1141,7 @@ fn read_motive(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Pars
         .and_then(|r| r.parse::<f64>().ok())
         .filter(|r| r.is_finite() && *r > 0.0);
     let mut base = None;
-    let series = read_xyz_rows(
+    let mut series = read_xyz_rows(
         &mut rows,
         path,
         &markers,
@@ -1160,7 +1160,6 @@ fn read_motive(input: impl Read, path: &Path, opts: &ReadOptions) -> Result<Pars
         },
         false,
     )?;
-    let mut series = series;
     let (join_notes, joined) = join_renamed_unlabeled(&mut series);
     let time_note = match rate_hz {
         Some(hz) => format!("t = (Frame - first frame) / Export Frame Rate {hz} Hz from the header (the Time column is rounded)"),

@@ -66,10 +66,10 @@ impl<T: Scalar> Shorthands<T> {
         // The ideal rig's forms, which keep full precision for a light slider (b never
         // subtracts (m1 + m2) g from m2 g cos^2), plus the drive of tilt and damping.
         let (gx, gy) = (k.gx, k.gy);
-        let e = rig.extra_drive(sin, w, k).unwrap_or_else(T::zero);
+        let e = rig.extra_drive(sin, w, k);
         let b = -(m1 * gy + m2 * sin * (gy * sin + lw2)) + m2 * cos * e;
         let c = m2 * cos * (gy * sin + lw2) + m2 * sin * e + (m1 + m2) * gx;
-        let q = rig.normal_numerator_sc(sin, cos, w, gy, k);
+        let q = rig.normal_numerator_sc(sin, cos, w, k);
         Shorthands {
             d,
             a,
@@ -150,14 +150,14 @@ impl<T: Scalar> Rig<T> {
     pub fn normal_numerator_on(&self, y: &[T], plain: bool, k: &RigConstants<T>) -> T {
         let (theta, w) = (y[THETA], y[THETA_DOT]);
         if plain {
-            return self.normal_numerator_sc(theta.sin(), T::zero(), w, self.gravity, k);
+            return self.normal_numerator_sc(theta.sin(), T::zero(), w, k);
         }
         if self.pivot_damping.is_exact_zero() && self.viscous_friction.is_exact_zero() {
             // Only sin(theta) is needed: half the trigonometry.
-            return self.normal_numerator_sc(theta.sin(), T::zero(), w, k.gy, k);
+            return self.normal_numerator_sc(theta.sin(), T::zero(), w, k);
         }
         let (sin, cos) = theta.sin_cos();
-        let q = self.normal_numerator_sc(sin, cos, w, k.gy, k);
+        let q = self.normal_numerator_sc(sin, cos, w, k);
         if self.viscous_friction.is_exact_zero() {
             q
         } else {
@@ -167,9 +167,9 @@ impl<T: Scalar> Rig<T> {
 
     /// Q from sin and cos of theta (cos is unused on a rig without pivot damping).
     #[inline(always)]
-    fn normal_numerator_sc(&self, sin: T, cos: T, w: T, gy: T, k: &RigConstants<T>) -> T {
+    fn normal_numerator_sc(&self, sin: T, cos: T, w: T, k: &RigConstants<T>) -> T {
         let (m1, m2) = (self.slider_mass, self.bob_mass);
-        let q = -m1 * ((m1 + m2) * gy + m2 * self.rod_length * w * w * sin);
+        let q = -m1 * ((m1 + m2) * k.gy + m2 * self.rod_length * w * w * sin);
         if self.pivot_damping.is_exact_zero() {
             q
         } else {
@@ -178,22 +178,17 @@ impl<T: Scalar> Rig<T> {
     }
 
     /// The part of A = g_y cos(theta) - g_x sin(theta) - c_p w / (m2 l) that a level, undamped
-    /// rail lacks: -g_x sin(theta) - c_p w / (m2 l); `None` on such a rail.
+    /// rail lacks: -g_x sin(theta) - c_p w / (m2 l).
     #[inline(always)]
-    fn extra_drive(&self, sin: T, w: T, k: &RigConstants<T>) -> Option<T> {
-        let tilt = !self.rail_tilt.is_exact_zero();
-        let damped = !self.pivot_damping.is_exact_zero();
-        if !(tilt || damped) {
-            return None;
-        }
+    fn extra_drive(&self, sin: T, w: T, k: &RigConstants<T>) -> T {
         let mut e = T::zero();
-        if tilt {
+        if !self.rail_tilt.is_exact_zero() {
             e -= k.gx * sin;
         }
-        if damped {
+        if !self.pivot_damping.is_exact_zero() {
             e -= k.damping_drive * w;
         }
-        Some(e)
+        e
     }
 
     /// Angular acceleration of the pendulum model at (theta, w), theta'' = A / l, without the
@@ -239,12 +234,18 @@ impl<T: Scalar> Rig<T> {
     /// = (Q - a c_v x') / (same), l theta'' = A + sin(theta) x''.
     #[inline(always)]
     pub fn slide(&self, sh: &Shorthands<T>, s: f64, sigma: f64, x_dot: T) -> SlideDynamics<T> {
-        self.slide_on(sh, (s, sigma), x_dot, false, &self.constants())
+        self.slide_on(
+            sh,
+            (s, sigma),
+            x_dot,
+            false,
+            self.inverse_stribeck_velocity(),
+        )
     }
 
     /// [`Rig::slide`] with the plain-rig tests hoisted out: `plain = true` (only on a
-    /// [`Rig::is_plain`] rig) skips the friction law and the viscous term; `k` holds the
-    /// rig's constants.
+    /// [`Rig::is_plain`] rig) skips the friction law and the viscous term;
+    /// `inverse_stribeck_velocity` is [`RigConstants::inverse_stribeck_velocity`].
     #[inline(always)]
     pub fn slide_on(
         &self,
@@ -252,12 +253,12 @@ impl<T: Scalar> Rig<T> {
         (s, sigma): (f64, f64),
         x_dot: T,
         plain: bool,
-        k: &RigConstants<T>,
+        inverse_stribeck_velocity: T,
     ) -> SlideDynamics<T> {
         let mu = if plain {
             self.mu_kinetic
         } else {
-            self.friction_mu_on(x_dot * s, k)
+            self.friction_mu_on(x_dot * s, inverse_stribeck_velocity)
         };
         let ms = mu * (s * sigma);
         let delta = sh.d + ms * sh.a;

@@ -312,26 +312,33 @@ impl<T: Scalar> Rig<T> {
             gy,
             damping_drive: c_p / (m2 * l),
             damping_normal: (m1 + m2) * c_p / l,
-            inverse_stribeck_velocity: match self.friction_law {
-                FrictionLaw::Coulomb => T::zero(),
-                FrictionLaw::Stribeck => self.stribeck_velocity.recip(),
-            },
+            inverse_stribeck_velocity: self.inverse_stribeck_velocity(),
+        }
+    }
+
+    /// 1 / v_s under Stribeck's law, zero under Coulomb's (where v_s is not used).
+    #[inline]
+    pub fn inverse_stribeck_velocity(&self) -> T {
+        match self.friction_law {
+            FrictionLaw::Coulomb => T::zero(),
+            FrictionLaw::Stribeck => self.stribeck_velocity.recip(),
         }
     }
 
     /// The sliding friction coefficient at speed `speed` = |x'| under the rig's law.
     #[inline(always)]
     pub fn friction_mu(&self, speed: T) -> T {
-        self.friction_mu_on(speed, &self.constants())
+        self.friction_mu_on(speed, self.inverse_stribeck_velocity())
     }
 
-    /// [`Rig::friction_mu`] with the rig's constants at hand (1 / v_s without a division).
+    /// [`Rig::friction_mu`] with [`Rig::inverse_stribeck_velocity`] at hand (a caller that
+    /// evaluates it many times keeps it in [`RigConstants`]).
     #[inline(always)]
-    pub fn friction_mu_on(&self, speed: T, k: &RigConstants<T>) -> T {
+    pub fn friction_mu_on(&self, speed: T, inverse_stribeck_velocity: T) -> T {
         match self.friction_law {
             FrictionLaw::Coulomb => self.mu_kinetic,
             FrictionLaw::Stribeck => {
-                let u = speed * k.inverse_stribeck_velocity;
+                let u = speed * inverse_stribeck_velocity;
                 let u2 = u * u;
                 if u2.re() > STRIBECK_TAIL {
                     // The hump is below e^-50 = 2e-22 of mu_s - mu_k here: mu_k to far

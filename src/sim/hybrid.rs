@@ -139,7 +139,13 @@ impl<T: Scalar, const N: usize, const PLAIN: bool> OdeSystem<T, N> for ModeSyste
                 let s = dir.sign();
                 let k = &self.constants;
                 let sh = Shorthands::new_on(self.rig, y[1], y[3], plain, k);
-                let dynamics = self.rig.slide_on(&sh, (s, self.sigma), y[2], plain, k);
+                let dynamics = self.rig.slide_on(
+                    &sh,
+                    (s, self.sigma),
+                    y[2],
+                    plain,
+                    k.inverse_stribeck_velocity,
+                );
                 dy[2] = dynamics.x_ddot;
                 dy[3] = dynamics.theta_ddot;
                 if N > 4 {
@@ -195,7 +201,10 @@ impl Guard {
                     Mode::Stick => 1.0,
                 };
                 let sh = Shorthands::new_on(rig, y[THETA], y[THETA_DOT], plain, k);
-                let delta = sh.d + sh.a * (rig.friction_mu_on(y[X_DOT] * s, k) * (s * sigma));
+                let delta = sh.d
+                    + sh.a
+                        * (rig.friction_mu_on(y[X_DOT] * s, k.inverse_stribeck_velocity)
+                            * (s * sigma));
                 delta.abs() - (rig.slider_mass + rig.bob_mass) * thr
             }
         }
