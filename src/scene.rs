@@ -1,7 +1,7 @@
 //! Scenes: a TOML file with a rig, an initial state, a run and what the run should produce.
 //! Key names are fixed (scripts use them); unknown keys are errors so typos never pass.
 
-use crate::model::{FrictionLaw, Rig, RigError, State};
+use crate::model::{FrictionLaw, PendulumKeys, Rig, RigError, State};
 use crate::sim::{Method, Options, Request, RestRule};
 use serde::Deserialize;
 use std::path::{Path, PathBuf};
@@ -13,10 +13,21 @@ use thiserror::Error;
 pub struct RigSpec {
     /// Slider mass (kg).
     pub slider_mass: f64,
-    /// Bob mass (kg).
-    pub bob_mass: f64,
-    /// Rod length (m).
+    /// Bob mass (kg); required unless the pendulum is given as `pendulum_mass`,
+    /// `pendulum_com` and `pendulum_inertia`.
+    pub bob_mass: Option<f64>,
+    /// Rod length (m): the pivot to the bob's centre, where the bob's marker is.
     pub rod_length: f64,
+    /// Mass of the rod (kg), a uniform rod from the pivot to the bob's centre (default 0).
+    pub rod_mass: Option<f64>,
+    /// Radius of the bob (m), a solid sphere (default 0).
+    pub bob_radius: Option<f64>,
+    /// Mass of everything that swings (kg), for a pendulum of any other shape.
+    pub pendulum_mass: Option<f64>,
+    /// Pivot to the pendulum's centre of mass (m).
+    pub pendulum_com: Option<f64>,
+    /// The pendulum's moment of inertia about the pivot (kg m^2).
+    pub pendulum_inertia: Option<f64>,
     /// Gravity (m/s^2).
     pub gravity: f64,
     /// Kinetic friction coefficient (required in scenes; a starting guess in rig files for
@@ -42,9 +53,8 @@ impl RigSpec {
         let mu_kinetic = self
             .mu_kinetic
             .ok_or(RigError::Missing { key: "mu_kinetic" })?;
-        let mut rig = Rig::new(
+        let mut rig = self.pendulum_keys().rig(
             self.slider_mass,
-            self.bob_mass,
             self.rod_length,
             self.gravity,
             mu_kinetic,
@@ -71,6 +81,18 @@ impl RigSpec {
         }
         rig.validate()?;
         Ok(rig)
+    }
+
+    /// The pendulum's keys, in either form.
+    pub fn pendulum_keys(&self) -> PendulumKeys {
+        PendulumKeys {
+            bob_mass: self.bob_mass,
+            rod_mass: self.rod_mass,
+            bob_radius: self.bob_radius,
+            pendulum_mass: self.pendulum_mass,
+            pendulum_com: self.pendulum_com,
+            pendulum_inertia: self.pendulum_inertia,
+        }
     }
 
     /// The validated rig, with `mu_guess` where mu_kinetic is left out (rig files for fitting:
@@ -261,7 +283,29 @@ fn check_rig_range(path: &Path, r: &RigSpec) -> Result<(), SceneError> {
         &range,
         r.slider_mass,
     )?;
-    check(path, within(r.bob_mass), "rig.bob_mass", &range, r.bob_mass)?;
+    for (key, v) in [
+        ("rig.bob_mass", r.bob_mass),
+        ("rig.pendulum_mass", r.pendulum_mass),
+        ("rig.pendulum_com", r.pendulum_com),
+    ] {
+        if let Some(v) = v {
+            check(path, within(v), key, &range, v)?;
+        }
+    }
+    for (key, v) in [
+        ("rig.rod_mass", r.rod_mass),
+        ("rig.bob_radius", r.bob_radius),
+    ] {
+        if let Some(v) = v {
+            check(
+                path,
+                v == 0.0 || within(v),
+                key,
+                &format!("0 or {range}"),
+                v,
+            )?;
+        }
+    }
     check(
         path,
         within(r.rod_length),

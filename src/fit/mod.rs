@@ -178,6 +178,88 @@ pub struct Adequacy {
     pub limited_by_model: Option<String>,
 }
 
+/// A value with its standard error.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct ValueSe {
+    /// The value.
+    pub value: f64,
+    /// Its standard error (delta method from the fitted parameters' covariance).
+    pub stderr: f64,
+}
+
+/// What the fit found of a rigid pendulum the rig file did not give (the `rigid_pendulum`
+/// nuisance), in quantities a lab can check against its pendulum. The data fix L and r'; the
+/// masses follow from the rig file's total mass, taken as slider_mass + bob_mass (a rod's
+/// mass missing there scales m_e, J and d by the same factor).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct PendulumFound {
+    /// Equivalent length L = J / (m_p d) (m): the simple pendulum with the same period.
+    pub equivalent_length: ValueSe,
+    /// Equivalent mass ratio r' = (m1 + m_p - m_e) / m_e.
+    pub mass_ratio: ValueSe,
+    /// Equivalent bob mass m_e = (m_p d)^2 / J (kg), from the total mass.
+    pub equivalent_bob_mass: ValueSe,
+    /// Moment of inertia about the pivot J = m_e L^2 (kg m^2).
+    pub inertia: ValueSe,
+    /// Radius of gyration about the pivot sqrt(J / m_p) (m), m_p taken as the rig's bob_mass.
+    pub radius_of_gyration: ValueSe,
+    /// Pivot to the centre of mass d = m_e L / m_p (m), m_p taken as the rig's bob_mass.
+    pub com: ValueSe,
+    /// The total mass m1 + m_p assumed (kg): the rig file's slider_mass + bob_mass.
+    pub total_mass: f64,
+    /// The swinging mass m_p assumed (kg): the rig file's bob_mass.
+    pub swinging_mass: f64,
+}
+
+impl PendulumFound {
+    /// From L and r' with their covariance `cov` ([[var L, cov], [cov, var r']]), the total
+    /// mass `total` and the swinging mass `m_p`.
+    pub fn new(l: f64, r: f64, cov: [[f64; 2]; 2], total: f64, m_p: f64) -> Self {
+        // Each derived quantity with its gradient in (L, r'): the delta method.
+        let se = |g: [f64; 2]| {
+            (g[0] * g[0] * cov[0][0] + 2.0 * g[0] * g[1] * cov[0][1] + g[1] * g[1] * cov[1][1])
+                .max(0.0)
+                .sqrt()
+        };
+        let m_e = total / (1.0 + r);
+        let dm_e = -total / ((1.0 + r) * (1.0 + r));
+        let j = m_e * l * l;
+        let dj = [2.0 * m_e * l, dm_e * l * l];
+        let k = (j / m_p).sqrt();
+        let dk = [dj[0] / (2.0 * k * m_p), dj[1] / (2.0 * k * m_p)];
+        let d = m_e * l / m_p;
+        let dd = [m_e / m_p, dm_e * l / m_p];
+        PendulumFound {
+            equivalent_length: ValueSe {
+                value: l,
+                stderr: se([1.0, 0.0]),
+            },
+            mass_ratio: ValueSe {
+                value: r,
+                stderr: se([0.0, 1.0]),
+            },
+            equivalent_bob_mass: ValueSe {
+                value: m_e,
+                stderr: se([0.0, dm_e]),
+            },
+            inertia: ValueSe {
+                value: j,
+                stderr: se(dj),
+            },
+            radius_of_gyration: ValueSe {
+                value: k,
+                stderr: se(dk),
+            },
+            com: ValueSe {
+                value: d,
+                stderr: se(dd),
+            },
+            total_mass: total,
+            swinging_mass: m_p,
+        }
+    }
+}
+
 /// The work a fit did.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct Work {
@@ -252,6 +334,11 @@ pub struct FitReport {
     pub stop_reason: String,
     /// Notes on identifiability and warnings on the fit's quality.
     pub warnings: Vec<String>,
+    /// The rigid pendulum the data found, when the `rigid_pendulum` nuisance was chosen.
+    pub pendulum: Option<PendulumFound>,
+    /// Why the fit failed although it ran (mu_kinetic pinned at zero with the friction
+    /// carried by another term): the value is then not a friction coefficient.
+    pub failed: Option<String>,
 }
 
 /// A recording that cannot be fitted.
@@ -464,10 +551,10 @@ fn base_fit(
     let (y0, x_dot_se) = guess::initial_state(obs, window).unwrap_or(([0.0; 4], f64::INFINITY));
     let at_rest = y0[2].abs() < 3.0 * x_dot_se;
     if let Some(l) = guess::rod_length(obs) {
-        if (l - rig.rod_length).abs() > 0.05 * rig.rod_length {
+        if (l - rig.marker_length).abs() > 0.05 * rig.marker_length {
             warnings.push(format!(
                 "the markers are {l:.4} m apart (median) but the rig says rod_length = {:.4} m: check the scale or the rig",
-                rig.rod_length
+                rig.marker_length
             ));
         }
     }
@@ -1050,7 +1137,15 @@ pub fn fit(
     }
     let rho = uncertainty::lag1(&problem, a.r.as_slice());
     let block_ratio = mu_index.map_or(1.0, |i| a.se_block[i] / a.se[i]);
-    let limited = adequacy_sentence(&a, block_ratio, windows_p, mu_index.map(|i| &params[i].1));
+    let mut limited = adequacy_sentence(&a, block_ratio, windows_p, mu_index.map(|i| &params[i].1));
+    let failed = pinned_friction(&problem, mu_index.map(|i| &params[i].1));
+    if let Some(why) = &failed {
+        limited = Some(match limited {
+            Some(s) => format!("{why} {s}"),
+            None => why.clone(),
+        });
+    }
+    let pendulum = pendulum_found(&problem, &params, &correlation, rig_guess);
 
     let mu_kinetic = mu_index.map(|i| params[i].1);
     let mu_static = if let Some(i) = idx(&problem, Param::MuStatic).filter(|_| mu_static_free) {
@@ -1171,6 +1266,10 @@ pub fn fit(
             *q != Param::StribeckVelocity
                 || problem.rig.friction_law == crate::model::FrictionLaw::Stribeck
         })
+        // A point pendulum's equivalent length and mass ratio are its rod and masses.
+        .filter(|q| {
+            !matches!(q, Param::PendulumLength | Param::MassRatio) || problem.rig.pendulum.is_some()
+        })
         .filter(|q| !problem.free.contains(q))
         .map(|q| (q, problem.get(q)))
         .collect();
@@ -1242,7 +1341,51 @@ pub fn fit(
         },
         stop_reason,
         warnings,
+        pendulum,
+        failed,
     })
+}
+
+/// The fit failed although it ran when mu_kinetic sits at its bound 0 (within two standard
+/// errors of it, and below 1e-3) while Stribeck's law or viscous rail friction carries the
+/// friction: no Coulomb coefficient was measured, whatever its interval says. Said as such.
+fn pinned_friction(problem: &TrajectoryProblem, mu: Option<&Estimate>) -> Option<String> {
+    let mu = mu?;
+    let carried = if problem.free.contains(&Param::StribeckVelocity) {
+        "Stribeck's law (mu_static and the Stribeck speed)"
+    } else if problem.free.contains(&Param::ViscousFriction) {
+        "viscous rail friction"
+    } else {
+        return None;
+    };
+    (mu.value < 1e-3 && mu.value < 2.0 * mu.stderr).then(|| {
+        format!(
+            "The fit failed: mu_kinetic is pinned at {:.2e} while {carried} carries the friction, so no friction coefficient was measured; the rig's description is likely wrong (a rigid pendulum: try --with rigid_pendulum, or give rod_mass and bob_radius).",
+            mu.value
+        )
+    })
+}
+
+/// What the `rigid_pendulum` nuisance found, when the chosen model frees it.
+fn pendulum_found(
+    problem: &TrajectoryProblem,
+    params: &[(Param, Estimate)],
+    correlation: &DMatrix<f64>,
+    rig_guess: &Rig<f64>,
+) -> Option<PendulumFound> {
+    let i = idx(problem, Param::PendulumLength)?;
+    let j = idx(problem, Param::MassRatio)?;
+    let (l, r) = (params[i].1, params[j].1);
+    let c = correlation[(i, j)] * l.stderr * r.stderr;
+    let cov = [[l.stderr * l.stderr, c], [c, r.stderr * r.stderr]];
+    let (total, m_p) = match rig_guess.pendulum {
+        Some(p) => (p.slider_mass + p.mass, p.mass),
+        None => (
+            rig_guess.slider_mass + rig_guess.bob_mass,
+            rig_guess.bob_mass,
+        ),
+    };
+    Some(PendulumFound::new(l.value, r.value, cov, total, m_p))
 }
 
 /// The one plain sentence when the model limits the result: chi-square fails against the

@@ -50,8 +50,15 @@ pub enum Param {
     XDot,
     /// Initial angular velocity (rad/s).
     ThetaDot,
-    /// Rod length (m).
+    /// Rod length (m): the pivot to the bob's marker; a rigid pendulum's equivalent length
+    /// moves with it in proportion (unless [`Param::PendulumLength`] is free).
     RodLength,
+    /// Equivalent length L of a rigid pendulum (m): the dynamics' rod, the marker staying at
+    /// the rod length (PHYSICS.md, "Rigid pendulum").
+    PendulumLength,
+    /// Equivalent mass ratio r' = (m1 + m_p - m_e) / m_e of a rigid pendulum, with the total
+    /// mass held (the motion depends on the masses through this ratio alone).
+    MassRatio,
     /// Rail tilt alpha (rad, +x downhill).
     RailTilt,
     /// Viscous torque coefficient at the pivot (N m s).
@@ -76,7 +83,7 @@ pub enum Param {
 
 impl Param {
     /// Every parameter, in report order.
-    pub const ALL: [Param; 17] = [
+    pub const ALL: [Param; 19] = [
         Param::MuKinetic,
         Param::MuStatic,
         Param::X,
@@ -84,6 +91,8 @@ impl Param {
         Param::XDot,
         Param::ThetaDot,
         Param::RodLength,
+        Param::PendulumLength,
+        Param::MassRatio,
         Param::RailTilt,
         Param::PivotDamping,
         Param::ViscousFriction,
@@ -120,6 +129,8 @@ impl Param {
             Param::XDot => "x_dot",
             Param::ThetaDot => "theta_dot",
             Param::RodLength => "rod_length",
+            Param::PendulumLength => "pendulum_length",
+            Param::MassRatio => "equivalent_mass_ratio",
             Param::RailTilt => "rail_tilt",
             Param::PivotDamping => "pivot_damping",
             Param::ViscousFriction => "viscous_friction",
@@ -136,9 +147,10 @@ impl Param {
     /// Unit of the parameter's value, for reports.
     pub fn unit(self) -> &'static str {
         match self {
-            Param::MuKinetic | Param::MuStatic | Param::ScaleError => "",
+            Param::MuKinetic | Param::MuStatic | Param::ScaleError | Param::MassRatio => "",
             Param::X
             | Param::RodLength
+            | Param::PendulumLength
             | Param::BobAlong
             | Param::BobAcross
             | Param::SliderDx
@@ -401,7 +413,9 @@ impl TrajectoryProblem {
             Param::Theta => self.initial[1],
             Param::XDot => self.initial[2],
             Param::ThetaDot => self.initial[3],
-            Param::RodLength => self.rig.rod_length,
+            Param::RodLength => self.rig.marker_length,
+            Param::PendulumLength => self.rig.rod_length,
+            Param::MassRatio => self.rig.slider_mass / self.rig.bob_mass,
             Param::RailTilt => self.rig.rail_tilt,
             Param::PivotDamping => self.rig.pivot_damping,
             Param::ViscousFriction => self.rig.viscous_friction,
@@ -428,6 +442,10 @@ impl TrajectoryProblem {
         let mut rig: Rig<T> = self.rig.lift();
         let mut y0: State<T> = self.initial.map(T::from);
         let mut cam: Camera<T> = self.camera.lift();
+        let pendulum_free = self.free.contains(&Param::PendulumLength);
+        // A rod length moves a rigid pendulum's equivalent length with it, in proportion.
+        let length_ratio = self.rig.rod_length / self.rig.marker_length;
+        let total_mass = T::from(self.rig.slider_mass + self.rig.bob_mass);
         for (&param, &v) in self.free.iter().zip(p) {
             match param {
                 Param::MuKinetic => rig.mu_kinetic = v,
@@ -436,7 +454,21 @@ impl TrajectoryProblem {
                 Param::Theta => y0[1] = v,
                 Param::XDot => y0[2] = v,
                 Param::ThetaDot => y0[3] = v,
-                Param::RodLength => rig.rod_length = v,
+                Param::RodLength => {
+                    rig.marker_length = v;
+                    if !pendulum_free {
+                        rig.rod_length = if length_ratio == 1.0 {
+                            v
+                        } else {
+                            v * length_ratio
+                        };
+                    }
+                }
+                Param::PendulumLength => rig.rod_length = v,
+                Param::MassRatio => {
+                    rig.bob_mass = total_mass / (v + 1.0);
+                    rig.slider_mass = total_mass - rig.bob_mass;
+                }
                 Param::RailTilt => rig.rail_tilt = v,
                 Param::PivotDamping => rig.pivot_damping = v,
                 Param::ViscousFriction => rig.viscous_friction = v,
@@ -720,7 +752,7 @@ impl TrajectoryProblem {
                     let (a, b) = at_p.rig.accelerations(s.mode, &y);
                     (DualSVec64::from(a), DualSVec64::from(b))
                 });
-                observed_markers_with(rig_m.rod_length, &cam_m, &y.map(DualSVec64::from), acc)
+                observed_markers_with(rig_m.marker_length, &cam_m, &y.map(DualSVec64::from), acc)
             },
             |row, _, marker, coord, d, cam| {
                 let scale = self.row_weight(row) / self.sigma[marker];
@@ -782,6 +814,11 @@ impl LeastSquares for TrajectoryProblem {
             }
         };
         clamp(p, Param::RodLength, 1e-6, f64::INFINITY);
+        // A rigid pendulum's L lies between half and twice the bob's distance for any rod
+        // and bob a lab builds (a bare uniform rod has L = 2l/3).
+        let l = self.rig.marker_length;
+        clamp(p, Param::PendulumLength, 0.5 * l, 2.0 * l);
+        clamp(p, Param::MassRatio, 1e-4, 1e4);
         clamp(p, Param::PivotDamping, 0.0, f64::INFINITY);
         clamp(p, Param::ViscousFriction, 0.0, f64::INFINITY);
         clamp(p, Param::StribeckVelocity, 1e-4, 10.0);

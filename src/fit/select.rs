@@ -31,11 +31,15 @@ pub enum Nuisance {
     SliderOffset,
     /// A time lag between the two markers' tracks.
     Lag,
+    /// A rigid pendulum (a rod with mass, a bob with size) whose build the rig file does not
+    /// give: its equivalent length and mass ratio free (PHYSICS.md, "Rigid pendulum").
+    RigidPendulum,
 }
 
 impl Nuisance {
     /// Every candidate, in the order ties are broken.
-    pub const ALL: [Nuisance; 9] = [
+    pub const ALL: [Nuisance; 10] = [
+        Nuisance::RigidPendulum,
         Nuisance::StaticFriction,
         Nuisance::Stribeck,
         Nuisance::RailTilt,
@@ -59,6 +63,7 @@ impl Nuisance {
             Nuisance::BobOffset => "bob_marker_offset",
             Nuisance::SliderOffset => "slider_marker_offset",
             Nuisance::Lag => "marker_lag",
+            Nuisance::RigidPendulum => "rigid_pendulum",
         }
     }
 
@@ -74,6 +79,7 @@ impl Nuisance {
             Nuisance::BobOffset => &[Param::BobAlong, Param::BobAcross],
             Nuisance::SliderOffset => &[Param::SliderDx, Param::SliderDy],
             Nuisance::Lag => &[Param::Lag],
+            Nuisance::RigidPendulum => &[Param::PendulumLength, Param::MassRatio],
         }
     }
 
@@ -291,7 +297,9 @@ fn restarted(m: &TrajectoryProblem, (y0, mu0): (State<f64>, f64)) -> TrajectoryP
     }
     f.rig.mu_kinetic = mu0;
     if f.free.contains(&Param::MuStatic) {
-        f.rig.mu_static = f.rig.mu_static.max(mu0 * 1.02);
+        // Just above the tie: a mu_static chosen while the model misfitted is part of the
+        // compromise this start leaves (the current start keeps it).
+        f.rig.mu_static = mu0 * 1.02;
     } else if f.tie_static {
         f.rig.mu_static = mu0;
     }
@@ -367,6 +375,8 @@ pub fn forward(
             .filter(|n| !chosen.contains(n) && !chosen.iter().any(|c| c.conflicts(*n)))
             .filter(|n| cur_problem.free.len() + n.new_params(cur_problem) <= MAX_FREE)
             .filter(|n| n.screened() || opts.friction_candidates)
+            // A pendulum the rig file gives is used as given (`--with` may still free it).
+            .filter(|n| *n != Nuisance::RigidPendulum || cur_problem.rig.pendulum.is_none())
             .collect();
         if open.is_empty() {
             break;

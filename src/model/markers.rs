@@ -6,11 +6,12 @@ use super::{Mode, Rig, Scalar, State, THETA, THETA_DOT, X, X_DOT};
 
 /// Slider and bob positions `[slider_x, slider_y, bob_x, bob_y]` in the rail frame with y up:
 /// the slider at (x, 0), the bob at (x + l cos(theta), -l sin(theta)) (the model's y-down
-/// angle flipped once, here).
+/// angle flipped once, here), with l the bob's centre ([`Rig::marker_length`]; a rigid
+/// pendulum's dynamics use its equivalent length instead).
 #[inline]
 pub fn markers<T: Scalar>(rig: &Rig<T>, y: &State<T>) -> [T; 4] {
     let (sin, cos) = y[THETA].sin_cos();
-    let l = rig.rod_length;
+    let l = rig.marker_length;
     [y[X], T::from(0.0), y[X] + l * cos, -(l * sin)]
 }
 
@@ -73,21 +74,21 @@ pub fn observed_markers<T: Scalar>(
 ) -> [T; 4] {
     // A lag that is zero but being differentiated must still take the Taylor path.
     let accelerations = (!camera.lag.is_exact_zero()).then(|| rig.accelerations(mode, y));
-    observed_markers_with(rig.rod_length, camera, y, accelerations)
+    observed_markers_with(rig.marker_length, camera, y, accelerations)
 }
 
-/// [`observed_markers`] with the accelerations (x'', theta'') at `y` given, as the lag needs
+/// [`observed_markers`] with the bob's centre at `marker_length` from the pivot and the accelerations (x'', theta'') at `y` given, as the lag needs
 /// them (`None`: no lag): a caller differentiating by the camera's parameters alone computes
 /// them once in f64.
 pub fn observed_markers_with<T: Scalar>(
-    rod_length: T,
+    marker_length: T,
     camera: &Camera<T>,
     y: &State<T>,
     accelerations: Option<(T, T)>,
 ) -> [T; 4] {
     let k = T::from(1.0) + camera.scale_error;
     let (sin, cos) = y[THETA].sin_cos();
-    let lb = rod_length + camera.bob_along;
+    let lb = marker_length + camera.bob_along;
     let e = camera.bob_across;
     // Bob relative to the slider, y down, and its first two angular derivatives' factors.
     let along = lb * cos - e * sin; // d(bx)/d(theta) = -across_y

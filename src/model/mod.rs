@@ -13,7 +13,7 @@ mod transition;
 pub use forces::{energy, momentum, Shorthands, SlideBranches, SlideDynamics};
 pub use markers::{markers, observed_markers, observed_markers_with, Camera};
 pub use mode::{Direction, Mode};
-pub use rig::{FrictionLaw, Rig, RigConstants, RigError};
+pub use rig::{FrictionLaw, PendulumKeys, Rig, RigConstants, RigError, RigidPendulum};
 pub use transition::{choose_at_rest, RestChoice};
 
 use num_dual::DualNum;

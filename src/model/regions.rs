@@ -429,7 +429,8 @@ pub fn q_zero_curve(rig: &Rig<f64>, window: &PlaneWindow) -> Vec<Curve> {
 /// The numbers that say whether and where a rig meets the Painleve paradox.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RegionSummary {
-    /// Mass ratio r = m1 / m2.
+    /// Mass ratio r = m1 / m2 of the point rig the dynamics use: for a rigid pendulum the
+    /// equivalent r' = (m1 + m_p - m_e) / m_e (PHYSICS.md, "Rigid pendulum").
     pub mass_ratio: f64,
     /// The rig's kinetic friction (the sliding model's mu).
     pub mu_kinetic: f64,
@@ -443,6 +444,10 @@ pub struct RegionSummary {
     pub paradox_band_deg: Vec<[f64; 2]>,
     /// The largest m1 / m2 at which the rig's mu_k exceeds mu*.
     pub max_mass_ratio_for_paradox: f64,
+    /// For a rigid pendulum whose mu* differs from the point rig's with the same masses: that
+    /// point rig's mu* (r = m1 / m_p, everything that swings at the bob), for comparison.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub point_rig_mu_critical: Option<f64>,
 }
 
 impl RegionSummary {
@@ -457,6 +462,10 @@ impl RegionSummary {
             theta_critical_deg: theta_critical(r).to_degrees(),
             paradox_band_deg: paradox_band_deg(rig),
             max_mass_ratio_for_paradox: max_mass_ratio_for_paradox(rig.mu_slide_max()),
+            point_rig_mu_critical: rig
+                .pendulum
+                .map(|p| mu_critical(p.point_mass_ratio()))
+                .filter(|&m| m != mu_critical(r)),
         }
     }
 

@@ -1,4 +1,5 @@
-//! Rig parameters (masses, rod, gravity, friction) and their validation.
+//! Rig parameters (masses, rod, gravity, friction) and their validation, and the rigid
+//! pendulum's equivalent point rig (PHYSICS.md, "Rigid pendulum"), computed here once.
 
 use super::Scalar;
 use thiserror::Error;
@@ -10,12 +11,20 @@ const STRIBECK_TAIL: f64 = 50.0;
 /// respect to mu or the rod length through every formula.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Rig<T> {
-    /// Slider mass m1 (kg).
+    /// Slider mass of the point rig the dynamics use (kg): m1 for a point pendulum, the
+    /// equivalent m1 + m_p - m_e for a rigid one ([`Rig::with_rigid_pendulum`]).
     pub slider_mass: T,
-    /// Bob mass m2 (kg).
+    /// Bob mass of the point rig the dynamics use (kg): m2, or the equivalent m_e.
     pub bob_mass: T,
-    /// Rod length l (m).
+    /// Rod length of the point rig the dynamics use (m): l, or the equivalent length L.
     pub rod_length: T,
+    /// Pivot to the bob's centre, where the bob's marker sits (m): the rig file's
+    /// `rod_length`. The observation model uses it, the dynamics never do; it equals
+    /// `rod_length` for a point pendulum.
+    pub marker_length: T,
+    /// The rigid pendulum as the rig file gives it (`None`: a point bob on a weightless rod).
+    /// For reports and checks only: the dynamics read the equivalent rig above.
+    pub pendulum: Option<RigidPendulum>,
     /// Gravity g (m/s^2).
     pub gravity: T,
     /// Kinetic friction coefficient mu_k (used while sliding).
@@ -64,6 +73,193 @@ pub enum FrictionLaw {
     Stribeck,
 }
 
+/// The swinging part of a rig as one rigid body hinged at the slider (PHYSICS.md, "Rigid
+/// pendulum"): what a rig file describes when the rod has mass or the bob has size. Only
+/// [`Rig::with_rigid_pendulum`] turns it into dynamics, through the equivalent point rig.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RigidPendulum {
+    /// Slider mass m1 as weighed (kg).
+    pub slider_mass: f64,
+    /// Mass m_p of everything that swings (kg).
+    pub mass: f64,
+    /// Pivot to the pendulum's centre of mass, d (m).
+    pub com: f64,
+    /// Moment of inertia about the pivot, J (kg m^2).
+    pub inertia: f64,
+    /// Pivot to the bob's centre, l, where the bob's marker sits (m).
+    pub marker_length: f64,
+}
+
+impl RigidPendulum {
+    /// A uniform rod of mass `rod_mass` from the pivot to the bob's centre (length `l`) and a
+    /// solid sphere bob of mass `bob_mass` and radius `radius` centred at `l`:
+    /// m_p = m2 + m_r, m_p d = m2 l + m_r l / 2, J = m2 (l^2 + 2 R^2 / 5) + m_r l^2 / 3.
+    pub fn rod_and_sphere(
+        slider_mass: f64,
+        bob_mass: f64,
+        rod_mass: f64,
+        radius: f64,
+        l: f64,
+    ) -> Self {
+        let mass = bob_mass + rod_mass;
+        RigidPendulum {
+            slider_mass,
+            mass,
+            com: (bob_mass * l + 0.5 * rod_mass * l) / mass,
+            inertia: bob_mass * (l * l + 0.4 * radius * radius) + rod_mass * l * l / 3.0,
+            marker_length: l,
+        }
+    }
+
+    /// The equivalent length L = J / (m_p d): the simple pendulum with the same period.
+    pub fn equivalent_length(&self) -> f64 {
+        self.inertia / (self.mass * self.com)
+    }
+
+    /// The equivalent bob mass m_e = (m_p d)^2 / J (at most m_p).
+    pub fn equivalent_bob_mass(&self) -> f64 {
+        let mpd = self.mass * self.com;
+        mpd * mpd / self.inertia
+    }
+
+    /// The equivalent slider mass m1 + m_p - m_e.
+    pub fn equivalent_slider_mass(&self) -> f64 {
+        self.slider_mass + self.mass - self.equivalent_bob_mass()
+    }
+
+    /// Radius of gyration about the pivot, sqrt(J / m_p) (m).
+    pub fn radius_of_gyration(&self) -> f64 {
+        (self.inertia / self.mass).sqrt()
+    }
+
+    /// The mass ratio m1 / m_p of the point rig with the same masses (everything that swings
+    /// at the bob), whose mu* a rigid rig is compared with.
+    pub fn point_mass_ratio(&self) -> f64 {
+        self.slider_mass / self.mass
+    }
+}
+
+/// The pendulum keys of a rig file (scene, rig and plan files alike), in either form: the
+/// rod-and-sphere form (`bob_mass`, optional `rod_mass` and `bob_radius`) or the general
+/// rigid body (`pendulum_mass`, `pendulum_com`, `pendulum_inertia`). [`PendulumKeys::rig`]
+/// checks them and builds the rig, so every file reads them by the same rules.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct PendulumKeys {
+    /// `bob_mass` (kg).
+    pub bob_mass: Option<f64>,
+    /// `rod_mass` (kg, a uniform rod from the pivot to the bob's centre; default 0).
+    pub rod_mass: Option<f64>,
+    /// `bob_radius` (m, a solid sphere; default 0).
+    pub bob_radius: Option<f64>,
+    /// `pendulum_mass` (kg, everything that swings).
+    pub pendulum_mass: Option<f64>,
+    /// `pendulum_com` (m, pivot to the centre of mass).
+    pub pendulum_com: Option<f64>,
+    /// `pendulum_inertia` (kg m^2, about the pivot).
+    pub pendulum_inertia: Option<f64>,
+}
+
+impl PendulumKeys {
+    /// The validated rig with slider mass `m1`, pivot-to-bob-centre distance `l`, gravity
+    /// `g` and friction `mu_kinetic`, `mu_static`; a point pendulum (no rod mass, no radius)
+    /// gives exactly [`Rig::new`]'s rig.
+    pub fn rig(
+        &self,
+        m1: f64,
+        l: f64,
+        g: f64,
+        mu_kinetic: f64,
+        mu_static: Option<f64>,
+    ) -> Result<Rig<f64>, RigError> {
+        let point = [
+            ("bob_mass", self.bob_mass),
+            ("rod_mass", self.rod_mass),
+            ("bob_radius", self.bob_radius),
+        ];
+        let body = [
+            ("pendulum_mass", self.pendulum_mass),
+            ("pendulum_com", self.pendulum_com),
+            ("pendulum_inertia", self.pendulum_inertia),
+        ];
+        let given =
+            |keys: &[(&'static str, Option<f64>)]| keys.iter().find(|k| k.1.is_some()).map(|k| k.0);
+        if let (Some(point), Some(body)) = (given(&point), given(&body)) {
+            return Err(RigError::MixedPendulum { point, body });
+        }
+        let bad = |key, expected: &str, value| RigError::Pendulum {
+            key,
+            expected: expected.to_owned(),
+            value,
+        };
+        let pendulum = if given(&body).is_some() {
+            let need = |key: &'static str, v: Option<f64>| -> Result<f64, RigError> {
+                let v = v.ok_or(RigError::Missing { key })?;
+                if v.is_finite() && v > 0.0 {
+                    Ok(v)
+                } else {
+                    Err(RigError::NotPositive { key, value: v })
+                }
+            };
+            let mass = need("pendulum_mass", self.pendulum_mass)?;
+            let com = need("pendulum_com", self.pendulum_com)?;
+            let inertia = need("pendulum_inertia", self.pendulum_inertia)?;
+            if l.is_finite() && l > 0.0 && com > 2.0 * l {
+                return Err(bad(
+                    "pendulum_com",
+                    &format!("at most twice rod_length ({})", 2.0 * l),
+                    com,
+                ));
+            }
+            let least = mass * com * com;
+            // No body has J below m d^2 (all its mass at the centre of mass); a last-digit
+            // rounding of a point pendulum's J = m l^2 is allowed.
+            if inertia < least * (1.0 - 1e-12) {
+                return Err(bad(
+                    "pendulum_inertia",
+                    &format!("at least pendulum_mass * pendulum_com^2 = {least}"),
+                    inertia,
+                ));
+            }
+            Some(RigidPendulum {
+                slider_mass: m1,
+                mass,
+                com,
+                inertia,
+                marker_length: l,
+            })
+        } else {
+            let m2 = self.bob_mass.ok_or(RigError::Missing { key: "bob_mass" })?;
+            for (key, v) in [("rod_mass", self.rod_mass), ("bob_radius", self.bob_radius)] {
+                if let Some(v) = v {
+                    if !(v.is_finite() && v >= 0.0) {
+                        return Err(RigError::Negative { key, value: v });
+                    }
+                }
+            }
+            let (m_r, radius) = (self.rod_mass.unwrap_or(0.0), self.bob_radius.unwrap_or(0.0));
+            if l.is_finite() && radius >= l {
+                return Err(bad(
+                    "bob_radius",
+                    &format!("smaller than rod_length ({l})"),
+                    radius,
+                ));
+            }
+            if m_r == 0.0 && radius == 0.0 {
+                // The point rig, bit for bit: nothing is computed from it. Zeros written
+                // out still say the pendulum is known (the fit then does not look for one).
+                let mut rig = Rig::new(m1, m2, l, g, mu_kinetic, mu_static)?;
+                if self.rod_mass.is_some() || self.bob_radius.is_some() {
+                    rig.pendulum = Some(RigidPendulum::rod_and_sphere(m1, m2, 0.0, 0.0, l));
+                }
+                return Ok(rig);
+            }
+            Some(RigidPendulum::rod_and_sphere(m1, m2, m_r, radius, l))
+        };
+        let p = pendulum.expect("both forms give a pendulum here");
+        Ok(Rig::new(m1, p.mass, l, g, mu_kinetic, mu_static)?.with_rigid_pendulum(p))
+    }
+}
+
 /// A rig parameter outside its physical range, named by its scene key.
 #[derive(Debug, Error, PartialEq)]
 pub enum RigError {
@@ -98,6 +294,24 @@ pub enum RigError {
     /// A Stribeck speed given for Coulomb's law, where it would be silently ignored.
     #[error("rig.stribeck_velocity is only used with rig.friction_law = \"stribeck\"")]
     StribeckWithoutLaw,
+    /// Keys of the two descriptions of the pendulum mixed in one rig.
+    #[error("rig.{point} and rig.{body} describe the pendulum in two ways: give bob_mass (with rod_mass and bob_radius if they are not zero) or pendulum_mass, pendulum_com and pendulum_inertia")]
+    MixedPendulum {
+        /// A key of the rod-and-sphere form.
+        point: &'static str,
+        /// A key of the general rigid-body form.
+        body: &'static str,
+    },
+    /// A pendulum value no body can have, with what it must be.
+    #[error("rig.{key} must be {expected}, got {value}")]
+    Pendulum {
+        /// Scene key of the parameter.
+        key: &'static str,
+        /// What the value must be.
+        expected: String,
+        /// The offending value.
+        value: f64,
+    },
     /// Static friction below kinetic friction.
     #[error("rig.mu_static ({mu_static}) must be >= rig.mu_kinetic ({mu_kinetic})")]
     StaticBelowKinetic {
@@ -122,6 +336,7 @@ impl Rig<f64> {
             slider_mass,
             bob_mass,
             rod_length,
+            marker_length: rod_length,
             gravity,
             mu_kinetic,
             mu_static: mu_static.unwrap_or(mu_kinetic),
@@ -137,6 +352,8 @@ impl Rig<f64> {
             slider_mass: 0.1,
             bob_mass: 0.1,
             rod_length: 0.3,
+            marker_length: 0.3,
+            pendulum: None,
             gravity: 9.81,
             mu_kinetic: mu,
             mu_static: mu,
@@ -181,6 +398,21 @@ impl Rig<f64> {
         }
     }
 
+    /// The same rig with the rigid pendulum `p` (PHYSICS.md, "Rigid pendulum"): the dynamics
+    /// take the equivalent point rig (slider m1 + m_p - m_e, bob m_e, rod L), computed here and
+    /// nowhere else, and the bob's marker stays at the bob's centre, `p.marker_length`. Its
+    /// energy is the rigid body's (m_e L = m_p d, m_e L^2 = J).
+    pub fn with_rigid_pendulum(self, p: RigidPendulum) -> Self {
+        Rig {
+            slider_mass: p.equivalent_slider_mass(),
+            bob_mass: p.equivalent_bob_mass(),
+            rod_length: p.equivalent_length(),
+            marker_length: p.marker_length,
+            pendulum: Some(p),
+            ..self
+        }
+    }
+
     /// Check every parameter, naming the first bad one by its scene key.
     pub fn validate(&self) -> Result<(), RigError> {
         for (key, value) in [
@@ -188,6 +420,7 @@ impl Rig<f64> {
             ("bob_mass", self.bob_mass),
             ("rod_length", self.rod_length),
             ("gravity", self.gravity),
+            ("rod_length", self.marker_length),
         ] {
             if !(value.is_finite() && value > 0.0) {
                 return Err(RigError::NotPositive { key, value });
@@ -237,6 +470,8 @@ impl Rig<f64> {
             slider_mass: T::from(self.slider_mass),
             bob_mass: T::from(self.bob_mass),
             rod_length: T::from(self.rod_length),
+            marker_length: T::from(self.marker_length),
+            pendulum: self.pendulum,
             gravity: T::from(self.gravity),
             mu_kinetic: T::from(self.mu_kinetic),
             mu_static: T::from(self.mu_static),
@@ -256,6 +491,8 @@ impl<T: Scalar> Rig<T> {
             slider_mass: self.slider_mass.re(),
             bob_mass: self.bob_mass.re(),
             rod_length: self.rod_length.re(),
+            marker_length: self.marker_length.re(),
+            pendulum: self.pendulum,
             gravity: self.gravity.re(),
             mu_kinetic: self.mu_kinetic.re(),
             mu_static: self.mu_static.re(),

@@ -159,7 +159,7 @@ impl Criteria {
             min_frames: spec.goal.min_frames,
             rail: spec.release.rail,
             field_of_view: cam.field_of_view,
-            rod_length: spec.rig.rod_length,
+            rod_length: spec.rig.marker_length,
         }
     }
 

@@ -2,7 +2,7 @@
 //! release mechanism can do, and the transitions to film. Unknown keys are errors, and every
 //! value is checked with the file and the key named, like scenes.
 
-use crate::model::Rig;
+use crate::model::{PendulumKeys, Rig};
 use crate::scene::SceneError;
 use serde::Deserialize;
 use std::fmt;
@@ -15,10 +15,21 @@ use std::path::Path;
 pub struct PlanRigSpec {
     /// Slider mass m1 (kg).
     pub slider_mass: f64,
-    /// Bob mass m2 (kg).
-    pub bob_mass: f64,
-    /// Rod length l (m).
+    /// Bob mass m2 (kg); required unless the pendulum is given as `pendulum_mass`,
+    /// `pendulum_com` and `pendulum_inertia`.
+    pub bob_mass: Option<f64>,
+    /// Rod length l (m): the pivot to the bob's centre.
     pub rod_length: f64,
+    /// Rod mass (kg, uniform rod; default 0).
+    pub rod_mass: Option<f64>,
+    /// Bob radius (m, solid sphere; default 0).
+    pub bob_radius: Option<f64>,
+    /// Mass of everything that swings (kg), for a pendulum of any other shape.
+    pub pendulum_mass: Option<f64>,
+    /// Pivot to the pendulum's centre of mass (m).
+    pub pendulum_com: Option<f64>,
+    /// Moment of inertia about the pivot (kg m^2).
+    pub pendulum_inertia: Option<f64>,
     /// Gravity (m/s^2).
     pub gravity: f64,
 }
@@ -475,18 +486,26 @@ impl PlanFile {
             None => None,
         };
         let r = &self.rig;
-        let rig = Rig::new(
-            r.slider_mass,
-            r.bob_mass,
-            r.rod_length,
-            r.gravity,
-            f.mu_kinetic,
-            f.mu_static,
-        )
-        .map_err(|e| SceneError::Invalid {
-            path: path.to_owned(),
-            message: e.to_string().replace("rig.mu_", "friction.mu_"),
-        })?;
+        let keys = PendulumKeys {
+            bob_mass: r.bob_mass,
+            rod_mass: r.rod_mass,
+            bob_radius: r.bob_radius,
+            pendulum_mass: r.pendulum_mass,
+            pendulum_com: r.pendulum_com,
+            pendulum_inertia: r.pendulum_inertia,
+        };
+        let rig: Rig<f64> = keys
+            .rig(
+                r.slider_mass,
+                r.rod_length,
+                r.gravity,
+                f.mu_kinetic,
+                f.mu_static,
+            )
+            .map_err(|e| SceneError::Invalid {
+                path: path.to_owned(),
+                message: e.to_string().replace("rig.mu_", "friction.mu_"),
+            })?;
         let c = &self.camera;
         let camera = Camera {
             frame_rate: positive(path, "camera.frame_rate", c.frame_rate)?,

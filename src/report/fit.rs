@@ -128,11 +128,39 @@ pub fn fit_json(rep: &FitReport) -> Value {
         "events": rep.events.iter().map(|e| json!({"t": e.t, "from": e.from.name(), "to": e.to.name(), "kind": e.kind})).collect::<Vec<_>>(),
         "starts": rep.starts,
         "warnings": rep.warnings,
+        "failed": rep.failed,
+        "pendulum": rep.pendulum,
     });
     if let (Value::Object(m), Value::Object(extra)) = (&mut v, more) {
         m.extend(extra);
     }
     v
+}
+
+/// The rigid pendulum the data found, in a lab's words.
+fn pendulum_text(s: &mut String, p: &crate::fit::PendulumFound) {
+    let _ = writeln!(
+        s,
+        "[[Rigid pendulum]] found by the data (the rig file gives point masses)"
+    );
+    let row = |s: &mut String, name: &str, v: &crate::fit::ValueSe, unit: &str| {
+        let _ = writeln!(
+            s,
+            "    {name:<24} {:>12.6e} +- {:.2e} {unit}",
+            v.value, v.stderr
+        );
+    };
+    row(s, "equivalent length L", &p.equivalent_length, "m");
+    row(s, "equivalent mass ratio r'", &p.mass_ratio, "");
+    row(s, "equivalent bob mass m_e", &p.equivalent_bob_mass, "kg");
+    row(s, "inertia about pivot J", &p.inertia, "kg m^2");
+    row(s, "radius of gyration", &p.radius_of_gyration, "m");
+    row(s, "centre of mass d", &p.com, "m");
+    let _ = writeln!(
+        s,
+        "    (m_e and J from the total mass {} kg = slider_mass + bob_mass; the radius of gyration and d with everything that swings taken as bob_mass = {} kg: a rod's mass missing from the rig file scales them)",
+        p.total_mass, p.swinging_mass
+    );
 }
 
 /// The readable report of `appell fit`: what lmfit's fit_report gives, and the model
@@ -244,6 +272,9 @@ pub fn fit_text(rep: &FitReport) -> String {
             s,
             "    sliding speeds     {lo:.4} to {hi:.4} m/s behind mu_kinetic"
         );
+    }
+    if let Some(p) = &rep.pendulum {
+        pendulum_text(&mut s, p);
     }
     let pairs = correlated_pairs(rep);
     if !pairs.is_empty() {

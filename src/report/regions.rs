@@ -169,14 +169,38 @@ pub fn regions_json(map: &RegionMap, trajectories: &[Trajectory]) -> Value {
 pub fn regions_summary(rig: &Rig<f64>, map: &RegionMap, trajectories: &[Trajectory]) -> String {
     let s = &map.summary;
     let mut out = String::new();
+    match rig.pendulum {
+        Some(p) => {
+            let _ = writeln!(
+                out,
+                "rig: m1 = {} kg, rigid pendulum m_p = {} kg, d = {:.5} m, J = {:.6e} kg m^2, l = {} m (bob centre), g = {} m/s^2, mu_k = {}, mu_s = {}",
+                p.slider_mass, p.mass, p.com, p.inertia, rig.marker_length, rig.gravity, s.mu_kinetic, s.mu_static
+            );
+            let _ = writeln!(
+                out,
+                "equivalent point rig: slider {:.5} kg, bob m_e = {:.5} kg, L = {:.5} m (r' = {:.4})",
+                rig.slider_mass, rig.bob_mass, rig.rod_length, s.mass_ratio
+            );
+        }
+        None => {
+            let _ = writeln!(
+                out,
+                "rig: m1 = {} kg, m2 = {} kg (r = m1/m2 = {:.4}), l = {} m, g = {} m/s^2, mu_k = {}, mu_s = {}",
+                rig.slider_mass, rig.bob_mass, s.mass_ratio, rig.rod_length, rig.gravity, s.mu_kinetic, s.mu_static
+            );
+        }
+    }
+    let point = match (rig.pendulum, s.point_rig_mu_critical) {
+        (Some(p), Some(m)) => format!(
+            " (rigid pendulum, r' = {:.4}; the point rig with the same masses, r = m1/m_p = {:.4}, has mu* = {m:.4})",
+            s.mass_ratio,
+            p.point_mass_ratio()
+        ),
+        _ => String::new(),
+    };
     let _ = writeln!(
         out,
-        "rig: m1 = {} kg, m2 = {} kg (r = m1/m2 = {:.4}), l = {} m, g = {} m/s^2, mu_k = {}, mu_s = {}",
-        rig.slider_mass, rig.bob_mass, s.mass_ratio, rig.rod_length, rig.gravity, s.mu_kinetic, s.mu_static
-    );
-    let _ = writeln!(
-        out,
-        "critical friction mu* = {:.4} at theta* = {:.2} deg",
+        "critical friction mu* = {:.4} at theta* = {:.2} deg{point}",
         s.mu_critical, s.theta_critical_deg
     );
     if s.paradox_possible() {
@@ -349,6 +373,17 @@ impl<'a> RegionFigure<'a> {
                 s.mu_critical, s.theta_critical_deg
             ),
         ];
+        if let Some(m) = s.point_rig_mu_critical {
+            out[0] = format!(
+                "rigid pendulum: r' = {:.3}, L = {:.4} m, l = {} m, mu_k = {}, mu_s = {}",
+                s.mass_ratio,
+                self.rig.rod_length,
+                self.rig.marker_length,
+                s.mu_kinetic,
+                s.mu_static
+            );
+            out.push(format!("point rig with the same masses: mu* = {m:.3}"));
+        }
         if self.rig.rail_tilt != 0.0 {
             out.push(format!(
                 "rail tilt {:.2} deg (+x downhill): the plane is not mirror-symmetric",
