@@ -243,9 +243,11 @@ pub fn run(args: Args) -> Result<(), Failure> {
                     if args.json {
                         outln!("{v}");
                     } else {
-                        let mu = rep.mu_kinetic.map_or("not identifiable".to_owned(), |m| {
-                            format!("{:.6} +- {:.2e}", m.value, m.stderr)
-                        });
+                        let mu = match (rep.mu_kinetic, &rep.failed) {
+                            (_, Some(_)) => "not measured (the fit failed; see --json)".to_owned(),
+                            (None, None) => "not identifiable".to_owned(),
+                            (Some(m), None) => format!("{:.6} +- {:.2e}", m.value, m.stderr),
+                        };
                         outln!(
                             "{}: mu_kinetic {mu}; rms {:.3e} m",
                             file.display(),

@@ -142,9 +142,23 @@ pub fn synthesize(scene: &Scene, opts: &SynthOptions) -> Result<Synthetic, SimEr
     let mut put = |k: &str, v: f64| {
         truth.insert(k.to_string(), v.to_string());
     };
-    put("slider_mass", r.slider_mass);
-    put("bob_mass", r.bob_mass);
-    put("rod_length", r.rod_length);
+    match r.pendulum {
+        // The rig as built (a fit's rig file takes these keys) and the equivalent point rig
+        // its motion follows.
+        Some(p) => {
+            put("slider_mass", p.slider_mass);
+            put("pendulum_mass", p.mass);
+            put("pendulum_com", p.com);
+            put("pendulum_inertia", p.inertia);
+            put("equivalent_length", r.rod_length);
+            put("equivalent_mass_ratio", r.slider_mass / r.bob_mass);
+        }
+        None => {
+            put("slider_mass", r.slider_mass);
+            put("bob_mass", r.bob_mass);
+        }
+    }
+    put("rod_length", r.marker_length);
     put("gravity", r.gravity);
     put("mu_kinetic", r.mu_kinetic);
     put("mu_static", r.mu_static);

@@ -959,12 +959,11 @@ pub fn fit(
         let chi2 = problem.chi2(&p).unwrap_or(f64::INFINITY);
         let mu_k = p[0];
         let opts = select::SelectOptions {
-            // The friction laws are fitted outright (no score test can screen them), so only
-            // when the onsets show mu_static above mu_kinetic or the model misfits: a
-            // well-described recording does not pay for two more fits.
-            friction_candidates: settings.mu_static == StaticMode::Auto
-                && onset
-                && (base.static_evidence == Some(true) || select::misfits(&problem, chi2)),
+            // The friction laws, where an onset can show them (the selection offers them in a
+            // round whose model misfits, or always when the onsets show mu_static above
+            // mu_kinetic).
+            friction_candidates: settings.mu_static == StaticMode::Auto && onset,
+            static_evidence: base.static_evidence == Some(true),
             mu_static_start: base.mu_s_data.unwrap_or(1.15 * mu_k).max(1.05 * mu_k),
             max_added: if settings.nuisances { 3 } else { 0 },
             max_iters: settings.max_iters,

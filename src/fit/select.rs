@@ -257,8 +257,12 @@ fn score_drops(
 
 /// Settings of the selection.
 pub struct SelectOptions {
-    /// Try mu_static and Stribeck friction (the data show a stick-to-slide onset).
+    /// Try mu_static and Stribeck friction (the data show a stick-to-slide onset) in a round
+    /// whose model misfits, or in every round when `static_evidence` is set.
     pub friction_candidates: bool,
+    /// The onsets show mu_static above mu_kinetic: the friction candidates are offered even
+    /// when the model describes the recording.
+    pub static_evidence: bool,
     /// Start value of mu_static for those candidates.
     pub mu_static_start: f64,
     /// Most nuisances added.
@@ -370,11 +374,16 @@ pub fn forward(
     }
     for _ in 0..opts.max_added {
         let (cur_problem, cur_p, cur_chi2) = &current;
+        // The friction laws are fitted outright (no score test screens them), so only when
+        // the onsets ask for them or this round's model misfits: a model that describes the
+        // recording does not pay for two more fits.
+        let friction =
+            opts.friction_candidates && (opts.static_evidence || misfits(cur_problem, *cur_chi2));
         let open: Vec<Nuisance> = Nuisance::ALL
             .into_iter()
             .filter(|n| !chosen.contains(n) && !chosen.iter().any(|c| c.conflicts(*n)))
             .filter(|n| cur_problem.free.len() + n.new_params(cur_problem) <= MAX_FREE)
-            .filter(|n| n.screened() || opts.friction_candidates)
+            .filter(|n| n.screened() || friction)
             // A pendulum the rig file gives is used as given (`--with` may still free it).
             .filter(|n| *n != Nuisance::RigidPendulum || cur_problem.rig.pendulum.is_none())
             .collect();
@@ -399,37 +408,76 @@ pub fn forward(
         if to_fit.is_empty() {
             break;
         }
-        let fits: Vec<(Nuisance, TrajectoryProblem, Solved)> = to_fit
-            .par_iter()
-            .with_max_len(1)
-            .map(|&nu| {
-                let m = nu.add_to(cur_problem, opts.mu_static_start);
-                let solved = solve_starts(&m, fresh, opts.max_iters);
-                (nu, m, solved)
-            })
-            .collect();
-        let mut best: Option<(Nuisance, TrajectoryProblem, DVector<f64>, f64)> = None;
-        for (nu, m, solved) in fits {
+        // Each candidate as a nuisance set and its problem. A mu_static chosen while the model
+        // misfitted may be part of the compromise (a late slip fitted by static friction while
+        // the pendulum's period is wrong): under misfit each candidate is also fitted without it.
+        let drop_static = misfit && chosen.contains(&Nuisance::StaticFriction);
+        let mut jobs: Vec<(Vec<Nuisance>, TrajectoryProblem)> = Vec::new();
+        for &nu in &to_fit {
+            jobs.push((
+                nu.join(&chosen),
+                nu.add_to(cur_problem, opts.mu_static_start),
+            ));
+            if drop_static && nu.supersedes() != Some(Nuisance::StaticFriction) {
+                let mut tied = cur_problem.clone();
+                tied.free.retain(|&q| q != Param::MuStatic);
+                tied.tie_static = true;
+                tied.rig.mu_static = tied.rig.mu_kinetic;
+                let without: Vec<Nuisance> = chosen
+                    .iter()
+                    .copied()
+                    .filter(|&c| c != Nuisance::StaticFriction)
+                    .collect();
+                jobs.push((nu.join(&without), nu.add_to(&tied, opts.mu_static_start)));
+            }
+        }
+        // Under misfit the score test only orders the candidates: the first two (and their
+        // variants) are fitted first, and the rest only when none of those describes the
+        // recording (a candidate that does leaves the others at most noise to gain this round).
+        let first = if misfit {
+            let k = 2usize.min(to_fit.len());
+            jobs.iter()
+                .position(|(set, _)| to_fit[..k].iter().all(|nu| !set.ends_with(&[*nu])))
+                .unwrap_or(jobs.len())
+        } else {
+            jobs.len()
+        };
+        let run = |jobs: &[(Vec<Nuisance>, TrajectoryProblem)]| -> Vec<(Vec<Nuisance>, TrajectoryProblem, Solved)> {
+            jobs.par_iter()
+                .with_max_len(1)
+                .map(|(set, m)| (set.clone(), m.clone(), solve_starts(m, fresh, opts.max_iters)))
+                .collect()
+        };
+        let mut fits = run(&jobs[..first]);
+        let adequate = fits.iter().any(|(_, m, s)| {
+            s.as_ref()
+                .is_ok_and(|(_, cost, _)| !misfits(m, chi2_of(*cost)))
+        });
+        if !adequate {
+            fits.extend(run(&jobs[first..]));
+        }
+        let mut best: Option<(Vec<Nuisance>, TrajectoryProblem, DVector<f64>, f64)> = None;
+        for (set, m, solved) in fits {
             let Ok((q, cost, iters)) = solved else {
                 continue;
             };
             iterations += iters;
             let c2 = chi2_of(cost);
-            rows.push(row(&nu.join(&chosen), &m, c2));
+            rows.push(row(&set, &m, c2));
             if best
                 .as_ref()
                 .is_none_or(|b| bic(m.free.len(), c2) < bic(b.1.free.len(), b.3))
             {
-                best = Some((nu, m, q, c2));
+                best = Some((set, m, q, c2));
             }
         }
-        let Some((nu, mut m, q, c2)) = best else {
+        let Some((set, mut m, q, c2)) = best else {
             break;
         };
         // Positive evidence (Kass and Raftery): a BIC lower by more than 2.
         if bic(m.free.len(), c2) < bic(cur_problem.free.len(), *cur_chi2) - 2.0 {
             m.set_values(&q);
-            chosen = nu.join(&chosen);
+            chosen = set;
             current = (m, q, c2);
         } else {
             break;

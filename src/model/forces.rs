@@ -358,7 +358,8 @@ impl<T: Scalar> Rig<T> {
 /// Mechanical energy with the tilted potential,
 /// E = 1/2 (m1 + m2) x'^2 - m2 l x' w sin(theta) + 1/2 m2 l^2 w^2 - (m1 + m2) g_x x
 /// − m2 g_x l cos(theta) − m2 g_y l sin(theta), zero at rest at x = 0 with the rod
-/// horizontal on a level rail; dE/dt = F x' - c_p w^2.
+/// horizontal on a level rail; dE/dt = F x' - c_p w^2. On a rigid pendulum's equivalent rig
+/// this is the rigid body's energy (PHYSICS.md, "Rigid pendulum": m_e L = m_p d, m_e L^2 = J).
 pub fn energy<T: Scalar>(rig: &Rig<T>, y: &State<T>) -> T {
     let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);
     let (gx, gy) = rig.gravity_components();
@@ -370,7 +371,8 @@ pub fn energy<T: Scalar>(rig: &Rig<T>, y: &State<T>) -> T {
 }
 
 /// Horizontal momentum (m1 + m2) x' - m2 l w sin(theta): conserved when mu = 0 on a level rail
-/// without rail friction.
+/// without rail friction. On a rigid pendulum's equivalent rig it is
+/// (m1 + m_p) x' - m_p d w sin(theta).
 pub fn momentum<T: Scalar>(rig: &Rig<T>, y: &State<T>) -> T {
     (rig.slider_mass + rig.bob_mass) * y[X_DOT]
         - rig.bob_mass * rig.rod_length * y[THETA_DOT] * y[THETA].sin()

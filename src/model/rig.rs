@@ -597,7 +597,8 @@ impl<T: Scalar> Rig<T> {
         }
     }
 
-    /// Mass ratio r = m1 / m2 that sets the critical friction.
+    /// Mass ratio r = m1 / m2 that sets the critical friction: for a rigid pendulum the
+    /// equivalent r' = (m1 + m_p - m_e) / m_e (PHYSICS.md, "Rigid pendulum").
     pub fn mass_ratio(&self) -> T {
         self.slider_mass / self.bob_mass
     }

@@ -14,5 +14,6 @@ mod real_files;
 mod real_rigs;
 mod recordings;
 mod regions;
+mod rigid;
 mod simulate_oracles;
 mod stress;
