@@ -1427,3 +1427,46 @@ fn adequacy_sentence(
         why.join("; ")
     ))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn problem(free: Vec<Param>) -> TrajectoryProblem {
+        let obs = Arc::new(Observations {
+            times: vec![0.0, 0.001],
+            slider: vec![Some([0.0, 0.0]); 2],
+            bob: vec![Some([0.3, 0.0]); 2],
+        });
+        TrajectoryProblem::new(obs, Rig::paper(0.3), [0.0; 4], free, Options::default())
+    }
+
+    fn estimate(value: f64, stderr: f64) -> Estimate {
+        Estimate {
+            value,
+            stderr,
+            ci95: [value - 1.96 * stderr, value + 1.96 * stderr],
+            interval: "wald",
+        }
+    }
+
+    /// mu pinned at 0 while Stribeck's law or viscous friction carries the friction is a
+    /// failed fit; the same mu with Coulomb's law alone, or a mu clear of 0, is not.
+    #[test]
+    fn mu_pinned_at_zero_with_friction_elsewhere_is_a_failed_fit() {
+        let stribeck = problem(vec![
+            Param::MuKinetic,
+            Param::MuStatic,
+            Param::StribeckVelocity,
+        ]);
+        let viscous = problem(vec![Param::MuKinetic, Param::ViscousFriction]);
+        let coulomb = problem(vec![Param::MuKinetic, Param::X]);
+        let pinned = estimate(0.0, 0.26);
+        assert!(pinned_friction(&stribeck, Some(&pinned)).is_some());
+        assert!(pinned_friction(&viscous, Some(&pinned)).is_some());
+        assert!(pinned_friction(&coulomb, Some(&pinned)).is_none());
+        assert!(pinned_friction(&stribeck, Some(&estimate(0.25, 0.01))).is_none());
+        // Clear of zero by many standard errors: a small but measured coefficient.
+        assert!(pinned_friction(&stribeck, Some(&estimate(5e-4, 1e-5))).is_none());
+    }
+}

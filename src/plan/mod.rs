@@ -230,8 +230,17 @@ fn paradox_notes(spec: &PlanSpec) -> Vec<String> {
     let r = spec.rig.mass_ratio();
     let mu_star = mu_critical(r);
     let [_, mu_hi] = spec.mu_kinetic.span();
+    let ratio = match spec.rig.pendulum {
+        Some(p) => format!(
+            "rigid pendulum: equivalent mass ratio r' = (m1 + m_p - m_e)/m_e = {r:.3} (L = {:.4} m; the point rig's r = m1/m_p = {:.3} would give mu* = {:.3})",
+            spec.rig.rod_length,
+            p.point_mass_ratio(),
+            mu_critical(p.point_mass_ratio())
+        ),
+        None => format!("mass ratio r = m1/m2 = {r:.3}"),
+    };
     let mut notes = vec![format!(
-        "mass ratio r = m1/m2 = {r:.3}: mu* = 2 sqrt(r (1 + r)) = {mu_star:.3}; mu_kinetic = {}",
+        "{ratio}: mu* = 2 sqrt(r (1 + r)) = {mu_star:.3}; mu_kinetic = {}",
         spec.mu_kinetic
     )];
     if spec.goal.targets.contains(&Target::SuddenStop) && mu_hi <= mu_star {
@@ -244,6 +253,13 @@ fn sudden_stop_advice(spec: &PlanSpec) -> String {
     let r = spec.rig.mass_ratio();
     let mu = spec.rig.mu_kinetic;
     let r_max = max_mass_ratio_for_paradox(mu);
+    if spec.rig.pendulum.is_some() {
+        // A rigid pendulum's masses enter through r' = (m1 + m_p - m_e) / m_e alone.
+        return format!(
+            "sudden_stop needs mu above mu* = {:.3} (rigid pendulum, r' = {r:.3}); with mu = {mu} an equivalent mass ratio r' below {r_max:.4} brings mu* below mu (a lighter slider, or a pendulum with more of its mass at the bob and less in the rod)",
+            mu_critical(r)
+        );
+    }
     format!(
         "sudden_stop needs mu above mu* = {:.3} (r = {r:.3}); with mu = {mu} a mass ratio r = m1/m2 below {r_max:.4} brings mu* below mu (slider mass below {:.4} kg with this bob, or bob mass above {:.4} kg with this slider)",
         mu_critical(r),

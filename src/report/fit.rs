@@ -141,7 +141,7 @@ pub fn fit_json(rep: &FitReport) -> Value {
 fn pendulum_text(s: &mut String, p: &crate::fit::PendulumFound) {
     let _ = writeln!(
         s,
-        "[[Rigid pendulum]] found by the data (the rig file gives point masses)"
+        "[[Rigid pendulum]] its equivalent length and mass ratio, found by the data"
     );
     let row = |s: &mut String, name: &str, v: &crate::fit::ValueSe, unit: &str| {
         let _ = writeln!(

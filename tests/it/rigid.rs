@@ -7,7 +7,7 @@
 
 use crate::helpers::*;
 use appell::data::{read_recording, ReadOptions};
-use appell::fit::{fit, FitSettings, Nuisance, Observations};
+use appell::fit::{fit, Estimate, FitReport, FitSettings, Nuisance, Observations};
 use appell::model::{markers, regions, Mode, PendulumKeys, Rig};
 use appell::scene::RigFile;
 use appell::sim::{impulsive_stop, simulate, Method, Options, Request};
@@ -430,6 +430,19 @@ fn observations(rig: &str) -> Observations {
     Observations::from(&rec)
 }
 
+/// The fit's mu_kinetic, asserted within 3 standard errors of the truth `mu`.
+fn mu_within_three_se(rig: &str, rep: &FitReport, mu: f64) -> Estimate {
+    let e = rep.mu_kinetic.expect("mu_kinetic identifiable");
+    let z = (e.value - mu) / e.stderr;
+    assert!(
+        z.abs() < 3.0,
+        "{rig}: mu {} +- {} (z = {z})",
+        e.value,
+        e.stderr
+    );
+    e
+}
+
 /// Recordings of rigid pendulums made by the independent Newton-Euler generator, three rigs
 /// from light to heavy slider: with the measured pendulum in the rig file, mu within 3
 /// standard errors and not flagged.
@@ -442,14 +455,7 @@ fn rigid_recordings_fit_with_the_measured_pendulum() {
         let r = RigFile::load_for_fit(&file, 0.3).unwrap();
         assert!(r.pendulum.is_some());
         let rep = fit(observations(rig), &r, &FitSettings::default()).unwrap();
-        let e = rep.mu_kinetic.unwrap();
-        let z = (e.value - mu) / e.stderr;
-        assert!(
-            z.abs() < 3.0,
-            "{rig}: mu {} +- {} (z = {z})",
-            e.value,
-            e.stderr
-        );
+        let e = mu_within_three_se(rig, &rep, mu);
         assert!(
             rep.adequacy.limited_by_model.is_none(),
             "{rig}: {:?}",
@@ -478,14 +484,7 @@ fn rigid_recordings_fit_with_the_labs_masses_only() {
             "{rig}: {:?}",
             rep.nuisances
         );
-        let e = rep.mu_kinetic.unwrap();
-        let z = (e.value - mu) / e.stderr;
-        assert!(
-            z.abs() < 3.0,
-            "{rig}: mu {} +- {} (z = {z})",
-            e.value,
-            e.stderr
-        );
+        let e = mu_within_three_se(rig, &rep, mu);
         let half = 0.5 * (e.ci95[1] - e.ci95[0]);
         assert!(half <= 0.02 * mu, "{rig}: half-width {half}");
         let p = rep.pendulum.unwrap();
@@ -496,4 +495,46 @@ fn rigid_recordings_fit_with_the_labs_masses_only() {
             p.equivalent_length
         );
     }
+}
+
+/// A plan file takes the rigid keys: the planner's rig is the rigid body's equivalent rig (its
+/// stuck pendulum swings with L from the sums here), and the plan's note names r'.
+#[test]
+fn plans_take_the_rigid_pendulum() {
+    let text = std::fs::read_to_string(repo("configs/plan_example.toml"))
+        .unwrap()
+        .replace(
+            "bob_mass = 0.10      # kg\n",
+            "bob_mass = 0.10      # kg\nrod_mass = 0.02\nbob_radius = 0.02\n",
+        );
+    assert!(text.contains("rod_mass"));
+    let spec = appell::plan::PlanSpec::from_toml(&text, Path::new("rigid_plan.toml")).unwrap();
+    let b = body(0.1, 0.1, 0.02, 0.02, 0.3);
+    assert!((spec.rig.rod_length - b.j / (b.m_p * b.d)).abs() < 1e-14);
+    assert_eq!(spec.rig.marker_length, 0.3);
+    let m_e = (b.m_p * b.d).powi(2) / b.j;
+    assert!((spec.rig.mass_ratio() - (b.m1 + b.m_p - m_e) / m_e).abs() < 1e-12);
+}
+
+/// The failure, made on purpose: the heavy rig's recording fitted with point masses and
+/// Stribeck friction forced in (no rigid pendulum allowed) ends with mu_kinetic pinned at 0 and
+/// the friction carried by Stribeck's law. The fit must say it failed, never report mu = 0.
+#[test]
+fn mu_pinned_at_zero_by_stribeck_is_reported_as_a_failed_fit() {
+    let file = repo("tests/data/rigid/rigid_heavy_lab.toml");
+    let r = RigFile::load_for_fit(&file, 0.3).unwrap();
+    let settings = FitSettings {
+        nuisances: false,
+        windows: false,
+        with: vec![Nuisance::Stribeck],
+        ..FitSettings::default()
+    };
+    let rep = fit(observations("heavy"), &r, &settings).unwrap();
+    // The scenario: Stribeck's law takes the friction and mu_kinetic sits at its bound.
+    let e = rep.mu_kinetic.unwrap();
+    assert!(e.value < 1e-3, "mu {} is no longer pinned: {:?}", e.value, rep.nuisances);
+    let why = rep.failed.expect("a pinned mu is a failed fit");
+    assert!(why.starts_with("The fit failed"), "{why}");
+    let limited = rep.adequacy.limited_by_model.unwrap();
+    assert!(limited.starts_with("The fit failed"), "{limited}");
 }
