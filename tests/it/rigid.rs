@@ -455,7 +455,7 @@ fn rigid_recordings_fit_with_the_measured_pendulum() {
         let r = RigFile::load_for_fit(&file, 0.3).unwrap();
         assert!(r.pendulum.is_some());
         let rep = fit(observations(rig), &r, &FitSettings::default()).unwrap();
-        let e = mu_within_three_se(rig, &rep, mu);
+        mu_within_three_se(rig, &rep, mu);
         assert!(
             rep.adequacy.limited_by_model.is_none(),
             "{rig}: {:?}",
