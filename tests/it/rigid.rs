@@ -532,7 +532,12 @@ fn mu_pinned_at_zero_by_stribeck_is_reported_as_a_failed_fit() {
     let rep = fit(observations("heavy"), &r, &settings).unwrap();
     // The scenario: Stribeck's law takes the friction and mu_kinetic sits at its bound.
     let e = rep.mu_kinetic.unwrap();
-    assert!(e.value < 1e-3, "mu {} is no longer pinned: {:?}", e.value, rep.nuisances);
+    assert!(
+        e.value < 1e-3,
+        "mu {} is no longer pinned: {:?}",
+        e.value,
+        rep.nuisances
+    );
     let why = rep.failed.expect("a pinned mu is a failed fit");
     assert!(why.starts_with("The fit failed"), "{why}");
     let limited = rep.adequacy.limited_by_model.unwrap();
