@@ -191,7 +191,7 @@ impl PendulumKeys {
             expected: expected.to_owned(),
             value,
         };
-        let pendulum = if given(&body).is_some() {
+        let p = if given(&body).is_some() {
             let need = |key: &'static str, v: Option<f64>| -> Result<f64, RigError> {
                 let v = v.ok_or(RigError::Missing { key })?;
                 if v.is_finite() && v > 0.0 {
@@ -220,13 +220,13 @@ impl PendulumKeys {
                     inertia,
                 ));
             }
-            Some(RigidPendulum {
+            RigidPendulum {
                 slider_mass: m1,
                 mass,
                 com,
                 inertia,
                 marker_length: l,
-            })
+            }
         } else {
             let m2 = self.bob_mass.ok_or(RigError::Missing { key: "bob_mass" })?;
             for (key, v) in [("rod_mass", self.rod_mass), ("bob_radius", self.bob_radius)] {
@@ -253,9 +253,8 @@ impl PendulumKeys {
                 }
                 return Ok(rig);
             }
-            Some(RigidPendulum::rod_and_sphere(m1, m2, m_r, radius, l))
+            RigidPendulum::rod_and_sphere(m1, m2, m_r, radius, l)
         };
-        let p = pendulum.expect("both forms give a pendulum here");
         Ok(Rig::new(m1, p.mass, l, g, mu_kinetic, mu_static)?.with_rigid_pendulum(p))
     }
 }
