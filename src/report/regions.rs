@@ -173,7 +173,7 @@ pub fn regions_summary(rig: &Rig<f64>, map: &RegionMap, trajectories: &[Trajecto
         Some(p) => {
             let _ = writeln!(
                 out,
-                "rig: m1 = {} kg, rigid pendulum m_p = {} kg, d = {:.5} m, J = {:.6e} kg m^2, l = {} m (bob centre), g = {} m/s^2, mu_k = {}, mu_s = {}",
+                "rig: m1 = {} kg, rigid pendulum m_p = {:.6} kg, d = {:.5} m, J = {:.6e} kg m^2, l = {} m (bob centre), g = {} m/s^2, mu_k = {}, mu_s = {}",
                 p.slider_mass, p.mass, p.com, p.inertia, rig.marker_length, rig.gravity, s.mu_kinetic, s.mu_static
             );
             let _ = writeln!(
@@ -234,9 +234,14 @@ pub fn regions_summary(rig: &Rig<f64>, map: &RegionMap, trajectories: &[Trajecto
             s.mu_kinetic, s.mu_critical
         );
     }
+    let ratio = if rig.pendulum.is_some() {
+        "equivalent ratio r'"
+    } else {
+        "m1/m2"
+    };
     let _ = writeln!(
         out,
-        "largest m1/m2 with a paradox band at mu_k = {}: {:.4}",
+        "largest {ratio} with a paradox band at mu_k = {}: {:.4}",
         s.mu_kinetic, s.max_mass_ratio_for_paradox
     );
     let _ = writeln!(
@@ -381,6 +386,10 @@ impl<'a> RegionFigure<'a> {
                 self.rig.marker_length,
                 s.mu_kinetic,
                 s.mu_static
+            );
+            out[1] = format!(
+                "mu* = 2 sqrt(r' (1 + r')) = {:.3}, theta* = {:.1} deg",
+                s.mu_critical, s.theta_critical_deg
             );
             out.push(format!("point rig with the same masses: mu* = {m:.3}"));
         }
