@@ -185,59 +185,94 @@ fn energy_with_j_balances_the_friction_work() {
     }
 }
 
-/// Newton-Euler on the sampled trajectory: from the simulated accelerations, the pivot force on
-/// the pendulum H = m_p a_cm - m_p g y must give the angular acceleration about the centre of
-/// mass (J_cm theta'' = torque of H), the slider obeys m1 x'' = F - H_x with F the Coulomb
-/// force on N = H_y - m1 g while sliding, and while stuck |H_x| <= mu_s |N|. Nothing here uses
-/// the equivalent rig.
+/// Newton-Euler on `rig`'s sampled trajectories (the rigid body `b` summed here), with the
+/// real-rig terms written out here: gravity (g_x, g_y) in the rail frame, the pivot's damping
+/// torque -c_p w on the pendulum, and while sliding the friction law mu(v) = mu_k + (mu_s -
+/// mu_k) exp(-(v/v_s)^2) (Coulomb when v_s is `None`) plus viscous rail friction -c_v x'.
+/// From the simulated accelerations the pivot force on the pendulum is
+/// H = m_p a_cm - m_p (g_x, g_y); it must give the angular acceleration about the centre of
+/// mass, J_cm theta'' = torque of H - c_p w; the slider obeys m1 x'' = F - H_x + m1 g_x with
+/// the law's F on N = H_y - m1 g_y while sliding, and while stuck |F| <= mu_s |N|. Nothing here
+/// uses the equivalent rig.
+fn check_newton_euler(b: &Body, rig: &Rig<f64>, v_s: Option<f64>) {
+    let (gx, gy) = (b.g * rig.rail_tilt.sin(), b.g * rig.rail_tilt.cos());
+    for y0 in [[0.0, 0.0, 0.0, 0.0], [0.0, -0.4, 0.0, 3.0]] {
+        let times: Vec<f64> = (0..=400).map(|k| k as f64 * 0.005).collect();
+        let sol = run(rig, y0, 2.0, 1e-11, Method::Dop853, &request(times, false));
+        let (mut slides, mut sticks) = (0, 0);
+        for s in &sol.samples {
+            let y = s.state;
+            let (xdd, tdd) = rig.accelerations(s.mode, &y);
+            let (sn, cs, w) = (y[1].sin(), y[1].cos(), y[3]);
+            // Centre of mass at (x + d cos, d sin), y down.
+            let a_cm = [
+                xdd - b.d * (sn * tdd + cs * w * w),
+                b.d * (cs * tdd - sn * w * w),
+            ];
+            let h = [b.m_p * (a_cm[0] - gx), b.m_p * (a_cm[1] - gy)];
+            // From the centre of mass to the pivot: -d (cos, sin).
+            let r = [-b.d * cs, -b.d * sn];
+            let torque = r[0] * h[1] - r[1] * h[0] - rig.pivot_damping * w;
+            let scale = b.m_p * b.g * b.d;
+            assert!(
+                (b.j_cm * tdd - torque).abs() < 1e-9 * scale,
+                "t={} torque {torque} vs {}",
+                s.t,
+                b.j_cm * tdd
+            );
+            let normal = h[1] - b.m1 * gy;
+            let f = b.m1 * xdd + h[0] - b.m1 * gx;
+            let force = (b.m1 + b.m_p) * b.g;
+            match s.mode {
+                Mode::Slide(dir) => {
+                    slides += 1;
+                    let v = y[2].abs();
+                    let mu = match v_s {
+                        None => rig.mu_kinetic,
+                        Some(v_s) => {
+                            rig.mu_kinetic
+                                + (rig.mu_static - rig.mu_kinetic) * (-(v / v_s).powi(2)).exp()
+                        }
+                    };
+                    let law = -mu * dir.sign() * normal.abs() - rig.viscous_friction * y[2];
+                    assert!((f - law).abs() < 1e-9 * force, "t={} F={f} law {law}", s.t);
+                }
+                Mode::Stick => {
+                    sticks += 1;
+                    assert!(xdd == 0.0);
+                    assert!(f.abs() <= rig.mu_static * normal.abs() + 1e-9 * force);
+                }
+            }
+        }
+        assert!(
+            slides > 10 && sticks > 10,
+            "{slides} slides, {sticks} sticks"
+        );
+    }
+}
+
+/// Newton-Euler on the plain rigid rigs (level rail, Coulomb friction, no damping).
 #[test]
 fn newton_euler_holds_on_sampled_trajectories() {
     for (b, rig) in cases() {
-        for y0 in [[0.0, 0.0, 0.0, 0.0], [0.0, -0.4, 0.0, 3.0]] {
-            let times: Vec<f64> = (0..=400).map(|k| k as f64 * 0.005).collect();
-            let sol = run(&rig, y0, 2.0, 1e-11, Method::Dop853, &request(times, false));
-            let (mut slides, mut sticks) = (0, 0);
-            for s in &sol.samples {
-                let y = s.state;
-                let (xdd, tdd) = rig.accelerations(s.mode, &y);
-                let (sn, cs, w) = (y[1].sin(), y[1].cos(), y[3]);
-                // Centre of mass at (x + d cos, d sin), y down.
-                let a_cm = [
-                    xdd - b.d * (sn * tdd + cs * w * w),
-                    b.d * (cs * tdd - sn * w * w),
-                ];
-                let h = [b.m_p * a_cm[0], b.m_p * a_cm[1] - b.m_p * b.g];
-                // From the centre of mass to the pivot: -d (cos, sin).
-                let r = [-b.d * cs, -b.d * sn];
-                let torque = r[0] * h[1] - r[1] * h[0];
-                let scale = b.m_p * b.g * b.d;
-                assert!(
-                    (b.j_cm * tdd - torque).abs() < 1e-9 * scale,
-                    "t={} torque {torque} vs {}",
-                    s.t,
-                    b.j_cm * tdd
-                );
-                let normal = h[1] - b.m1 * b.g;
-                let f = b.m1 * xdd + h[0];
-                let force = (b.m1 + b.m_p) * b.g;
-                match s.mode {
-                    Mode::Slide(dir) => {
-                        slides += 1;
-                        let coulomb = -rig.mu_kinetic * dir.sign() * normal.abs();
-                        assert!((f - coulomb).abs() < 1e-9 * force, "t={} F={f}", s.t);
-                    }
-                    Mode::Stick => {
-                        sticks += 1;
-                        assert!(xdd == 0.0);
-                        assert!(f.abs() <= rig.mu_static * normal.abs() + 1e-9 * force);
-                    }
-                }
-            }
-            assert!(
-                slides > 10 && sticks > 10,
-                "{slides} slides, {sticks} sticks"
-            );
+        check_newton_euler(&b, &rig, None);
+    }
+}
+
+/// The real-rig terms compose with the rigid pendulum: Newton-Euler with a tilted rail, pivot
+/// damping, Stribeck friction and viscous rail friction, all at once.
+#[test]
+fn newton_euler_holds_with_tilt_damping_and_stribeck() {
+    for (b, rig) in cases() {
+        let rig = Rig {
+            mu_static: 0.3,
+            ..rig
         }
+        .with_rail_tilt(0.5_f64.to_radians())
+        .with_pivot_damping(2e-3)
+        .with_viscous_friction(0.05)
+        .with_stribeck(0.05);
+        check_newton_euler(&b, &rig, Some(0.05));
     }
 }
 
@@ -542,4 +577,39 @@ fn mu_pinned_at_zero_by_stribeck_is_reported_as_a_failed_fit() {
     assert!(why.starts_with("The fit failed"), "{why}");
     let limited = rep.adequacy.limited_by_model.unwrap();
     assert!(limited.starts_with("The fit failed"), "{limited}");
+}
+
+/// With a tilted rail and pivot damping the rigid body's energy (PHYSICS.md, "Rigid pendulum":
+/// E = 1/2 (m1 + m_p) x'^2 - m_p d x' w sin + 1/2 J w^2 - (m1 + m_p) g_x x - m_p g_x d cos
+/// - m_p g_y d sin) changes by the friction work plus the damping work.
+#[test]
+fn tilted_damped_energy_with_j_balances_the_work() {
+    for (b, rig) in cases() {
+        let rig = rig
+            .with_rail_tilt(1.0_f64.to_radians())
+            .with_pivot_damping(1e-3)
+            .with_viscous_friction(0.02);
+        let (gx, gy) = (b.g * rig.rail_tilt.sin(), b.g * rig.rail_tilt.cos());
+        let e = |y: &[f64; 4]| {
+            let (x, th, x_dot, w) = (y[0], y[1], y[2], y[3]);
+            0.5 * (b.m1 + b.m_p) * x_dot * x_dot - b.m_p * b.d * x_dot * w * th.sin()
+                + 0.5 * b.j * w * w
+                - (b.m1 + b.m_p) * gx * x
+                - b.m_p * gx * b.d * th.cos()
+                - b.m_p * gy * b.d * th.sin()
+        };
+        let y0 = [0.0, 0.0, 0.0, 0.0];
+        let times: Vec<f64> = (0..=40).map(|k| k as f64 * 0.05).collect();
+        let sol = run(&rig, y0, 2.0, 1e-12, Method::Dop853, &request(times, true));
+        assert!(sol.events.len() >= 2, "sticks and slips: {:?}", sol.events);
+        for s in &sol.samples {
+            let work = s.friction_work.unwrap() + s.damping_work.unwrap();
+            let de = e(&s.state) - e(&y0);
+            assert!(
+                (de - work).abs() < 1e-9 * (b.m_p * b.g * b.d),
+                "t={} dE={de} W={work}",
+                s.t
+            );
+        }
+    }
 }
