@@ -1134,6 +1134,10 @@ pub fn fit(
             };
         }
     }
+    // Physical bounds: no interval reaches below mu_kinetic = 0 or negative damping.
+    for (q, e) in params.iter_mut() {
+        *e = within_bounds(*q, *e, 0.0);
+    }
     let rho = uncertainty::lag1(&problem, a.r.as_slice());
     let block_ratio = mu_index.map_or(1.0, |i| a.se_block[i] / a.se[i]);
     let mut limited = adequacy_sentence(&a, block_ratio, windows_p, mu_index.map(|i| &params[i].1));
@@ -1166,6 +1170,9 @@ pub fn fit(
                 None => warnings.push("the profile interval for mu_static did not close".into()),
             }
         }
+        // mu_static >= mu_kinetic: its interval starts no lower than mu_kinetic's.
+        let mu_k_low = mu_kinetic.map_or(0.0, |e| e.ci95[0]);
+        params[i].1 = within_bounds(Param::MuStatic, params[i].1, mu_k_low);
         StaticResult::Estimated(params[i].1)
     } else if slides
         && (static_at_bound || (slip_after_stick && base.static_evidence == Some(false)))
@@ -1345,6 +1352,21 @@ pub fn fit(
     })
 }
 
+/// `e` with its 95% interval cut at the physical bound of `q`: mu_kinetic, pivot damping and
+/// viscous rail friction are at least 0, and mu_static at least `mu_k_low` (the lower end of
+/// mu_kinetic's interval). The part of an interval beyond a bound holds no rig, so cutting it
+/// never loses the truth; the value and standard error are left as fitted.
+fn within_bounds(q: Param, mut e: Estimate, mu_k_low: f64) -> Estimate {
+    let low = match q {
+        Param::MuKinetic | Param::PivotDamping | Param::ViscousFriction => 0.0,
+        Param::MuStatic => mu_k_low,
+        _ => return e,
+    };
+    e.ci95[0] = e.ci95[0].max(low);
+    e.ci95[1] = e.ci95[1].max(e.ci95[0]);
+    e
+}
+
 /// The fit failed although it ran when mu_kinetic sits at its bound 0 (within two standard
 /// errors of it, and below 1e-3) while Stribeck's law or viscous rail friction carries the
 /// friction: no Coulomb coefficient was measured, whatever its interval says. Said as such.
@@ -1448,6 +1470,24 @@ mod tests {
             ci95: [value - 1.96 * stderr, value + 1.96 * stderr],
             interval: "wald",
         }
+    }
+
+    /// Intervals stop at the physical bounds and nowhere else.
+    #[test]
+    fn intervals_stop_at_the_physical_bounds() {
+        let e = within_bounds(Param::MuKinetic, estimate(0.0, 20.0), 0.0);
+        assert_eq!(e.ci95, [0.0, 39.2]);
+        assert_eq!((e.value, e.stderr), (0.0, 20.0));
+        let e = within_bounds(Param::PivotDamping, estimate(1e-4, 1e-4), 0.0);
+        assert_eq!(e.ci95[0], 0.0);
+        // mu_static from the lower end of mu_kinetic's interval.
+        let e = within_bounds(Param::MuStatic, estimate(0.30, 0.05), 0.26);
+        assert_eq!(e.ci95[0], 0.26);
+        // Away from a bound, or without one, nothing changes.
+        let far = estimate(0.25, 0.01);
+        assert_eq!(within_bounds(Param::MuKinetic, far, 0.0), far);
+        let tilt = estimate(-0.01, 0.02);
+        assert_eq!(within_bounds(Param::RailTilt, tilt, 0.0), tilt);
     }
 
     /// mu pinned at 0 while Stribeck's law or viscous friction carries the friction is a

@@ -573,6 +573,8 @@ fn mu_pinned_at_zero_by_stribeck_is_reported_as_a_failed_fit() {
         e.value,
         rep.nuisances
     );
+    // Its interval stops at mu_kinetic = 0 (it was [-40, 40] before the bound).
+    assert!(e.ci95[0] >= 0.0, "{:?}", e.ci95);
     let why = rep.failed.expect("a pinned mu is a failed fit");
     assert!(why.starts_with("The fit failed"), "{why}");
     let limited = rep.adequacy.limited_by_model.unwrap();
