@@ -412,8 +412,13 @@ pub fn forward(
         // misfitted may be part of the compromise (a late slip fitted by static friction while
         // the pendulum's period is wrong): under misfit each candidate is also fitted without it.
         let drop_static = misfit && chosen.contains(&Nuisance::StaticFriction);
-        let mut jobs: Vec<(Vec<Nuisance>, TrajectoryProblem)> = Vec::new();
-        for &nu in &to_fit {
+        // Under misfit the score test only orders the candidates: the first two (and their
+        // variants) are fitted first, and the rest only when none of those describes the
+        // recording (a candidate that does leaves the others at most noise to gain this round).
+        let leading = if misfit { 2 } else { to_fit.len() };
+        let (mut first, mut rest) = (Vec::new(), Vec::new());
+        for (i, &nu) in to_fit.iter().enumerate() {
+            let jobs = if i < leading { &mut first } else { &mut rest };
             jobs.push((
                 nu.join(&chosen),
                 nu.add_to(cur_problem, opts.mu_static_start),
@@ -431,30 +436,22 @@ pub fn forward(
                 jobs.push((nu.join(&without), nu.add_to(&tied, opts.mu_static_start)));
             }
         }
-        // Under misfit the score test only orders the candidates: the first two (and their
-        // variants) are fitted first, and the rest only when none of those describes the
-        // recording (a candidate that does leaves the others at most noise to gain this round).
-        let first = if misfit {
-            let k = 2usize.min(to_fit.len());
-            jobs.iter()
-                .position(|(set, _)| to_fit[..k].iter().all(|nu| !set.ends_with(&[*nu])))
-                .unwrap_or(jobs.len())
-        } else {
-            jobs.len()
-        };
-        let run = |jobs: &[(Vec<Nuisance>, TrajectoryProblem)]| -> Vec<(Vec<Nuisance>, TrajectoryProblem, Solved)> {
-            jobs.par_iter()
+        let run = |jobs: Vec<(Vec<Nuisance>, TrajectoryProblem)>| {
+            jobs.into_par_iter()
                 .with_max_len(1)
-                .map(|(set, m)| (set.clone(), m.clone(), solve_starts(m, fresh, opts.max_iters)))
-                .collect()
+                .map(|(set, m)| {
+                    let solved = solve_starts(&m, fresh, opts.max_iters);
+                    (set, m, solved)
+                })
+                .collect::<Vec<_>>()
         };
-        let mut fits = run(&jobs[..first]);
+        let mut fits = run(first);
         let adequate = fits.iter().any(|(_, m, s)| {
             s.as_ref()
                 .is_ok_and(|(_, cost, _)| !misfits(m, chi2_of(*cost)))
         });
         if !adequate {
-            fits.extend(run(&jobs[first..]));
+            fits.extend(run(rest));
         }
         let mut best: Option<(Vec<Nuisance>, TrajectoryProblem, DVector<f64>, f64)> = None;
         for (set, m, solved) in fits {
