@@ -615,3 +615,32 @@ fn tilted_damped_energy_with_j_balances_the_work() {
         }
     }
 }
+
+/// What the fit reports of a pendulum it found: given the true L and r' and the true masses,
+/// m_e, J, d and the radius of gyration are the rigid body's (summed here); the standard errors
+/// follow the delta method, checked by finite differences with a correlated covariance.
+#[test]
+fn the_pendulum_found_is_reported_in_the_bodys_quantities() {
+    use appell::fit::PendulumFound;
+    let b = body(0.1, 0.1, 0.02, 0.02, 0.3);
+    let l_eq = b.j / (b.m_p * b.d);
+    let m_e = (b.m_p * b.d).powi(2) / b.j;
+    let r_eq = (b.m1 + b.m_p - m_e) / m_e;
+    let cov = [[4e-10, -3e-9], [-3e-9, 9e-8]];
+    let found = PendulumFound::new(l_eq, r_eq, cov, b.m1 + b.m_p, b.m_p);
+    let close = |a: f64, c: f64| (a - c).abs() < 1e-12 * c.abs();
+    assert!(close(found.equivalent_bob_mass.value, m_e));
+    assert!(close(found.inertia.value, b.j));
+    assert!(close(found.com.value, b.d));
+    assert!(close(found.radius_of_gyration.value, (b.j / b.m_p).sqrt()));
+    // Delta method by central differences of J(L, r') = total / (1 + r') L^2.
+    let j = |l: f64, r: f64| (b.m1 + b.m_p) / (1.0 + r) * l * l;
+    let (hl, hr) = (1e-7, 1e-6);
+    let g = [
+        (j(l_eq + hl, r_eq) - j(l_eq - hl, r_eq)) / (2.0 * hl),
+        (j(l_eq, r_eq + hr) - j(l_eq, r_eq - hr)) / (2.0 * hr),
+    ];
+    let var = g[0] * g[0] * cov[0][0] + 2.0 * g[0] * g[1] * cov[0][1] + g[1] * g[1] * cov[1][1];
+    assert!((found.inertia.stderr / var.sqrt() - 1.0).abs() < 1e-5);
+    assert!((found.equivalent_length.stderr - 2e-5).abs() < 1e-15);
+}
