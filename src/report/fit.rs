@@ -119,6 +119,7 @@ pub fn fit_json(rep: &FitReport) -> Value {
         "block_se_ratio": a.block_se_ratio,
         "block_frames": a.block_frames,
         "limited_by_model": a.limited_by_model,
+        "noise_free": a.noise_free,
         "outliers": {"slider": rep.outliers[0], "bob": rep.outliers[1]},
         "sliding_speed_range": rep.sliding_speed_range,
         "rms_residual_m": rep.rms_residual_m,

@@ -316,3 +316,62 @@ fn chi_square_against_measured_noise_reveals_a_misfit() {
     let (ok, _, z) = covers(&rep, 0.12);
     assert!(ok && z.abs() < 3.0, "z {z}");
 }
+
+/// A noise-free recording (regression tests on synthetic data) is recognised, by the fit's
+/// chi-square far below the noise measured from the tracks at 1 kHz and by a measured noise
+/// below the model's numerical accuracy at 10 kHz: mu is recovered to rounding, no adequacy
+/// flag is raised (they compare residuals with a noise that is not there), and the report says
+/// the intervals are not meaningful. The same recording with 0.1 mm of noise is not noise-free.
+#[test]
+fn noise_free_recordings_are_recognised_and_recovered_exactly() {
+    let rig = example_rig(0.12);
+    let camera = Camera::default();
+    for (rate, duration) in [(1000.0, 2.0), (10_000.0, 0.5)] {
+        let obs = record(&rig, &camera, Y0, rate, duration, 0.0, 1);
+        let rep = fit(obs, &example_rig(0.3), &FitSettings::default()).unwrap();
+        assert!(
+            rep.adequacy.noise_free,
+            "{rate} Hz: noise {:?}, residual RMS {}, {:?}",
+            rep.noise_m, rep.rms_residual_m, rep.adequacy
+        );
+        assert!(
+            rep.adequacy.limited_by_model.is_none(),
+            "{:?}",
+            rep.adequacy
+        );
+        let mu = rep.mu_kinetic.unwrap().value;
+        assert!((mu - 0.12).abs() < 1e-8, "{rate} Hz: mu {mu}");
+        assert!(rep.warnings.iter().any(|w| w.contains("not meaningful")));
+        assert_eq!(
+            rep.outliers,
+            [0, 0],
+            "{rate} Hz: noise-free positions left out"
+        );
+    }
+    let noisy = record(&rig, &camera, Y0, 1000.0, 2.0, 1e-4, 1);
+    let rep = fit(noisy, &example_rig(0.3), &FitSettings::default()).unwrap();
+    assert!(!rep.adequacy.noise_free);
+}
+
+/// A noise-free recording that the model does not describe (a rigid pendulum fitted as point
+/// masses, no nuisance allowed) is not "noise-free" for the fit: its residuals are far above
+/// the model's accuracy, and the model's limit is still said.
+#[test]
+fn a_misfit_of_a_noise_free_recording_keeps_its_flag() {
+    let rigid = appell::model::PendulumKeys {
+        bob_mass: Some(0.2),
+        rod_mass: Some(0.03),
+        bob_radius: Some(0.02),
+        ..Default::default()
+    }
+    .rig(0.5, 0.3, 9.81, 0.12, None)
+    .unwrap();
+    let obs = record(&rigid, &Camera::default(), Y0, 1000.0, 2.0, 0.0, 1);
+    let settings = FitSettings {
+        nuisances: false,
+        ..FitSettings::default()
+    };
+    let rep = fit(obs, &example_rig(0.3), &settings).unwrap();
+    assert!(!rep.adequacy.noise_free, "{:?}", rep.adequacy);
+    assert!(rep.adequacy.limited_by_model.is_some());
+}
