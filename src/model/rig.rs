@@ -127,11 +127,6 @@ impl RigidPendulum {
         self.slider_mass + self.mass - self.equivalent_bob_mass()
     }
 
-    /// Radius of gyration about the pivot, sqrt(J / m_p) (m).
-    pub fn radius_of_gyration(&self) -> f64 {
-        (self.inertia / self.mass).sqrt()
-    }
-
     /// The mass ratio m1 / m_p of the point rig with the same masses (everything that swings
     /// at the bob), whose mu* a rigid rig is compared with.
     pub fn point_mass_ratio(&self) -> f64 {

@@ -368,29 +368,33 @@ impl<'a> RegionFigure<'a> {
     /// The key numbers printed beside the panels.
     pub fn key_numbers(&self) -> Vec<String> {
         let s = &self.map.summary;
-        let mut out = vec![
-            format!(
-                "m1/m2 = {:.3}, l = {} m, mu_k = {}, mu_s = {}",
-                s.mass_ratio, self.rig.rod_length, s.mu_kinetic, s.mu_static
-            ),
-            format!(
-                "mu* = 2 sqrt(r (1 + r)) = {:.3}, theta* = {:.1} deg",
-                s.mu_critical, s.theta_critical_deg
-            ),
-        ];
+        let mut out = match self.rig.pendulum {
+            Some(_) => vec![
+                format!(
+                    "rigid pendulum: r' = {:.3}, L = {:.4} m, l = {} m, mu_k = {}, mu_s = {}",
+                    s.mass_ratio,
+                    self.rig.rod_length,
+                    self.rig.marker_length,
+                    s.mu_kinetic,
+                    s.mu_static
+                ),
+                format!(
+                    "mu* = 2 sqrt(r' (1 + r')) = {:.3}, theta* = {:.1} deg",
+                    s.mu_critical, s.theta_critical_deg
+                ),
+            ],
+            None => vec![
+                format!(
+                    "m1/m2 = {:.3}, l = {} m, mu_k = {}, mu_s = {}",
+                    s.mass_ratio, self.rig.rod_length, s.mu_kinetic, s.mu_static
+                ),
+                format!(
+                    "mu* = 2 sqrt(r (1 + r)) = {:.3}, theta* = {:.1} deg",
+                    s.mu_critical, s.theta_critical_deg
+                ),
+            ],
+        };
         if let Some(m) = s.point_rig_mu_critical {
-            out[0] = format!(
-                "rigid pendulum: r' = {:.3}, L = {:.4} m, l = {} m, mu_k = {}, mu_s = {}",
-                s.mass_ratio,
-                self.rig.rod_length,
-                self.rig.marker_length,
-                s.mu_kinetic,
-                s.mu_static
-            );
-            out[1] = format!(
-                "mu* = 2 sqrt(r' (1 + r')) = {:.3}, theta* = {:.1} deg",
-                s.mu_critical, s.theta_critical_deg
-            );
             out.push(format!("point rig with the same masses: mu* = {m:.3}"));
         }
         if self.rig.rail_tilt != 0.0 {
