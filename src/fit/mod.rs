@@ -3,7 +3,7 @@
 //! marker's noise from the tracks and drop mis-tracked frames; fit the base model from starts
 //! that cannot miss; let the data choose physics and camera nuisances (forward selection by
 //! BIC); settle mu_static; then the uncertainty (Jacobian, block covariance, profile) and
-//! the adequacy checks (chi-square against the measured noise, fits of the thirds) that widen
+//! the adequacy checks (chi-square against the measured noise, fits of the windows) that widen
 //! the interval when the model does not describe the recording.
 
 pub mod guess;
@@ -76,7 +76,8 @@ pub struct FitSettings {
     /// Let the data add physics and camera nuisances (tilt, damping, friction laws, scale,
     /// marker offsets, lag); off: the plain model only (faster).
     pub nuisances: bool,
-    /// Fit the recording's thirds and widen the interval when they disagree.
+    /// Fit the recording's windows (cut by the motion, a slide each) and widen the interval
+    /// when they disagree.
     pub windows: bool,
     /// Nuisances put in the model whatever the data say (a rail known to be tilted); the
     /// selection adds others on top.
@@ -122,7 +123,7 @@ pub struct Estimate {
     pub ci95: [f64; 2],
     /// How the interval was computed: `profile`, `wald` (value +- 1.96 stderr), with
     /// `+block` when widened for correlated residuals and `+windows` when widened to cover
-    /// the thirds' values.
+    /// the windows' values, and `+models` when it carries the spread of close models.
     pub interval: &'static str,
 }
 
@@ -172,7 +173,7 @@ pub struct Adequacy {
     pub block_se_ratio: f64,
     /// Frames per block of the block covariance.
     pub block_frames: usize,
-    /// p-value of the thirds' agreement (`None` with fewer than two sliding thirds).
+    /// p-value of the windows' agreement (`None` with fewer than two sliding windows).
     pub windows_p_value: Option<f64>,
     /// One plain sentence when the result is limited by the model; `None` when it is not.
     pub limited_by_model: Option<String>,
@@ -314,7 +315,7 @@ pub struct FitReport {
     pub models: Vec<ModelRow>,
     /// Nuisances in the chosen model.
     pub nuisances: Vec<Nuisance>,
-    /// mu_kinetic fitted on each third of the recording.
+    /// mu_kinetic fitted on each window of the recording (cut by the motion).
     pub windows: Vec<WindowFit>,
     /// Mis-tracked positions dropped (slider, bob): before the fit from the tracks, and
     /// after it from the residuals.
@@ -534,7 +535,7 @@ struct Base {
 
 /// Relative cost decrease (and step) at which a long recording's fits short of the whole
 /// recording stop: they only start the next fit well.
-const STAGE_FTOL: f64 = 1e-6;
+pub(crate) const STAGE_FTOL: f64 = 1e-6;
 
 /// The default [`FitSettings::long_prefix`]: frames a long recording's starts and candidate
 /// models are fitted on (recordings up to twice this are fitted whole from every start).
@@ -781,17 +782,35 @@ fn base_fit(
 /// Residuals this many noise deviations out are mis-tracked frames the track check missed.
 const RESIDUAL_OUTLIER: f64 = 6.0;
 
-/// Step 4: positions whose residual is beyond [`RESIDUAL_OUTLIER`] deviations get weight
-/// zero, and the fit is redone without them. Returns the drops per marker.
-fn drop_residual_outliers(
+/// What the residual outlier step did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+struct ResidualOutliers {
+    /// Positions dropped (slider, bob): the model describes the rest of the recording.
+    dropped: [usize; 2],
+    /// Positions down-weighted, not dropped (slider, bob): the model does not describe the
+    /// rest either, so their residuals may be the model's error, not mis-tracking.
+    weighted: [usize; 2],
+    /// Nothing done yet: the current model misfits the rest; the chosen model decides.
+    deferred: bool,
+}
+
+/// Step 4: positions whose residual is beyond [`RESIDUAL_OUTLIER`] deviations. Dropped (weight
+/// zero, and the fit redone) only when the model describes the rest of the recording (its
+/// chi-square passes [`select::misfits`]): a model that misfits leaves large residuals where it
+/// is wrong, and dropping those would throw real positions away to fit a wrong model. Then the
+/// step is deferred to the chosen model (`last` false), or, on that model (`last` true), the
+/// positions are down-weighted by Huber's weight (their residual counts as if it were
+/// [`RESIDUAL_OUTLIER`] deviations), which keeps them in the fit.
+fn residual_outliers(
     problem: &mut TrajectoryProblem,
     p: &mut DVector<f64>,
     settings: &FitSettings,
     iterations: &mut u64,
-) -> [usize; 2] {
-    let mut dropped = [0; 2];
+    last: bool,
+) -> ResidualOutliers {
+    let mut out = ResidualOutliers::default();
     let Ok(raw) = problem.raw_residuals(p) else {
-        return dropped;
+        return out;
     };
     // The scale: the measured noise, or the residuals' own robust spread when larger (a fit
     // that misses the motion has large residuals everywhere, and those are not outliers).
@@ -819,28 +838,55 @@ fn drop_residual_outliers(
         }
     }
     // More than 2% of the positions flagged is a misfit, not mis-tracking.
-    if bad.len() * 2 * 50 > raw.len() {
-        return dropped;
+    if bad.is_empty() || bad.len() * 2 * 50 > raw.len() {
+        return out;
     }
-    if bad.is_empty() {
-        return dropped;
-    }
-    let rows: Vec<usize> = problem
+    let flagged: Vec<usize> = problem
         .rows()
         .enumerate()
         .filter(|(_, row)| bad.contains(&(row.frame, row.marker)))
         .map(|(i, _)| i)
         .collect();
-    problem.drop_rows(rows);
-    for &(_, m) in &bad {
-        dropped[m] += 1;
+    // The rest: its chi-square against the measured noise.
+    let (mut chi2_rest, mut n_rest) = (0.0, 0usize);
+    for (i, (row, &r)) in problem.rows().zip(&raw).enumerate() {
+        let w = problem.row_weight(i);
+        if w > 0.0 && !bad.contains(&(row.frame, row.marker)) {
+            chi2_rest += w * w * (r / problem.sigma[row.marker]).powi(2);
+            n_rest += 1;
+        }
+    }
+    let dof = (n_rest.saturating_sub(problem.free.len()) as f64).max(1.0);
+    let fits_rest = chi2_rest <= dof + 5.0 * (2.0 * dof).sqrt();
+    let counts = |out: &mut [usize; 2]| {
+        for &(_, m) in &bad {
+            out[m] += 1;
+        }
+    };
+    if fits_rest {
+        problem.drop_rows(flagged);
+        counts(&mut out.dropped);
+    } else if !last {
+        out.deferred = true;
+        return out;
+    } else {
+        let mut weights: Vec<f64> = (0..problem.n_rows())
+            .map(|i| problem.row_weight(i))
+            .collect();
+        let markers: Vec<usize> = problem.rows().map(|row| row.marker).collect();
+        for i in flagged {
+            let z = (raw[i] / scale[markers[i]]).abs();
+            weights[i] *= (RESIDUAL_OUTLIER / z).sqrt();
+        }
+        problem.set_row_weights(weights);
+        counts(&mut out.weighted);
     }
     if let Ok((q, _, it)) = solve(problem, p.clone(), settings.max_iters) {
         *iterations += it;
         *p = q;
         problem.set_values(p);
     }
-    dropped
+    out
 }
 
 /// What the fitted motion does at the frame times, summed as it runs (no samples kept).
@@ -934,14 +980,7 @@ pub fn fit(
     let (mut problem, mut p) = (base.problem, base.p);
     let mut iterations = base.iterations;
     let mut starts = base.starts;
-    let late = drop_residual_outliers(&mut problem, &mut p, settings, &mut iterations);
-    outliers = [outliers[0] + late[0], outliers[1] + late[1]];
-    if outliers.iter().sum::<usize>() > 0 {
-        warnings.push(format!(
-            "{} slider and {} bob positions were mis-tracked (beyond {} noise deviations) and left out",
-            outliers[0], outliers[1], RESIDUAL_OUTLIER
-        ));
-    }
+    let mut late = residual_outliers(&mut problem, &mut p, settings, &mut iterations, false);
 
     // Does the fitted motion slide? A slide shorter than the slider's noise is not seen; a
     // raw track that clearly moves while no fit slides is a failed fit, said as such.
@@ -969,7 +1008,13 @@ pub fn fit(
             friction_candidates: settings.mu_static == StaticMode::Auto && onset,
             static_evidence: base.static_evidence == Some(true),
             mu_static_start: base.mu_s_data.unwrap_or(1.15 * mu_k).max(1.05 * mu_k),
-            max_added: if settings.nuisances { 3 } else { 0 },
+            // No cap decides the answer: the criterion stops the selection (every candidate
+            // is screened each round, and at most two plus the friction laws are fitted).
+            max_added: if settings.nuisances {
+                Nuisance::ALL.len()
+            } else {
+                0
+            },
             max_iters: settings.max_iters,
             already: if problem.free.contains(&Param::MuStatic) {
                 vec![Nuisance::StaticFriction]
@@ -990,6 +1035,23 @@ pub fn fit(
         nuisances = sel.chosen;
     }
     let mut moved = !nuisances.is_empty();
+    if late.deferred {
+        late = residual_outliers(&mut problem, &mut p, settings, &mut iterations, true);
+        moved |= late != ResidualOutliers::default();
+    }
+    outliers = [0, 1].map(|m| outliers[m] + late.dropped[m]);
+    if outliers.iter().sum::<usize>() > 0 {
+        warnings.push(format!(
+            "{} slider and {} bob positions were mis-tracked (beyond {} noise deviations) and left out",
+            outliers[0], outliers[1], RESIDUAL_OUTLIER
+        ));
+    }
+    if late.weighted.iter().sum::<usize>() > 0 {
+        warnings.push(format!(
+            "{} slider and {} bob positions lie beyond {} deviations of the fit, but the model does not describe the rest of the recording either: they were down-weighted (Huber), not left out",
+            late.weighted[0], late.weighted[1], RESIDUAL_OUTLIER
+        ));
+    }
 
     if !slides {
         if let Some(range) = raw_moves {
@@ -1044,7 +1106,10 @@ pub fn fit(
     // Step 7: uncertainty.
     // Polished once more unless a long recording's whole fit already converged on this very
     // model and weights (each pass over a million frames costs a third of a second).
-    let settled = base.settled.clone().filter(|_| !moved && late == [0, 0]);
+    let settled = base
+        .settled
+        .clone()
+        .filter(|_| !moved && late.dropped == [0, 0]);
     let polished = match settled {
         Some(reason) => Ok((p.clone(), 0.0, 0, reason)),
         None => solve_traced(&problem, p.clone(), settings.max_iters),
@@ -1099,6 +1164,15 @@ pub fn fit(
                 let ratio = (se[i] / a.se[i]).max(1.0);
                 let v = p[i];
                 params[i].1.ci95 = [v - (v - ci[0]) * ratio, v + (ci[1] - v) * ratio];
+                // A model that misfits bends the profile by its misfit, not by the data's
+                // information: there the interval is no narrower than +- 1.96 stderr.
+                if select::misfits(&problem, a.chi2) {
+                    let e = &mut params[i].1;
+                    e.ci95 = [
+                        e.ci95[0].min(v - 1.96 * se[i]),
+                        e.ci95[1].max(v + 1.96 * se[i]),
+                    ];
+                }
                 params[i].1.interval = if ratio > 1.0001 {
                     "profile+block"
                 } else {
@@ -1112,30 +1186,43 @@ pub fn fit(
         }
     }
 
-    // Step 8: adequacy. The thirds must agree; if they do not, the interval covers them.
+    // Step 8: adequacy. The windows (cut by the motion: a slide each) must agree; if they do
+    // not, the interval covers them.
     let windows = if settings.windows && identifiable {
-        uncertainty::windows(&problem, 3, settings)
+        uncertainty::windows(
+            &problem,
+            &uncertainty::motion_bounds(&problem.observations().times, &sol.events),
+            settings,
+        )
     } else {
         Vec::new()
     };
     let windows_p = uncertainty::window_consistency(&windows);
     if let (Some(i), Some(pw)) = (mu_index, windows_p) {
         if pw < 0.01 {
-            let lo = windows
-                .iter()
-                .map(|w| w.mu_kinetic)
-                .fold(f64::INFINITY, f64::min);
-            let hi = windows
-                .iter()
-                .map(|w| w.mu_kinetic)
-                .fold(f64::NEG_INFINITY, f64::max);
-            let e = &mut params[i].1;
-            e.ci95 = [e.ci95[0].min(lo), e.ci95[1].max(hi)];
-            e.stderr = e.stderr.max((e.ci95[1] - e.ci95[0]) / (2.0 * 1.96));
-            e.interval = match e.interval {
-                "profile" | "profile+block" => "profile+block+windows",
-                _ => "wald+block+windows",
-            };
+            let s_w = uncertainty::window_spread(&windows, params[i].1.value);
+            widen(&mut params[i].1, s_w, "windows");
+        }
+    }
+    // Models close in the criterion that give another mu_kinetic: their spread joins the
+    // interval (model uncertainty), and the report names them.
+    if let Some(i) = mu_index {
+        model_uncertainty(&mut params[i].1, &models, &mut warnings);
+    }
+    // A model that still misfits (by the chi-square, the residuals' correlation or the
+    // windows) is one more nuisance away from another mu: the interval keeps room for as much
+    // as mu moved along the selection's path.
+    let block_ratio = mu_index.map_or(1.0, |i| a.se_block[i] / a.se[i]);
+    let misfit = a.p_value < 1e-3 || block_ratio > 1.5 || windows_p.is_some_and(|p| p < 0.01);
+    if let (Some(i), true) = (mu_index, misfit) {
+        let v = params[i].1.value;
+        let shift = models
+            .iter()
+            .filter(|m| m.path && m.mu_kinetic.is_finite())
+            .map(|m| (m.mu_kinetic - v).abs())
+            .fold(0.0, f64::max);
+        if shift > 0.0 {
+            widen(&mut params[i].1, shift, "path");
         }
     }
     // Physical bounds: no interval reaches below mu_kinetic = 0 or negative damping.
@@ -1143,7 +1230,6 @@ pub fn fit(
         *e = within_bounds(*q, *e, 0.0);
     }
     let rho = uncertainty::lag1(&problem, a.r.as_slice());
-    let block_ratio = mu_index.map_or(1.0, |i| a.se_block[i] / a.se[i]);
     let mut limited = adequacy_sentence(&a, block_ratio, windows_p, mu_index.map(|i| &params[i].1));
     let failed = pinned_friction(&problem, mu_index.map(|i| &params[i].1));
     if let Some(why) = &failed {
@@ -1391,12 +1477,57 @@ const NOISE_FREE_CHI2: f64 = 0.01;
 /// noise): its measured noise `sigma` and the residuals' RMS `rms` (m) both below [`NOISE_FREE_TOLERANCES`] x `rtol` x `scale` (the model's
 /// numerical accuracy at the markers' distance), or the reduced chi-square below
 /// [`NOISE_FREE_CHI2`]. Then the residuals are the integrator's and the data's rounding, and
-/// the chi-square, block and thirds tests, which compare them with the noise, say nothing. A
+/// the chi-square, block and window tests, which compare them with the noise, say nothing. A
 /// model that misfits a noise-free recording leaves residuals far above the model's accuracy:
 /// it is not noise-free and keeps its flag.
 pub fn is_noise_free(sigma: [f64; 2], rms: f64, scale: f64, rtol: f64, reduced_chi2: f64) -> bool {
     sigma[0].max(sigma[1]).max(rms) < NOISE_FREE_TOLERANCES * rtol * scale
         || reduced_chi2 < NOISE_FREE_CHI2
+}
+
+/// `e` widened by a further standard deviation `s` (a source of error its interval did not
+/// hold), named `tag` in its interval's method: the standard error becomes sqrt(se^2 + s^2) and
+/// each half-width h becomes sqrt(h^2 + (1.96 s)^2), about the same value.
+fn widen(e: &mut Estimate, s: f64, tag: &str) {
+    if s.is_nan() || s <= 0.0 {
+        return;
+    }
+    let wider = |h: f64| (h * h + 1.96 * 1.96 * s * s).sqrt();
+    e.ci95 = [
+        e.value - wider(e.value - e.ci95[0]),
+        e.value + wider(e.ci95[1] - e.value),
+    ];
+    e.stderr = (e.stderr * e.stderr + s * s).sqrt();
+    e.interval = intern(format!("{}+{tag}", e.interval));
+}
+
+/// A method label as a `&'static str`: the labels are few (a base method and a handful of
+/// widenings in a fixed order), so each distinct one is leaked once and reused.
+fn intern(label: String) -> &'static str {
+    static LABELS: std::sync::Mutex<Vec<&'static str>> = std::sync::Mutex::new(Vec::new());
+    let mut labels = LABELS.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(l) = labels.iter().find(|l| **l == label) {
+        return l;
+    }
+    let l: &'static str = Box::leak(label.into_boxed_str());
+    labels.push(l);
+    l
+}
+
+/// Widen mu_kinetic's estimate `e` by the spread of the models in play ([`select::model_spread`])
+/// when that spread is worth a tenth of its standard error: the standard error becomes
+/// sqrt(se^2 + spread) and each half-width sqrt(h^2 + 1.96^2 spread).
+fn model_uncertainty(e: &mut Estimate, models: &[ModelRow], warnings: &mut Vec<String>) {
+    let (var, names) = select::model_spread(models, e.value);
+    if var.is_nan() || var.sqrt() <= 0.1 * e.stderr || names.len() < 2 {
+        return;
+    }
+    widen(e, var.sqrt(), "models");
+    warnings.push(format!(
+        "models close in the criterion give different mu_kinetic, and the interval carries their spread (standard deviation {:.2e}): {}",
+        var.sqrt(),
+        names.join(", ")
+    ));
 }
 
 /// `e` with its 95% interval cut at the physical bound of `q`: mu_kinetic, pivot damping and
@@ -1458,7 +1589,7 @@ fn pendulum_found(
 
 /// The one plain sentence when the model limits the result: chi-square fails against the
 /// measured noise (p < 0.001), the residuals are correlated enough to widen the errors by half,
-/// or the thirds disagree (p < 0.01).
+/// or the windows (a slide each) disagree (p < 0.01).
 fn adequacy_sentence(
     a: &uncertainty::Assessment,
     block_ratio: f64,
@@ -1479,7 +1610,7 @@ fn adequacy_sentence(
     }
     if let Some(pw) = windows_p.filter(|p| *p < 0.01) {
         why.push(format!(
-            "the recording's thirds disagree on mu_kinetic (p = {pw:.1e})"
+            "the recording's slides, fitted one by one, disagree on mu_kinetic (p = {pw:.1e})"
         ));
     }
     if why.is_empty() {

@@ -4,7 +4,7 @@
 //! lowers the Bayesian information criterion BIC = chi2 + k ln(n) (forward selection).
 
 use super::problem::{Param, TrajectoryProblem, MAX_FREE};
-use super::{solve, Solved};
+use super::{solve_loose, Solved, STAGE_FTOL};
 use crate::model::{FrictionLaw, State};
 use nalgebra::DVector;
 use rayon::prelude::*;
@@ -27,6 +27,9 @@ pub enum Nuisance {
     CameraScale,
     /// Bob marker off the rod's end: along and across the rod.
     BobOffset,
+    /// Bob marker off the rod's line only (across it): unlike the full offset it can join a
+    /// camera scale error, which acts through the marker's distance along the rod.
+    BobAcross,
     /// Slider marker off the pivot.
     SliderOffset,
     /// A time lag between the two markers' tracks.
@@ -38,7 +41,7 @@ pub enum Nuisance {
 
 impl Nuisance {
     /// Every candidate, in the order ties are broken.
-    pub const ALL: [Nuisance; 10] = [
+    pub const ALL: [Nuisance; 11] = [
         Nuisance::RigidPendulum,
         Nuisance::StaticFriction,
         Nuisance::Stribeck,
@@ -47,6 +50,7 @@ impl Nuisance {
         Nuisance::ViscousFriction,
         Nuisance::CameraScale,
         Nuisance::BobOffset,
+        Nuisance::BobAcross,
         Nuisance::SliderOffset,
         Nuisance::Lag,
     ];
@@ -61,6 +65,7 @@ impl Nuisance {
             Nuisance::ViscousFriction => "viscous_friction",
             Nuisance::CameraScale => "camera_scale",
             Nuisance::BobOffset => "bob_marker_offset",
+            Nuisance::BobAcross => "bob_marker_across",
             Nuisance::SliderOffset => "slider_marker_offset",
             Nuisance::Lag => "marker_lag",
             Nuisance::RigidPendulum => "rigid_pendulum",
@@ -77,6 +82,7 @@ impl Nuisance {
             Nuisance::ViscousFriction => &[Param::ViscousFriction],
             Nuisance::CameraScale => &[Param::ScaleError],
             Nuisance::BobOffset => &[Param::BobAlong, Param::BobAcross],
+            Nuisance::BobAcross => &[Param::BobAcross],
             Nuisance::SliderOffset => &[Param::SliderDx, Param::SliderDy],
             Nuisance::Lag => &[Param::Lag],
             Nuisance::RigidPendulum => &[Param::PendulumLength, Param::MassRatio],
@@ -93,12 +99,16 @@ impl Nuisance {
     /// Whether a model holding `self` cannot take `other`: camera scale and the bob marker's
     /// distance along the rod act through their product; Stribeck contains mu_static, so
     /// mu_static is not offered on top of it (Stribeck on top of mu_static replaces it:
-    /// [`Nuisance::supersedes`]).
+    /// [`Nuisance::supersedes`]); the full bob offset contains the offset across the rod.
     fn conflicts(self, other: Nuisance) -> bool {
         use Nuisance::*;
         matches!(
             (self, other),
-            (CameraScale, BobOffset) | (BobOffset, CameraScale) | (Stribeck, StaticFriction)
+            (CameraScale, BobOffset)
+                | (BobOffset, CameraScale)
+                | (Stribeck, StaticFriction)
+                | (BobOffset, BobAcross)
+                | (BobAcross, BobOffset)
         )
     }
 
@@ -161,6 +171,15 @@ pub struct ModelRow {
     pub delta_bic: f64,
     /// Whether this is the model the fit reports.
     pub chosen: bool,
+    /// Its mu_kinetic (NaN when its fit failed).
+    pub mu_kinetic: f64,
+    /// Why its fit failed (`None` when it converged): a failed candidate is no evidence and
+    /// takes no part in the comparison or the weights.
+    pub failed: Option<String>,
+    /// Its weight among the converged models (quasi-BIC weight, [`model_weights`]).
+    pub weight: f64,
+    /// Whether the selection passed through it: the base model and each model it took.
+    pub path: bool,
 }
 
 /// The outcome of forward selection: the chosen problem and optimum, the nuisances it holds
@@ -212,7 +231,14 @@ fn score_drops(
         for n in group.iter() {
             aug.free.extend(n.params());
         }
-        let extra: Vec<Param> = seen.iter().flat_map(|n| n.params()).copied().collect();
+        // Each camera parameter once (candidates may share one: the bob's offset across the
+        // rod is in both bob candidates).
+        let mut extra: Vec<Param> = Vec::new();
+        for &q in seen.iter().flat_map(|n| n.params()) {
+            if !extra.contains(&q) {
+                extra.push(q);
+            }
+        }
         let mut q = p.clone().resize_vertically(aug.free.len(), 0.0);
         for (i, &param) in aug.free.iter().enumerate().skip(k) {
             q[i] = problem.get(param);
@@ -222,13 +248,27 @@ fn score_drops(
         if let Ok(nq) = aug.normal_equations_observed(&q, &extra) {
             let btb = nq.jtj.view((0, 0), (k, k)).into_owned();
             if let Some(btb_inv) = btb.try_inverse() {
+                // The columns of each candidate's parameters in the augmented equations.
+                let mut cols: Vec<Vec<usize>> = Vec::new();
                 let mut col = k;
-                for n in group.iter().chain(seen.iter()) {
-                    let w = n.params().len();
-                    let g = nq.jtr.rows(col, w).into_owned();
-                    let bc = nq.jtj.view((0, col), (k, w)).into_owned();
-                    let ctc = nq.jtj.view((col, col), (w, w)).into_owned();
-                    col += w;
+                for n in group.iter() {
+                    cols.push((col..col + n.params().len()).collect());
+                    col += n.params().len();
+                }
+                for n in seen.iter() {
+                    cols.push(
+                        n.params()
+                            .iter()
+                            .filter_map(|q| extra.iter().position(|e| e == q))
+                            .map(|j| col + j)
+                            .collect(),
+                    );
+                }
+                for (n, c) in group.iter().chain(seen.iter()).zip(&cols) {
+                    let base: Vec<usize> = (0..k).collect();
+                    let g = nq.jtr.select_rows(c);
+                    let bc = nq.jtj.select_rows(&base).select_columns(c);
+                    let ctc = nq.jtj.select_rows(c).select_columns(c);
                     let s = ctc - bc.transpose() * &btb_inv * &bc;
                     let drop = s
                         .try_inverse()
@@ -310,15 +350,23 @@ fn restarted(m: &TrajectoryProblem, (y0, mu0): (State<f64>, f64)) -> TrajectoryP
     f
 }
 
+/// A candidate's fit: to a relative cost decrease of [`STAGE_FTOL`], which settles its
+/// chi-square to far below a unit (the criterion's differences that matter are units), while
+/// the last digits cost as many iterations again. The chosen model is polished after the
+/// selection.
+fn solve_candidate(m: &TrajectoryProblem, p0: DVector<f64>, max_iters: u64) -> Solved {
+    solve_loose(m, p0, max_iters, Some(STAGE_FTOL))
+}
+
 /// Solve `m` from its values and, when `fresh` is given, also from a restart; the lower
 /// cost wins. Iterations of both count.
 fn solve_starts(m: &TrajectoryProblem, fresh: Option<(State<f64>, f64)>, max_iters: u64) -> Solved {
-    let a = solve(m, m.values(), max_iters);
+    let a = solve_candidate(m, m.values(), max_iters);
     let Some(start) = fresh else {
         return a;
     };
     let f = restarted(m, start);
-    let b = solve(&f, f.values(), max_iters);
+    let b = solve_candidate(&f, f.values(), max_iters);
     match (a, b) {
         (Ok(x), Ok(y)) => {
             let iters = x.2 + y.2;
@@ -328,6 +376,140 @@ fn solve_starts(m: &TrajectoryProblem, fresh: Option<(State<f64>, f64)>, max_ite
         (Ok(x), Err(_)) => Ok(x),
         (Err(_), b) => b,
     }
+}
+
+/// Chi-square a candidate may end above the model it nests and still count as converged:
+/// the solvers' stopping tolerance, with a floor of one unit.
+fn nested_slack(parent_chi2: f64) -> f64 {
+    (1e-4 * parent_chi2).max(1.0)
+}
+
+/// The round's best candidate: its nuisances, problem, optimum, chi-square and row.
+type Best = (Vec<Nuisance>, TrajectoryProblem, DVector<f64>, f64, usize);
+
+/// A failed candidate: why, the chi-square it reached (NaN when none) and the iterations.
+type Failure = (String, f64, u64);
+
+/// Fit candidate `m` from its own start (and `fresh` when given). A candidate that nests the
+/// current model (`parent`: that model's chi-square) yet ends worse than it has not converged:
+/// it is retried, longer and from the data's start, and is a failure when it still ends
+/// worse (it is then no evidence about the nuisance, and must not be compared as if it were).
+fn fit_candidate(
+    m: &TrajectoryProblem,
+    fresh: Option<(State<f64>, f64)>,
+    opts: &SelectOptions,
+    parent: Option<f64>,
+) -> Result<(DVector<f64>, f64, u64), Failure> {
+    let worse = |cost: f64| parent.is_some_and(|c| chi2_of(cost) > c + nested_slack(c));
+    let first = solve_starts(m, fresh, opts.max_iters);
+    let (mut best, mut iters) = match first {
+        Ok((q, cost, it)) if !worse(cost) => return Ok((q, cost, it)),
+        Ok((q, cost, it)) => (Some((q, cost)), it),
+        Err(e) if parent.is_none() => return Err((e, f64::NAN, 0)),
+        Err(_) => (None, 0),
+    };
+    // The retries: on from where the first fit stopped with twice the iterations, and from
+    // the data's start when the first fit did not use it.
+    let mut retries: Vec<(TrajectoryProblem, DVector<f64>)> = Vec::new();
+    if let Some((q, _)) = &best {
+        retries.push((m.clone(), q.clone()));
+    }
+    if m.free.contains(&Param::MuStatic) && m.rig.mu_static > m.rig.mu_kinetic {
+        // From the current model itself: mu_static just above mu_kinetic, where the static
+        // coefficient (and Stribeck's law) does what Coulomb's law with one coefficient does.
+        let mut tied = m.clone();
+        tied.rig.mu_static = tied.rig.mu_kinetic * (1.0 + 1e-9);
+        let v = tied.values();
+        retries.push((tied, v));
+    }
+    if let (None, Some(start)) = (fresh, opts.fresh_start) {
+        let f = restarted(m, start);
+        let v = f.values();
+        retries.push((f, v));
+    }
+    let mut last_err = String::from("no start converged");
+    for (r, p0) in retries {
+        match solve_candidate(&r, p0, 2 * opts.max_iters) {
+            Ok((q, cost, it)) => {
+                iters += it;
+                if best.as_ref().is_none_or(|b| cost < b.1) {
+                    best = Some((q, cost));
+                }
+            }
+            Err(e) => last_err = e,
+        }
+    }
+    match best {
+        Some((q, cost)) if !worse(cost) => Ok((q, cost, iters)),
+        Some((_, cost)) => Err((
+            format!(
+                "did not converge: its chi-square {:.1} stayed above the {:.1} of the model it extends",
+                chi2_of(cost),
+                parent.unwrap_or(f64::NAN)
+            ),
+            chi2_of(cost),
+            iters,
+        )),
+        None => Err((last_err, f64::NAN, iters)),
+    }
+}
+
+/// `r` marked as a failed fit.
+fn failed_row(mut r: ModelRow, why: String) -> ModelRow {
+    r.failed = Some(why);
+    r.mu_kinetic = f64::NAN;
+    r.bic = f64::NAN;
+    r
+}
+
+/// Each converged model's weight w_i = exp(-dBIC_i / (2 c)) / sum, the Bayesian information
+/// criterion's approximation to the posterior probability of the model (Burnham and Anderson,
+/// "Model selection and multimodel inference", 6.4), with the chi-squares divided by the
+/// chosen model's reduced chi-square `c` (at least 1: their quasi-likelihood correction for
+/// overdispersion). A model that misfits overstates every chi-square difference by that
+/// factor, which would make one model look certain. A model fitted twice (the same
+/// nuisances) counts once.
+pub fn model_weights(rows: &mut [ModelRow], c: f64) {
+    let mut seen = std::collections::HashSet::new();
+    let mut total = 0.0;
+    for r in rows.iter_mut() {
+        r.weight = 0.0;
+        let mut set: Vec<&str> = r.name.split('+').collect();
+        set.sort_unstable();
+        if r.failed.is_some() || !r.delta_bic.is_finite() || !seen.insert(set.join("+")) {
+            continue;
+        }
+        r.weight = (-0.5 * r.delta_bic / c).exp();
+        total += r.weight;
+    }
+    if total > 0.0 {
+        rows.iter_mut().for_each(|r| r.weight /= total);
+    }
+}
+
+/// The spread of mu_kinetic across the models the weights leave in play: sum w_i (mu_i -
+/// mu)^2 around the chosen model's `mu`, and the models that carry it (the chosen one, and
+/// each that gives a tenth of the sum or more).
+/// Added in quadrature to the chosen model's variance it gives the unconditional standard
+/// error (Burnham and Anderson, eq. 4.9, with the chosen model's value for the average).
+pub fn model_spread(rows: &[ModelRow], mu: f64) -> (f64, Vec<String>) {
+    let var = rows
+        .iter()
+        .filter(|r| r.weight > 0.0 && r.mu_kinetic.is_finite())
+        .map(|r| r.weight * (r.mu_kinetic - mu).powi(2))
+        .sum();
+    let names = rows
+        .iter()
+        .filter(|r| r.weight > 0.0 && r.mu_kinetic.is_finite())
+        .filter(|r| r.chosen || r.weight * (r.mu_kinetic - mu).powi(2) >= 0.1 * var)
+        .map(|r| {
+            format!(
+                "{} (weight {:.2e}, mu_kinetic {:.6})",
+                r.name, r.weight, r.mu_kinetic
+            )
+        })
+        .collect();
+    (var, names)
 }
 
 /// Forward selection from the base model `problem` at its optimum `p` (chi-square `chi2`).
@@ -353,23 +535,39 @@ pub fn forward(
         bic: bic(m.free.len(), chi2),
         delta_bic: 0.0,
         chosen: false,
+        mu_kinetic: m.rig.mu_kinetic,
+        failed: None,
+        weight: 0.0,
+        path: false,
     };
     let mut chosen: Vec<Nuisance> = opts.already.clone();
     let mut current = (problem, p, chi2);
-    let mut rows = vec![row(&chosen, &current.0, chi2)];
+    let mut rows = vec![ModelRow {
+        path: true,
+        ..row(&chosen, &current.0, chi2)
+    }];
     let mut iterations = 0;
     for &nu in &opts.forced {
         if chosen.contains(&nu) || chosen.iter().any(|c| c.conflicts(nu)) {
             continue;
         }
         let m = nu.add_to(&current.0, opts.mu_static_start);
-        if let Ok((q, cost, iters)) = solve_starts(&m, opts.fresh_start, opts.max_iters) {
-            iterations += iters;
-            let mut m = m;
-            m.set_values(&q);
-            chosen = nu.join(&chosen);
-            rows.push(row(&chosen, &m, chi2_of(cost)));
-            current = (m, q, chi2_of(cost));
+        match fit_candidate(&m, opts.fresh_start, opts, Some(current.2)) {
+            Ok((q, cost, iters)) => {
+                iterations += iters;
+                let mut m = m;
+                m.set_values(&q);
+                chosen = nu.join(&chosen);
+                rows.push(ModelRow {
+                    path: true,
+                    ..row(&chosen, &m, chi2_of(cost))
+                });
+                current = (m, q, chi2_of(cost));
+            }
+            Err((why, chi2, iters)) => {
+                iterations += iters;
+                rows.push(failed_row(row(&nu.join(&chosen), &m, chi2), why));
+            }
         }
     }
     for _ in 0..opts.max_added {
@@ -413,15 +611,26 @@ pub fn forward(
         // the pendulum's period is wrong): under misfit each candidate is also fitted without it.
         let drop_static = misfit && chosen.contains(&Nuisance::StaticFriction);
         // Under misfit the score test only orders the candidates: the first two (and their
-        // variants) are fitted first, and the rest only when none of those describes the
-        // recording (a candidate that does leaves the others at most noise to gain this round).
+        // variants) are fitted first, and the rest only when neither of those earns its place
+        // (lowers the criterion by more than 2). The selection is greedy: one that does is
+        // taken, and the next round screens the others again from the better model; fitting
+        // every candidate in every round of a misfitting model cost seconds.
         let leading = if misfit { 2 } else { to_fit.len() };
         let (mut first, mut rest) = (Vec::new(), Vec::new());
         for (i, &nu) in to_fit.iter().enumerate() {
-            let jobs = if i < leading { &mut first } else { &mut rest };
+            // The friction laws, which no score test ranks, are among the first when the
+            // onsets show mu_static above mu_kinetic.
+            let jobs = if i < leading || (!nu.screened() && opts.static_evidence) {
+                &mut first
+            } else {
+                &mut rest
+            };
+            // Nested: the current model is the candidate at its neutral values, so its fit
+            // can be no worse than the current one's.
             jobs.push((
                 nu.join(&chosen),
                 nu.add_to(cur_problem, opts.mu_static_start),
+                Some(*cur_chi2),
             ));
             if drop_static && nu.supersedes() != Some(Nuisance::StaticFriction) {
                 let mut tied = cur_problem.clone();
@@ -433,48 +642,62 @@ pub fn forward(
                     .copied()
                     .filter(|&c| c != Nuisance::StaticFriction)
                     .collect();
-                jobs.push((nu.join(&without), nu.add_to(&tied, opts.mu_static_start)));
+                jobs.push((
+                    nu.join(&without),
+                    nu.add_to(&tied, opts.mu_static_start),
+                    None,
+                ));
             }
         }
-        let run = |jobs: Vec<(Vec<Nuisance>, TrajectoryProblem)>| {
+        let run = |jobs: Vec<(Vec<Nuisance>, TrajectoryProblem, Option<f64>)>| {
             jobs.into_par_iter()
                 .with_max_len(1)
-                .map(|(set, m)| {
-                    let solved = solve_starts(&m, fresh, opts.max_iters);
+                .map(|(set, m, parent)| {
+                    let solved = fit_candidate(&m, fresh, opts, parent);
                     (set, m, solved)
                 })
                 .collect::<Vec<_>>()
         };
         let mut fits = run(first);
-        let adequate = fits.iter().any(|(_, m, s)| {
+        let cur_bic = bic(cur_problem.free.len(), *cur_chi2);
+        let earns = fits.iter().any(|(_, m, s)| {
             s.as_ref()
-                .is_ok_and(|(_, cost, _)| !misfits(m, chi2_of(*cost)))
+                .is_ok_and(|(_, cost, _)| bic(m.free.len(), chi2_of(*cost)) < cur_bic - 2.0)
         });
-        if !adequate {
+        if !earns {
             fits.extend(run(rest));
         }
-        let mut best: Option<(Vec<Nuisance>, TrajectoryProblem, DVector<f64>, f64)> = None;
+        let mut best: Option<Best> = None;
         for (set, m, solved) in fits {
-            let Ok((q, cost, iters)) = solved else {
-                continue;
+            let (q, cost, iters) = match solved {
+                Ok(s) => s,
+                Err((why, chi2, iters)) => {
+                    iterations += iters;
+                    rows.push(failed_row(row(&set, &m, chi2), why));
+                    continue;
+                }
             };
             iterations += iters;
             let c2 = chi2_of(cost);
-            rows.push(row(&set, &m, c2));
+            let mut fitted = m.clone();
+            fitted.set_values(&q);
+            rows.push(row(&set, &fitted, c2));
+            let at = rows.len() - 1;
             if best
                 .as_ref()
                 .is_none_or(|b| bic(m.free.len(), c2) < bic(b.1.free.len(), b.3))
             {
-                best = Some((set, m, q, c2));
+                best = Some((set, m, q, c2, at));
             }
         }
-        let Some((set, mut m, q, c2)) = best else {
+        let Some((set, mut m, q, c2, at)) = best else {
             break;
         };
         // Positive evidence (Kass and Raftery): a BIC lower by more than 2.
         if bic(m.free.len(), c2) < bic(cur_problem.free.len(), *cur_chi2) - 2.0 {
             m.set_values(&q);
             chosen = set;
+            rows[at].path = true;
             current = (m, q, c2);
         } else {
             break;
@@ -484,8 +707,10 @@ pub fn forward(
     let best_bic = bic(current.0.free.len(), current.2);
     for r in &mut rows {
         r.delta_bic = r.bic - best_bic;
-        r.chosen = r.name == chosen_name && (r.bic - best_bic).abs() < 1e-9;
+        r.chosen = r.failed.is_none() && r.name == chosen_name && (r.bic - best_bic).abs() < 1e-9;
     }
+    let dof = (n - current.0.free.len() as f64).max(1.0);
+    model_weights(&mut rows, (current.2 / dof).max(1.0));
     let (problem, p, _) = current;
     Selection {
         problem,

@@ -151,21 +151,68 @@ pub struct WindowFit {
     pub stderr: f64,
 }
 
-/// mu_kinetic fitted on each of `parts` equal stretches of the recording: the state at the
-/// stretch's start from the whole fit, then mu_kinetic and that state free, everything else
-/// held. Stretches where the whole fit does not slide are left out (mu says nothing there).
+/// Most windows the motion is cut into (each is one more fit).
+pub const MAX_WINDOWS: usize = 6;
+
+/// Frame indices that cut the recording by its fitted motion (`events`): in the middle of each
+/// stick between two slides, and at each reversal, so every window holds its own slide. At
+/// most [`MAX_WINDOWS`] windows (evenly chosen cuts), each at least 30 frames; a motion with
+/// fewer than two slides gives the recording's thirds.
+pub fn motion_bounds(times: &[f64], events: &[crate::sim::Event]) -> Vec<usize> {
+    use crate::sim::EventKind;
+    let n = times.len();
+    let mut cuts: Vec<f64> = Vec::new();
+    let mut stuck_at: Option<f64> = None;
+    for e in events {
+        match e.kind {
+            EventKind::Stick | EventKind::SuddenStop | EventKind::ImpulsiveStop => {
+                stuck_at = Some(e.t)
+            }
+            EventKind::Slip => {
+                if let Some(t) = stuck_at.take() {
+                    cuts.push(0.5 * (t + e.t));
+                }
+            }
+            EventKind::Reversal => cuts.push(e.t),
+            _ => {}
+        }
+    }
+    if cuts.len() > MAX_WINDOWS - 1 {
+        let k = cuts.len();
+        cuts = (1..MAX_WINDOWS)
+            .map(|j| cuts[j * k / MAX_WINDOWS])
+            .collect();
+    }
+    let mut bounds = vec![0];
+    for t in cuts {
+        let i = times.partition_point(|&x| x < t).min(n - 1);
+        if i >= bounds[bounds.len() - 1] + 30 && i + 30 < n {
+            bounds.push(i);
+        }
+    }
+    bounds.push(n - 1);
+    if bounds.len() < 3 {
+        return (0..=3).map(|k| k * (n - 1) / 3).collect();
+    }
+    bounds
+}
+
+/// mu_kinetic fitted on each stretch between consecutive frame indices `bounds`: the state at
+/// the stretch's start from the whole fit, then mu_kinetic and that state free, everything
+/// else held. Stretches where the whole fit does not slide are left out (mu says nothing
+/// there).
 pub fn windows(
     problem: &TrajectoryProblem,
-    parts: usize,
+    bounds: &[usize],
     settings: &FitSettings,
 ) -> Vec<WindowFit> {
     let obs = problem.observations();
     let n = obs.times.len();
-    if n < 30 * parts {
+    let parts = bounds.len().saturating_sub(1);
+    if n < 90 || parts < 2 || bounds[parts] > n - 1 {
         return Vec::new();
     }
     let t_end = obs.times[n - 1];
-    let bounds: Vec<usize> = (0..=parts).map(|k| k * (n - 1) / parts).collect();
     let starts: Vec<f64> = bounds.iter().map(|&i| obs.times[i]).collect();
     let Ok(sol) = simulate(
         &problem.rig,
@@ -267,6 +314,24 @@ pub fn windows(
             })
         })
         .collect()
+}
+
+/// The windows' spread about the whole fit's value `mu`: sqrt(sum w_i (mu_i - mu)^2 / sum w_i)
+/// with w_i = 1 / se_i^2, so a window that says little (a short slide) moves it little. When
+/// the windows disagree this is the error of a value taken from one model over the whole
+/// recording: the spread with which its parts see the model's misfit.
+pub fn window_spread(windows: &[WindowFit], mu: f64) -> f64 {
+    let (mut num, mut den) = (0.0, 0.0);
+    for w in windows.iter().filter(|w| w.stderr > 0.0) {
+        let wi = 1.0 / (w.stderr * w.stderr);
+        num += wi * (w.mu_kinetic - mu).powi(2);
+        den += wi;
+    }
+    if den > 0.0 {
+        (num / den).sqrt()
+    } else {
+        0.0
+    }
 }
 
 /// Whether the windows' values agree within their errors: the p-value of

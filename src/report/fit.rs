@@ -165,7 +165,7 @@ fn pendulum_text(s: &mut String, p: &crate::fit::PendulumFound) {
 }
 
 /// The readable report of `appell fit`: what lmfit's fit_report gives, and the model
-/// comparison, the noise, the thirds and the adequacy verdict.
+/// comparison, the noise, the windows and the adequacy verdict.
 pub fn fit_text(rep: &FitReport) -> String {
     let mut s = String::new();
     let a = &rep.adequacy;
@@ -289,23 +289,34 @@ pub fn fit_text(rep: &FitReport) -> String {
             s,
             "[[Models compared]] by BIC = chi2 + k ln(n), forward selection"
         );
-        for m in &rep.models {
+        for m in rep.models.iter().filter(|m| m.failed.is_none()) {
             let _ = writeln!(
                 s,
-                "  {} {:<36} k {:>2}  chi2 {:>12.1}  BIC {:>12.1}  dBIC {:>+10.1}",
+                "  {} {:<36} k {:>2}  chi2 {:>12.1}  BIC {:>12.1}  dBIC {:>+10.1}  weight {:.3}  mu_kinetic {:.5}",
                 if m.chosen { "*" } else { " " },
                 m.name,
                 m.free.len(),
                 m.chi2,
                 m.bic,
-                m.delta_bic
+                m.delta_bic,
+                m.weight,
+                m.mu_kinetic
+            );
+        }
+        for m in rep.models.iter().filter(|m| m.failed.is_some()) {
+            let _ = writeln!(
+                s,
+                "  failed {:<36} k {:>2}  {}",
+                m.name,
+                m.free.len(),
+                m.failed.as_deref().unwrap_or("")
             );
         }
     }
     if !rep.windows.is_empty() {
         let _ = writeln!(
             s,
-            "[[Thirds]] mu_kinetic per stretch (agreement p = {})",
+            "[[Windows]] mu_kinetic per slide (cut at sticks and reversals; agreement p = {})",
             a.windows_p_value
                 .map_or("-".to_owned(), |p| format!("{p:.3}"))
         );
@@ -397,7 +408,7 @@ fn tick_label(v: f64, span: f64) -> String {
 
 impl FitFigure<'_> {
     /// The legend's key numbers: mu with its error and interval, the model, the fit's quality
-    /// and the thirds.
+    /// and the windows.
     fn notes(&self) -> Vec<String> {
         let rep = self.report;
         let mut notes = Vec::new();
@@ -530,7 +541,7 @@ impl Figure for FitFigure<'_> {
 
         let (charts, side) = root.split_horizontally(1000);
         let heights = [250, 250, 200, 200];
-        let (rows, thirds_area) = charts.split_vertically(heights.iter().sum::<u32>());
+        let (rows, windows_area) = charts.split_vertically(heights.iter().sum::<u32>());
         let mut areas = Vec::new();
         let mut rest = rows;
         for h in &heights[..3] {
@@ -614,7 +625,7 @@ impl Figure for FitFigure<'_> {
             }
         }
 
-        // The thirds: mu_kinetic fitted on each stretch against the whole fit's interval.
+        // The windows: mu_kinetic fitted on each stretch against the whole fit's interval.
         if let Some(mu) = rep.mu_kinetic {
             let ys = rep
                 .windows
@@ -628,7 +639,7 @@ impl Figure for FitFigure<'_> {
                 .chain(mu.ci95);
             let yr = data_range(ys, 0.15);
             let span = yr.end - yr.start;
-            let mut chart = ChartBuilder::on(&thirds_area)
+            let mut chart = ChartBuilder::on(&windows_area)
                 .caption(
                     "mu_kinetic per third of the recording (95% bars) against the whole fit's 95% interval",
                     ("sans-serif", 16),
