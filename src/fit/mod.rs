@@ -1617,8 +1617,24 @@ fn adequacy_sentence(
         return None;
     }
     let interval = mu.map_or(String::new(), |e| {
+        let what: Vec<&str> = e
+            .interval
+            .split('+')
+            .filter_map(|tag| match tag {
+                "block" => Some("the residuals' correlation"),
+                "windows" => Some("the spread of the slides' values"),
+                "models" => Some("the spread of close models"),
+                "path" => Some("as much as mu moved while nuisances were added"),
+                _ => None,
+            })
+            .collect();
+        let held = if what.is_empty() {
+            String::new()
+        } else {
+            format!(" to hold {}", what.join(", "))
+        };
         format!(
-            "; the interval for mu_kinetic was widened to [{:.5}, {:.5}] ({})",
+            "; the interval for mu_kinetic was widened{held}: [{:.5}, {:.5}] ({})",
             e.ci95[0], e.ci95[1], e.interval
         )
     });
