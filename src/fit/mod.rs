@@ -173,6 +173,9 @@ pub struct Adequacy {
     pub block_se_ratio: f64,
     /// Frames per block of the block covariance.
     pub block_frames: usize,
+    /// One-sided p-value of the runs test on the residuals' signs (small: long runs, a smooth
+    /// misfit even below the chi-square's threshold).
+    pub runs_p_value: f64,
     /// p-value of the windows' agreement (`None` with fewer than two sliding windows).
     pub windows_p_value: Option<f64>,
     /// One plain sentence when the result is limited by the model; `None` when it is not.
@@ -1213,7 +1216,11 @@ pub fn fit(
     // windows) is one more nuisance away from another mu: the interval keeps room for as much
     // as mu moved along the selection's path.
     let block_ratio = mu_index.map_or(1.0, |i| a.se_block[i] / a.se[i]);
-    let misfit = a.p_value < 1e-3 || block_ratio > 1.5 || windows_p.is_some_and(|p| p < 0.01);
+    let runs_p = uncertainty::runs_p_value(&problem, a.r.as_slice());
+    let misfit = a.p_value < 1e-3
+        || block_ratio > 1.5
+        || windows_p.is_some_and(|p| p < 0.01)
+        || runs_p < RUNS_P;
     if let (Some(i), true) = (mu_index, misfit) {
         let v = params[i].1.value;
         let shift = models
@@ -1230,7 +1237,13 @@ pub fn fit(
         *e = within_bounds(*q, *e, 0.0);
     }
     let rho = uncertainty::lag1(&problem, a.r.as_slice());
-    let mut limited = adequacy_sentence(&a, block_ratio, windows_p, mu_index.map(|i| &params[i].1));
+    let mut limited = adequacy_sentence(
+        &a,
+        block_ratio,
+        windows_p,
+        runs_p,
+        mu_index.map(|i| &params[i].1),
+    );
     let failed = pinned_friction(&problem, mu_index.map(|i| &params[i].1));
     if let Some(why) = &failed {
         limited = Some(match limited {
@@ -1415,6 +1428,7 @@ pub fn fit(
         aic: a.chi2 + 2.0 * k as f64,
         bic: a.chi2 + k as f64 * (n_rows as f64).ln(),
         lag1: rho,
+        runs_p_value: runs_p,
         block_se_ratio: block_ratio,
         block_frames: a.block_frames,
         windows_p_value: windows_p,
@@ -1587,13 +1601,19 @@ fn pendulum_found(
     Some(PendulumFound::new(l.value, r.value, cov, total, m_p))
 }
 
+/// Below this p-value the runs test says the residuals are not noise (four streams of
+/// thousands of signs: a smooth miss of 3/4 of the noise is enough, whatever noise was measured).
+const RUNS_P: f64 = 1e-4;
+
 /// The one plain sentence when the model limits the result: chi-square fails against the
 /// measured noise (p < 0.001), the residuals are correlated enough to widen the errors by half,
-/// or the windows (a slide each) disagree (p < 0.01).
+/// the windows (a slide each) disagree (p < 0.01), or the residuals' signs run in long
+/// stretches (runs test p < [`RUNS_P`]).
 fn adequacy_sentence(
     a: &uncertainty::Assessment,
     block_ratio: f64,
     windows_p: Option<f64>,
+    runs_p: f64,
     mu: Option<&Estimate>,
 ) -> Option<String> {
     let mut why = Vec::new();
@@ -1606,6 +1626,11 @@ fn adequacy_sentence(
     if block_ratio > 1.5 {
         why.push(format!(
             "the residuals are correlated in time (block standard error {block_ratio:.1} times the plain one)"
+        ));
+    }
+    if runs_p < RUNS_P {
+        why.push(format!(
+            "the residuals keep their sign over long stretches (runs test p = {runs_p:.1e})"
         ));
     }
     if let Some(pw) = windows_p.filter(|p| *p < 0.01) {

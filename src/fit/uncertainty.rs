@@ -138,6 +138,39 @@ pub fn lag1(problem: &TrajectoryProblem, r: &[f64]) -> f64 {
     }
 }
 
+/// Wald and Wolfowitz's runs test on the residuals' signs, per coordinate stream, pooled: the
+/// one-sided p-value of so few runs (stretches of one sign) if the residuals were independent.
+/// A model that misses a smooth part of the motion leaves long runs whatever the noise level:
+/// the test needs no noise measurement, so it still sees the miss where the noise measured
+/// from the tracks is too large for the chi-square to (correlated tracking noise, motion blur).
+/// 1 without residuals.
+pub fn runs_p_value(problem: &TrajectoryProblem, r: &[f64]) -> f64 {
+    runs_p(&streams(problem, r))
+}
+
+/// [`runs_p_value`] of residual streams.
+fn runs_p(streams: &[Vec<f64>]) -> f64 {
+    let (mut runs, mut mean, mut var) = (0.0, 0.0, 0.0);
+    for s in streams {
+        let signs: Vec<bool> = s.iter().filter(|v| **v != 0.0).map(|v| *v > 0.0).collect();
+        let n = signs.len() as f64;
+        let pos = signs.iter().filter(|b| **b).count() as f64;
+        let neg = n - pos;
+        if pos < 1.0 || neg < 1.0 {
+            continue;
+        }
+        runs += 1.0 + signs.windows(2).filter(|w| w[0] != w[1]).count() as f64;
+        let mu = 2.0 * pos * neg / n + 1.0;
+        mean += mu;
+        var += (mu - 1.0) * (mu - 2.0) / (n - 1.0);
+    }
+    if var <= 0.0 {
+        return 1.0;
+    }
+    let z = (runs - mean) / var.sqrt();
+    statrs::distribution::Normal::standard().cdf(z)
+}
+
 /// mu_kinetic fitted on one stretch of the recording.
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct WindowFit {
@@ -501,4 +534,46 @@ pub fn profile_interval(
         ends[side] = 0.5 * (lo.0 + hi.0);
     }
     Some(ends)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::runs_p;
+
+    /// A reproducible stream of independent signs (xorshift), symmetric about zero.
+    fn noise(n: usize, seed: u64) -> Vec<f64> {
+        let mut x = seed.max(1);
+        (0..n)
+            .map(|_| {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                (x % 2001) as f64 - 1000.0
+            })
+            .collect()
+    }
+
+    /// Independent residuals pass; a smooth miss of 3/4 of the noise (a slow sine added) does
+    /// not, whatever the noise level is thought to be; alternating signs are the opposite of
+    /// long runs.
+    #[test]
+    fn long_runs_of_one_sign_are_caught() {
+        let white: Vec<Vec<f64>> = (1..5).map(|s| noise(2000, s)).collect();
+        assert!(runs_p(&white) > 1e-3, "{}", runs_p(&white));
+        let smooth: Vec<Vec<f64>> = white
+            .iter()
+            .map(|s| {
+                s.iter()
+                    .enumerate()
+                    .map(|(i, v)| v + 430.0 * (i as f64 / 300.0).sin())
+                    .collect()
+            })
+            .collect();
+        assert!(runs_p(&smooth) < 1e-4, "{}", runs_p(&smooth));
+        let alternating = vec![(0..2000)
+            .map(|i| if i % 2 == 0 { 1.0 } else { -1.0 })
+            .collect()];
+        assert!(runs_p(&alternating) > 0.999);
+        assert_eq!(runs_p(&[vec![1.0; 10]]), 1.0);
+    }
 }

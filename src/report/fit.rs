@@ -116,6 +116,7 @@ pub fn fit_json(rep: &FitReport) -> Value {
         "nuisances": rep.nuisances.iter().map(|n| n.name()).collect::<Vec<_>>(),
         "windows": rep.windows,
         "windows_p_value": a.windows_p_value,
+        "runs_p_value": a.runs_p_value,
         "block_se_ratio": a.block_se_ratio,
         "block_frames": a.block_frames,
         "limited_by_model": a.limited_by_model,
