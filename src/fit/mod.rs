@@ -12,6 +12,7 @@ pub mod noise;
 mod outliers;
 mod problem;
 mod select;
+mod stages;
 mod uncertainty;
 
 pub use noise::NoiseEstimate;
@@ -20,12 +21,11 @@ pub use select::{ModelRow, Nuisance};
 pub use uncertainty::WindowFit;
 
 use crate::model::{Camera, Mode, Rig, Shorthands, State};
-use crate::sim::{simulate_each, Event, EventKind, Options, Request, Sample, Solution};
+use crate::sim::{simulate_each, Event, Options, Request, Sample, Solution};
 use argmin::core::{Executor, State as _};
 use lm::LevenbergMarquardt;
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
-use std::sync::atomic::Ordering;
 use std::sync::Arc;
 use thiserror::Error;
 
@@ -961,518 +961,71 @@ fn slider_moves(obs: &Observations, sigma: f64) -> Option<f64> {
     (range > 10.0 * sigma).then_some(range)
 }
 
-/// Fit the free parameters to `obs` starting from `rig_guess` (its mu values are guesses).
+/// Fit the free parameters to `obs` starting from `rig_guess` (its mu values are guesses):
+/// the stages of [`stages`], in order.
 pub fn fit(
     obs: Observations,
     rig_guess: &Rig<f64>,
     settings: &FitSettings,
 ) -> Result<FitReport, FitError> {
-    let mut obs = check_data(obs)?;
-    let n_frames = obs.times.len();
-    let (sigma, noise_measured, mut outliers) = noise_and_outliers(&mut obs, settings)?;
-    enough_frames(&obs)?;
-    let noise_dof: f64 = noise_measured
-        .iter()
-        .flatten()
-        .map(|e| e.dof)
-        .sum::<f64>()
-        .max(2.0);
-    let obs = Arc::new(obs);
+    let data = stages::prepare(obs, settings)?;
     let mut warnings = Vec::new();
-    let base = base_fit(&obs, rig_guess, sigma, settings, &mut warnings)?;
-    let (mut problem, mut p) = (base.problem, base.p);
-    let mut iterations = base.iterations;
-    let mut starts = base.starts;
-    let mut late = residual_outliers(&mut problem, &mut p, settings, &mut iterations, false);
-
-    // Does the fitted motion slide? A slide shorter than the slider's noise is not seen; a
-    // raw track that clearly moves while no fit slides is a failed fit, said as such.
-    let mo = motion(&problem)?;
-    let fitted_range = mo.range;
-    let slides = mo.slides && fitted_range.1 - fitted_range.0 > 3.0 * problem.sigma[0];
-    let raw_moves = slider_moves(&obs, problem.sigma[0]);
-    let onset = mo
-        .sol
-        .events
-        .iter()
-        .any(|e| e.kind == EventKind::Slip && e.t > 0.0)
-        || base.mu_s_data.is_some();
-
-    // Step 5: the nuisances the data ask for.
-    let mut models = Vec::new();
-    let mut nuisances = Vec::new();
-    if slides && (settings.nuisances || !settings.with.is_empty()) {
-        let chi2 = problem.chi2(&p).unwrap_or(f64::INFINITY);
-        let mu_k = p[0];
-        let opts = select::SelectOptions {
-            // The friction laws, where an onset can show them (the selection offers them in a
-            // round whose model misfits, or always when the onsets show mu_static above
-            // mu_kinetic).
-            friction_candidates: settings.mu_static == StaticMode::Auto && onset,
-            static_evidence: base.static_evidence == Some(true),
-            mu_static_start: base.mu_s_data.unwrap_or(1.15 * mu_k).max(1.05 * mu_k),
-            // No cap decides the answer: the criterion stops the selection (every candidate
-            // is screened each round, and at most two plus the friction laws are fitted).
-            max_added: if settings.nuisances {
-                Nuisance::ALL.len()
-            } else {
-                0
-            },
-            max_iters: settings.max_iters,
-            already: if problem.free.contains(&Param::MuStatic) {
-                vec![Nuisance::StaticFriction]
-            } else {
-                Vec::new()
-            },
-            // A fresh start over a long recording would meet events it cannot match yet
-            // (the base fit reaches such recordings through their first frames).
-            fresh_start: (obs.times.len() <= settings.long_prefix.saturating_mul(2))
-                .then_some((base.y0_guess, base.mu0)),
-            forced: settings.with.clone(),
-        };
-        let sel = select::forward(problem, p, chi2, &opts);
-        iterations += sel.iterations;
-        problem = sel.problem;
-        p = sel.p;
-        models = sel.rows;
-        nuisances = sel.chosen;
-    }
-    let mut moved = !nuisances.is_empty();
-    if late.deferred {
-        late = residual_outliers(&mut problem, &mut p, settings, &mut iterations, true);
-        moved |= late != ResidualOutliers::default();
-    }
-    outliers = [0, 1].map(|m| outliers[m] + late.dropped[m]);
-    if outliers.iter().sum::<usize>() > 0 {
-        warnings.push(format!(
-            "{} slider and {} bob positions were mis-tracked (beyond {} noise deviations) and left out",
-            outliers[0], outliers[1], RESIDUAL_OUTLIER
-        ));
-    }
-    if late.weighted.iter().sum::<usize>() > 0 {
-        warnings.push(format!(
-            "{} slider and {} bob positions lie beyond {} deviations of the fit, but the model does not describe the rest of the recording either: they were down-weighted (Huber), not left out",
-            late.weighted[0], late.weighted[1], RESIDUAL_OUTLIER
-        ));
-    }
-
-    if !slides {
-        if let Some(range) = raw_moves {
-            warnings.push(format!(
-                "the slider moves by {range:.4} m in the recording but no fit reproduces a slide: the fit failed; try --starts with other mu values"
-            ));
-        } else {
-            warnings.push("the slider never slides in the recording: mu_kinetic is not identifiable from it; mu_static is only bounded from below".into());
-        }
-        // The stuck pendulum: mu where it never slips (0.999 mu*, no paradox either).
-        let mu_hold = 0.999 * crate::model::regions::mu_critical(problem.rig.mass_ratio());
-        problem.rig.mu_kinetic = mu_hold;
-        problem.rig.mu_static = mu_hold;
-        problem.initial[2] = 0.0;
-        problem.free = vec![Param::X, Param::Theta, Param::ThetaDot];
-        if let Ok((q, _, it)) = solve(&problem, problem.values(), settings.max_iters) {
-            iterations += it;
-            p = q;
-            problem.set_values(&p);
-        } else {
-            p = problem.values();
-        }
-        moved = true;
-    }
-
-    // Step 6: mu_static. Freed at its bound mu_static = mu_kinetic it says only "up to".
-    let mut static_at_bound = false;
-    let mut mu_static_free = false;
-    if slides {
-        if let Some(i) = idx(&problem, Param::MuStatic) {
-            if p[i] - p[0] <= 1e-6 * p[0].max(1e-9) {
-                problem.free.remove(i);
-                problem.tie_static = true;
-                p = problem.values();
-                static_at_bound = true;
-                moved = true;
-            } else {
-                mu_static_free = true;
-            }
-        }
-    }
-    let mo = if moved { motion(&problem)? } else { mo };
-    let sticks = mo.sticks;
-    let mo_ratio = mo.needed_ratio;
-    let mo_speeds = mo.slide_speeds;
-    let sol = mo.sol;
-    let slip_after_stick = sol
-        .events
-        .iter()
-        .any(|e| e.kind == EventKind::Slip && e.t > 0.0);
-
-    // Step 7: uncertainty.
-    // Polished once more unless a long recording's whole fit already converged on this very
-    // model and weights (each pass over a million frames costs a third of a second).
-    let settled = base
-        .settled
-        .clone()
-        .filter(|_| !moved && late.dropped == [0, 0]);
-    let polished = match settled {
-        Some(reason) => Ok((p.clone(), 0.0, 0, reason)),
-        None => solve_traced(&problem, p.clone(), settings.max_iters),
-    };
-    let (stop_reason, p) = match polished {
-        Ok((q, _, it, reason)) => {
-            iterations += it;
-            problem.set_values(&q);
-            (reason, q)
-        }
-        Err(e) => (format!("final polish failed: {e}"), p),
-    };
-    let a = uncertainty::assess(&problem, &p, noise_dof).map_err(FitError::NoStart)?;
-    let k = p.len();
-    let scale = a.reduced_chi2.max(1.0);
-    let se: Vec<f64> = (0..k).map(|i| a.se[i].max(a.se_block[i])).collect();
-    let correlation =
-        DMatrix::from_fn(k, k, |i, j| a.cov[(i, j)] / (a.se[i] * a.se[j]).max(1e-300));
-    let mut params: Vec<(Param, Estimate)> = problem
-        .free
-        .iter()
-        .enumerate()
-        .map(|(i, &q)| {
-            let widened = se[i] > a.se[i] * 1.0001;
-            (
-                q,
-                Estimate {
-                    value: p[i],
-                    stderr: se[i],
-                    ci95: [p[i] - 1.96 * se[i], p[i] + 1.96 * se[i]],
-                    interval: if widened { "wald+block" } else { "wald" },
-                },
-            )
-        })
-        .collect();
-    let identifiable = slides;
-    let mu_index = idx(&problem, Param::MuKinetic).filter(|_| identifiable);
-    if let (true, Some(i)) = (settings.profile, mu_index) {
-        match uncertainty::profile_interval(
-            &problem,
-            &p,
-            i,
-            a.se[i],
-            scale,
-            settings,
-            0.0,
-            Some((&a.cov, a.chi2)),
-        ) {
-            Some(ci) => {
-                // The profile knows the curvature, the block covariance the correlated
-                // residuals: widen the profile's half-widths by the block's excess.
-                let ratio = (se[i] / a.se[i]).max(1.0);
-                let v = p[i];
-                params[i].1.ci95 = [v - (v - ci[0]) * ratio, v + (ci[1] - v) * ratio];
-                // A model that misfits bends the profile by its misfit, not by the data's
-                // information: there the interval is no narrower than +- 1.96 stderr.
-                if select::misfits(&problem, a.chi2) {
-                    let e = &mut params[i].1;
-                    e.ci95 = [
-                        e.ci95[0].min(v - 1.96 * se[i]),
-                        e.ci95[1].max(v + 1.96 * se[i]),
-                    ];
-                }
-                params[i].1.interval = if ratio > 1.0001 {
-                    "profile+block"
-                } else {
-                    "profile"
-                };
-            }
-            None => warnings.push(
-                "the profile interval for mu_kinetic did not close; the interval shown is value +- 1.96 stderr"
-                    .into(),
-            ),
-        }
-    }
-
-    // Step 8: adequacy. The windows (cut by the motion: a slide each) must agree; if they do
-    // not, the interval covers them.
-    let windows = if settings.windows && identifiable {
-        uncertainty::windows(
-            &problem,
-            &uncertainty::motion_bounds(&problem.observations().times, &sol.events),
-            settings,
-        )
-    } else {
-        Vec::new()
-    };
-    let windows_p = uncertainty::window_consistency(&windows);
-    if let (Some(i), Some(pw)) = (mu_index, windows_p) {
-        if pw < 0.01 {
-            let s_w = uncertainty::window_spread(&windows, params[i].1.value);
-            widen(&mut params[i].1, s_w, "windows");
-        }
-    }
-    // Models close in the criterion that give another mu_kinetic: their spread joins the
-    // interval (model uncertainty), and the report names them.
-    if let Some(i) = mu_index {
-        model_uncertainty(&mut params[i].1, &models, &mut warnings);
-    }
-    // A model that still misfits (by the chi-square, the residuals' correlation or the
-    // windows) is one more nuisance away from another mu: the interval keeps room for as much
-    // as mu moved along the selection's path.
-    let block_ratio = mu_index.map_or(1.0, |i| a.se_block[i] / a.se[i]);
-    let runs_p = uncertainty::runs_p_value(&problem, a.r.as_slice());
-    let misfit = a.p_value < 1e-3
-        || block_ratio > 1.5
-        || windows_p.is_some_and(|p| p < 0.01)
-        || runs_p < RUNS_P;
-    if let (Some(i), true) = (mu_index, misfit) {
-        let v = params[i].1.value;
-        let shift = models
-            .iter()
-            .filter(|m| m.path && m.mu_kinetic.is_finite())
-            .map(|m| (m.mu_kinetic - v).abs())
-            .fold(0.0, f64::max);
-        if shift > 0.0 {
-            widen(&mut params[i].1, shift, "path");
-        }
-    }
-    // Physical bounds: no interval reaches below mu_kinetic = 0 or negative damping.
-    for (q, e) in params.iter_mut() {
-        *e = within_bounds(*q, *e, 0.0);
-    }
-    let rho = uncertainty::lag1(&problem, a.r.as_slice());
-    let mut limited = adequacy_sentence(
-        &a,
-        block_ratio,
-        windows_p,
-        runs_p,
-        mu_index.map(|i| &params[i].1),
-    );
-    let failed = pinned_friction(&problem, mu_index.map(|i| &params[i].1));
-    if let Some(why) = &failed {
-        limited = Some(match limited {
-            Some(s) => format!("{why} {s}"),
-            None => why.clone(),
-        });
-    }
-    let (rms_per_marker_m, rms_residual_m) = marker_rms(&problem, a.r.as_slice(), k);
-    let noise_free = is_noise_free(
-        problem.sigma,
-        rms_residual_m,
-        problem.rig.marker_length,
-        settings.options.rtol,
-        a.reduced_chi2,
-    );
-    if noise_free && failed.is_none() {
-        limited = None;
-        if let Some(i) = mu_index {
-            warnings.push(format!(
-                "the recording is noise-free to the model's numerical accuracy (noise measured from the tracks {:.1e} m, residual RMS {:.1e} m): mu_kinetic is recovered as {:.10}, and its standard error and interval are not meaningful",
-                problem.sigma[0].max(problem.sigma[1]),
-                rms_residual_m,
-                params[i].1.value
-            ));
-        }
-    }
-    let pendulum = pendulum_found(&problem, &params, &correlation, rig_guess);
-
-    let mu_kinetic = mu_index.map(|i| params[i].1);
-    let mu_static = if let Some(i) = idx(&problem, Param::MuStatic).filter(|_| mu_static_free) {
-        if settings.profile {
-            match uncertainty::profile_interval(
-                &problem,
-                &p,
-                i,
-                a.se[i],
-                scale,
-                settings,
-                p[0],
-                Some((&a.cov, a.chi2)),
-            ) {
-                Some(ci) => {
-                    params[i].1.ci95 = ci;
-                    params[i].1.interval = "profile";
-                }
-                None => warnings.push("the profile interval for mu_static did not close".into()),
-            }
-        }
-        // mu_static >= mu_kinetic: its interval starts no lower than mu_kinetic's.
-        let mu_k_low = mu_kinetic.map_or(0.0, |e| e.ci95[0]);
-        params[i].1 = within_bounds(Param::MuStatic, params[i].1, mu_k_low);
-        StaticResult::Estimated(params[i].1)
-    } else if slides
-        && (static_at_bound || (slip_after_stick && base.static_evidence == Some(false)))
-    {
-        let mut upper = None;
-        let mut prefix_limit = false;
-        if settings.profile {
-            let mut free_static = problem.clone();
-            free_static.free.push(Param::MuStatic);
-            free_static.tie_static = false;
-            let mut q = free_static.values();
-            // A long recording's limit comes from its first frames, refitted there: a limit
-            // from fewer frames is looser, never narrower, and the search probes mu_static
-            // from afar, a full-length fit each time.
-            if obs.times.len() > settings.long_prefix.saturating_mul(2) {
-                free_static = free_static.on(Arc::new(obs.prefix(settings.long_prefix)));
-                if let Ok((opt, _, it)) = solve(&free_static, q.clone(), settings.max_iters) {
-                    iterations += it;
-                    q = opt;
-                    free_static.set_values(&q);
-                }
-                prefix_limit = true;
-            }
-            upper = uncertainty::profile_interval(
-                &free_static,
-                &q,
-                q.len() - 1,
-                f64::NAN,
-                scale,
-                settings,
-                q[0],
-                None,
-            )
-            .map(|ci| ci[1]);
-        }
-        let mu = p[0];
-        match upper {
-            Some(u) => {
-                let from = if prefix_limit {
-                    format!(" (from the first {} frames)", settings.long_prefix)
-                } else {
-                    String::new()
-                };
-                warnings.push(format!(
-                    "mu_static fits at its bound mu_static = mu_kinetic; the data allow up to {u:.5}{from}"
-                ));
-                StaticResult::Estimated(Estimate {
-                    value: mu,
-                    stderr: (u - mu) / 1.96,
-                    ci95: [mu, u],
-                    interval: "profile (one-sided)",
-                })
-            }
-            None => {
-                warnings.push(
-                    "mu_static fits at its bound mu_static = mu_kinetic (no upper limit computed: profiles are off)"
-                        .into(),
-                );
-                StaticResult::NotIdentifiable
-            }
-        }
-    } else if !slides {
-        StaticResult::LowerBound(mo_ratio)
-    } else {
-        if !sticks {
-            warnings
-                .push("the slider never sticks: the recording says nothing about mu_static".into());
-        }
-        StaticResult::NotIdentifiable
-    };
-
-    // Step 9: the report.
-    // Starts that ended statistically as good as the best (cost within the 1-dof likelihood
-    // ratio) but at a different mu are a real ambiguity.
-    let best_cost = starts.iter().map(|s| s.cost).fold(f64::INFINITY, f64::min);
-    let tied: Vec<f64> = starts
-        .iter()
-        .filter(|s| s.cost <= best_cost + 2.0 * scale)
-        .map(|s| s.mu_end)
-        .collect();
-    if let (Some(lo), Some(hi), Some(i)) = (
-        tied.iter().cloned().reduce(f64::min),
-        tied.iter().cloned().reduce(f64::max),
-        mu_index,
-    ) {
-        if hi - lo > 3.0 * se[i].max(1e-6) {
-            warnings.push(format!("starts disagree: equally good fits have mu_kinetic from {lo:.5} to {hi:.5}; the best was kept"));
-        }
-    }
-    starts.sort_by(|a, b| a.mu_start.total_cmp(&b.mu_start));
-    let sliding_speed_range = mo_speeds;
-    let fixed = Param::ALL
-        .into_iter()
-        // The Stribeck speed means nothing under Coulomb's law.
-        .filter(|q| {
-            *q != Param::StribeckVelocity
-                || problem.rig.friction_law == crate::model::FrictionLaw::Stribeck
-        })
-        // A point pendulum's equivalent length and mass ratio are its rod and masses.
-        .filter(|q| {
-            !matches!(q, Param::PendulumLength | Param::MassRatio) || problem.rig.pendulum.is_some()
-        })
-        .filter(|q| !problem.free.contains(q))
-        .map(|q| (q, problem.get(q)))
-        .collect();
-    let start_problem = TrajectoryProblem::new(
-        obs.clone(),
-        *rig_guess,
-        base.y0_guess,
-        problem.free.clone(),
-        settings.options,
-    );
-    let start_values = problem
-        .free
-        .iter()
-        .map(|&q| {
-            let v = if q == Param::MuKinetic {
-                base.mu0
-            } else {
-                start_problem.get(q)
-            };
-            (q, v)
-        })
-        .collect();
-    let n_rows = problem.rows_used();
-    let adequacy = Adequacy {
-        chi2: a.chi2,
-        dof: a.dof,
-        reduced_chi2: a.reduced_chi2,
-        p_value: a.p_value,
-        aic: a.chi2 + 2.0 * k as f64,
-        bic: a.chi2 + k as f64 * (n_rows as f64).ln(),
-        lag1: rho,
-        runs_p_value: runs_p,
-        block_se_ratio: block_ratio,
-        block_frames: a.block_frames,
-        windows_p_value: windows_p,
-        limited_by_model: limited,
-        noise_free,
-    };
-    let c = &problem.counters;
-    Ok(FitReport {
-        params,
-        start_values,
-        fixed,
-        mu_kinetic,
-        mu_static,
-        rig: problem.rig,
-        initial: problem.initial,
-        camera: problem.camera,
-        correlation,
-        rms_residual_m,
-        rms_per_marker_m,
-        noise_m: problem.sigma,
-        noise: noise_measured,
-        reduced_chi2: adequacy.reduced_chi2,
-        residual_autocorrelation: rho,
-        adequacy,
-        models,
-        nuisances,
-        windows,
-        outliers,
-        sliding_speed_range,
-        events: sol.events,
-        identifiable,
-        starts,
-        n_residuals: n_rows,
-        n_frames,
-        work: Work {
-            iterations,
-            residual_evals: c.residuals.load(Ordering::Relaxed),
-            jacobian_evals: c.jacobians.load(Ordering::Relaxed),
-        },
-        stop_reason,
+    let base = base_fit(&data.obs, rig_guess, data.sigma, settings, &mut warnings)?;
+    let mut f = stages::Fitting {
+        problem: base.problem.clone(),
+        p: base.p.clone(),
+        iterations: base.iterations,
         warnings,
-        pendulum,
-        failed,
-    })
+        moved: false,
+    };
+    let late = residual_outliers(&mut f.problem, &mut f.p, settings, &mut f.iterations, false);
+    let seen = stages::seen(&f, &data.obs, &base)?;
+    let (models, nuisances) = stages::nuisances(&mut f, &seen, &base, data.n_frames, settings);
+    let (outliers, late) = stages::late_outliers(&mut f, late, data.dropped, settings);
+    if !seen.slides {
+        stages::hold_stuck(&mut f, seen.raw_moves, settings);
+    }
+    let static_state = stages::static_bound(&mut f, seen.slides);
+    let slides = seen.slides;
+    let motion = if f.moved {
+        motion(&f.problem)?
+    } else {
+        seen.motion
+    };
+    let settled = base.settled.clone().filter(|_| late.dropped == [0, 0]);
+    let stop_reason = stages::polish(&mut f, settled, settings);
+    let mut est = stages::estimates(&mut f, data.noise_dof, slides, settings)?;
+    let verdict = stages::adequacy(&mut f, &mut est, &models, &motion.sol.events, settings);
+    let mu_static = stages::mu_static(
+        &mut f,
+        &mut est,
+        static_state,
+        slides,
+        &motion,
+        &base,
+        &data.obs,
+        settings,
+    );
+    stages::starts_agree(&mut f, &base, &est);
+    let identifiable = slides;
+    Ok(stages::report(
+        f,
+        stages::Parts {
+            data,
+            base,
+            rig_guess,
+            settings,
+            est,
+            verdict,
+            models,
+            nuisances,
+            outliers,
+            motion,
+            mu_static,
+            identifiable,
+            stop_reason,
+        },
+    ))
 }
 
 /// Below this many times the fit's relative tolerance times the rod length, a measured noise

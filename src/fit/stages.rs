@@ -1,0 +1,729 @@
+//! The stages of [`super::fit`], each a function over the model being fitted ([`Fitting`]):
+//! the data prepared, the motion seen, the nuisances chosen, the late outliers, a recording
+//! that never slides, mu_static at its bound, the polish, the estimates, the adequacy and its
+//! widenings, mu_static's result and the report. Each stage says what it reads and returns;
+//! the driver only orders them.
+
+use super::problem::{Observations, Param, TrajectoryProblem};
+use super::select::{self, ModelRow, Nuisance, SelectOptions};
+use super::uncertainty::{self, Assessment, WindowFit};
+use super::{
+    adequacy_sentence, check_data, enough_frames, idx, is_noise_free, marker_rms,
+    model_uncertainty, motion, noise_and_outliers, pendulum_found, pinned_friction,
+    residual_outliers, slider_moves, solve, solve_traced, widen, within_bounds, Adequacy, Base,
+    Estimate, FitError, FitReport, FitSettings, Motion, NoiseEstimate, ResidualOutliers,
+    StaticMode, StaticResult, Work, RESIDUAL_OUTLIER, RUNS_P,
+};
+use crate::model::{FrictionLaw, Rig};
+use crate::sim::EventKind;
+use nalgebra::{DMatrix, DVector};
+use std::sync::atomic::Ordering;
+use std::sync::Arc;
+
+/// The recording ready to fit: times from zero, mis-tracked positions out, each marker's noise.
+pub(super) struct Prepared {
+    pub obs: Arc<Observations>,
+    /// Frames in the recording as read.
+    pub n_frames: usize,
+    /// Noise per marker used as weights (m).
+    pub sigma: [f64; 2],
+    /// The noise measurements (or the given noise).
+    pub noise: [Option<NoiseEstimate>; 2],
+    /// Degrees of freedom of the noise measurement (the chi-square's F test).
+    pub noise_dof: f64,
+    /// Positions dropped from the tracks (slider, bob).
+    pub dropped: [usize; 2],
+}
+
+/// Stage 1: the data checked, the noise measured, the mis-tracked positions dropped.
+pub(super) fn prepare(obs: Observations, settings: &FitSettings) -> Result<Prepared, FitError> {
+    let mut obs = check_data(obs)?;
+    let n_frames = obs.times.len();
+    let (sigma, noise, dropped) = noise_and_outliers(&mut obs, settings)?;
+    enough_frames(&obs)?;
+    let noise_dof = noise.iter().flatten().map(|e| e.dof).sum::<f64>().max(2.0);
+    Ok(Prepared {
+        obs: Arc::new(obs),
+        n_frames,
+        sigma,
+        noise,
+        noise_dof,
+        dropped,
+    })
+}
+
+/// The model being fitted and what the fit has spent and noted, passed from stage to stage.
+pub(super) struct Fitting {
+    pub problem: TrajectoryProblem,
+    pub p: DVector<f64>,
+    pub iterations: u64,
+    pub warnings: Vec<String>,
+    /// The model changed after the base fit's last solve over the whole recording.
+    pub moved: bool,
+}
+
+/// What the base fit's motion shows.
+pub(super) struct Seen {
+    pub motion: Motion,
+    /// The fitted motion slides by more than the slider's noise.
+    pub slides: bool,
+    /// The raw slider track's range when it moves by more than its noise explains.
+    pub raw_moves: Option<f64>,
+    /// A stick-to-slide onset: in the fitted motion, or from the data.
+    pub onset: bool,
+}
+
+/// Stage 3: does the fitted motion slide? A slide shorter than the slider's noise is not seen;
+/// a raw track that clearly moves while no fit slides is a failed fit, said as such.
+pub(super) fn seen(f: &Fitting, obs: &Observations, base: &Base) -> Result<Seen, FitError> {
+    let motion = motion(&f.problem)?;
+    let (lo, hi) = motion.range;
+    let slides = motion.slides && hi - lo > 3.0 * f.problem.sigma[0];
+    let onset = motion
+        .sol
+        .events
+        .iter()
+        .any(|e| e.kind == EventKind::Slip && e.t > 0.0)
+        || base.mu_s_data.is_some();
+    Ok(Seen {
+        raw_moves: slider_moves(obs, f.problem.sigma[0]),
+        motion,
+        slides,
+        onset,
+    })
+}
+
+/// Stage 4: the nuisances the data ask for (forward selection). Returns the models compared
+/// and the nuisances chosen.
+pub(super) fn nuisances(
+    f: &mut Fitting,
+    seen: &Seen,
+    base: &Base,
+    n_frames: usize,
+    settings: &FitSettings,
+) -> (Vec<ModelRow>, Vec<Nuisance>) {
+    if !seen.slides || (!settings.nuisances && settings.with.is_empty()) {
+        return (Vec::new(), Vec::new());
+    }
+    let chi2 = f.problem.chi2(&f.p).unwrap_or(f64::INFINITY);
+    let mu_k = f.p[0];
+    let opts = SelectOptions {
+        // The friction laws, where an onset can show them (the selection offers them in a
+        // round whose model misfits, or always when the onsets show mu_static above
+        // mu_kinetic).
+        friction_candidates: settings.mu_static == StaticMode::Auto && seen.onset,
+        static_evidence: base.static_evidence == Some(true),
+        mu_static_start: base.mu_s_data.unwrap_or(1.15 * mu_k).max(1.05 * mu_k),
+        // No cap decides the answer: the criterion stops the selection (every candidate is
+        // screened each round, and at most two plus the friction laws are fitted).
+        max_added: if settings.nuisances {
+            Nuisance::ALL.len()
+        } else {
+            0
+        },
+        max_iters: settings.max_iters,
+        already: if f.problem.free.contains(&Param::MuStatic) {
+            vec![Nuisance::StaticFriction]
+        } else {
+            Vec::new()
+        },
+        // A fresh start over a long recording would meet events it cannot match yet (the
+        // base fit reaches such recordings through their first frames).
+        fresh_start: (n_frames <= settings.long_prefix.saturating_mul(2))
+            .then_some((base.y0_guess, base.mu0)),
+        forced: settings.with.clone(),
+    };
+    let sel = select::forward(f.problem.clone(), f.p.clone(), chi2, &opts);
+    f.iterations += sel.iterations;
+    f.problem = sel.problem;
+    f.p = sel.p;
+    f.moved |= !sel.chosen.is_empty();
+    (sel.rows, sel.chosen)
+}
+
+/// Stage 5: the residual outliers a misfitting base model left for the chosen one
+/// ([`residual_outliers`]), and the report's note on every position left out or down-weighted.
+/// Returns the positions left out in all (slider, bob) and what this step did.
+pub(super) fn late_outliers(
+    f: &mut Fitting,
+    mut late: ResidualOutliers,
+    from_tracks: [usize; 2],
+    settings: &FitSettings,
+) -> ([usize; 2], ResidualOutliers) {
+    if late.deferred {
+        late = residual_outliers(&mut f.problem, &mut f.p, settings, &mut f.iterations, true);
+        f.moved |= late != ResidualOutliers::default();
+    }
+    let out = [0, 1].map(|m| from_tracks[m] + late.dropped[m]);
+    if out.iter().sum::<usize>() > 0 {
+        f.warnings.push(format!(
+            "{} slider and {} bob positions were mis-tracked (beyond {} noise deviations) and left out",
+            out[0], out[1], RESIDUAL_OUTLIER
+        ));
+    }
+    if late.weighted.iter().sum::<usize>() > 0 {
+        f.warnings.push(format!(
+            "{} slider and {} bob positions lie beyond {} deviations of the fit, but the model does not describe the rest of the recording either: they were down-weighted (Huber), not left out",
+            late.weighted[0], late.weighted[1], RESIDUAL_OUTLIER
+        ));
+    }
+    (out, late)
+}
+
+/// Stage 6, for a recording whose fit never slides: said as such (or as a failed fit when the
+/// raw track moves), and the stuck pendulum fitted with mu where it never slips (0.999 mu*, no
+/// paradox either).
+pub(super) fn hold_stuck(f: &mut Fitting, raw_moves: Option<f64>, settings: &FitSettings) {
+    if let Some(range) = raw_moves {
+        f.warnings.push(format!(
+            "the slider moves by {range:.4} m in the recording but no fit reproduces a slide: the fit failed; try --starts with other mu values"
+        ));
+    } else {
+        f.warnings.push("the slider never slides in the recording: mu_kinetic is not identifiable from it; mu_static is only bounded from below".into());
+    }
+    let problem = &mut f.problem;
+    let mu_hold = 0.999 * crate::model::regions::mu_critical(problem.rig.mass_ratio());
+    problem.rig.mu_kinetic = mu_hold;
+    problem.rig.mu_static = mu_hold;
+    problem.initial[2] = 0.0;
+    problem.free = vec![Param::X, Param::Theta, Param::ThetaDot];
+    if let Ok((q, _, it)) = solve(problem, problem.values(), settings.max_iters) {
+        f.iterations += it;
+        f.p = q;
+        problem.set_values(&f.p);
+    } else {
+        f.p = problem.values();
+    }
+    f.moved = true;
+}
+
+/// How mu_static stands after the selection.
+#[derive(Clone, Copy, Default)]
+pub(super) struct StaticState {
+    /// It was free and fitted at its bound mu_static = mu_kinetic: it now says only "up to".
+    pub at_bound: bool,
+    /// It is free above mu_kinetic.
+    pub free: bool,
+}
+
+/// Stage 7: a free mu_static at its bound mu_static = mu_kinetic is tied again.
+pub(super) fn static_bound(f: &mut Fitting, slides: bool) -> StaticState {
+    let mut s = StaticState::default();
+    if !slides {
+        return s;
+    }
+    if let Some(i) = idx(&f.problem, Param::MuStatic) {
+        if f.p[i] - f.p[0] <= 1e-6 * f.p[0].max(1e-9) {
+            f.problem.free.remove(i);
+            f.problem.tie_static = true;
+            f.p = f.problem.values();
+            s.at_bound = true;
+            f.moved = true;
+        } else {
+            s.free = true;
+        }
+    }
+    s
+}
+
+/// Stage 8: the final polish, unless a long recording's whole fit already converged on this
+/// very model and weights (each pass over a million frames costs a third of a second).
+/// Returns why the solver stopped.
+pub(super) fn polish(f: &mut Fitting, settled: Option<String>, settings: &FitSettings) -> String {
+    let polished = match settled.filter(|_| !f.moved) {
+        Some(reason) => Ok((f.p.clone(), 0.0, 0, reason)),
+        None => solve_traced(&f.problem, f.p.clone(), settings.max_iters),
+    };
+    match polished {
+        Ok((q, _, it, reason)) => {
+            f.iterations += it;
+            f.problem.set_values(&q);
+            f.p = q;
+            reason
+        }
+        Err(e) => format!("final polish failed: {e}"),
+    }
+}
+
+/// Every free parameter's estimate with the covariances behind them.
+pub(super) struct Estimates {
+    pub a: Assessment,
+    pub params: Vec<(Param, Estimate)>,
+    /// Standard errors: the larger of the plain and the block ones.
+    pub se: Vec<f64>,
+    pub correlation: DMatrix<f64>,
+    /// max(1, reduced chi-square): the profiles' scale.
+    pub scale: f64,
+    /// mu_kinetic's index when it is identifiable.
+    pub mu_index: Option<usize>,
+}
+
+/// Stage 9: standard errors (Jacobian, block covariance) and mu_kinetic's profile interval,
+/// widened by the block excess, and under a misfit never narrower than +- 1.96 stderr.
+pub(super) fn estimates(
+    f: &mut Fitting,
+    noise_dof: f64,
+    identifiable: bool,
+    settings: &FitSettings,
+) -> Result<Estimates, FitError> {
+    let (problem, p) = (&f.problem, &f.p);
+    let a = uncertainty::assess(problem, p, noise_dof).map_err(FitError::NoStart)?;
+    let k = p.len();
+    let scale = a.reduced_chi2.max(1.0);
+    let se: Vec<f64> = (0..k).map(|i| a.se[i].max(a.se_block[i])).collect();
+    let correlation =
+        DMatrix::from_fn(k, k, |i, j| a.cov[(i, j)] / (a.se[i] * a.se[j]).max(1e-300));
+    let mut params: Vec<(Param, Estimate)> = problem
+        .free
+        .iter()
+        .enumerate()
+        .map(|(i, &q)| {
+            let widened = se[i] > a.se[i] * 1.0001;
+            (
+                q,
+                Estimate {
+                    value: p[i],
+                    stderr: se[i],
+                    ci95: [p[i] - 1.96 * se[i], p[i] + 1.96 * se[i]],
+                    interval: if widened { "wald+block" } else { "wald" },
+                },
+            )
+        })
+        .collect();
+    let mu_index = idx(problem, Param::MuKinetic).filter(|_| identifiable);
+    if let (true, Some(i)) = (settings.profile, mu_index) {
+        let profile = uncertainty::profile_interval(
+            problem,
+            p,
+            i,
+            a.se[i],
+            scale,
+            settings,
+            0.0,
+            Some((&a.cov, a.chi2)),
+        );
+        match profile {
+            Some(ci) => {
+                // The profile knows the curvature, the block covariance the correlated
+                // residuals: widen the profile's half-widths by the block's excess.
+                let ratio = (se[i] / a.se[i]).max(1.0);
+                let v = p[i];
+                let e = &mut params[i].1;
+                e.ci95 = [v - (v - ci[0]) * ratio, v + (ci[1] - v) * ratio];
+                // A model that misfits bends the profile by its misfit, not by the data's
+                // information: there the interval is no narrower than +- 1.96 stderr.
+                if select::misfits(problem, a.chi2) {
+                    e.ci95 = [
+                        e.ci95[0].min(v - 1.96 * se[i]),
+                        e.ci95[1].max(v + 1.96 * se[i]),
+                    ];
+                }
+                e.interval = if ratio > 1.0001 {
+                    "profile+block"
+                } else {
+                    "profile"
+                };
+            }
+            None => f.warnings.push(
+                "the profile interval for mu_kinetic did not close; the interval shown is value +- 1.96 stderr"
+                    .into(),
+            ),
+        }
+    }
+    Ok(Estimates {
+        a,
+        params,
+        se,
+        correlation,
+        scale,
+        mu_index,
+    })
+}
+
+/// What the adequacy stage found.
+pub(super) struct Verdict {
+    pub windows: Vec<WindowFit>,
+    pub windows_p: Option<f64>,
+    pub runs_p: f64,
+    pub block_ratio: f64,
+    pub lag1: f64,
+    /// The one plain sentence when the model limits the result.
+    pub limited: Option<String>,
+    /// Why the fit failed although it ran.
+    pub failed: Option<String>,
+    pub noise_free: bool,
+    pub rms_per_marker_m: [f64; 2],
+    pub rms_residual_m: f64,
+}
+
+/// Stage 10: adequacy. mu_kinetic on each window cut by the motion (a slide each), the runs
+/// test, the chi-square and the block ratio; when any fails, mu's interval widens by the
+/// windows' spread and by mu's shift along the selection's path, and by the spread of close
+/// models in any case; then the physical bounds, the one plain sentence, a failed fit, and a
+/// noise-free recording recognised.
+pub(super) fn adequacy(
+    f: &mut Fitting,
+    est: &mut Estimates,
+    models: &[ModelRow],
+    events: &[crate::sim::Event],
+    settings: &FitSettings,
+) -> Verdict {
+    let (problem, a) = (&f.problem, &est.a);
+    let mu_index = est.mu_index;
+    let windows = if settings.windows && mu_index.is_some() {
+        let bounds = uncertainty::motion_bounds(&problem.observations().times, events);
+        uncertainty::windows(problem, &bounds, settings)
+    } else {
+        Vec::new()
+    };
+    let windows_p = uncertainty::window_consistency(&windows);
+    let block_ratio = mu_index.map_or(1.0, |i| a.se_block[i] / a.se[i]);
+    let runs_p = uncertainty::runs_p_value(problem, a.r.as_slice());
+    let misfit = a.p_value < 1e-3
+        || block_ratio > 1.5
+        || windows_p.is_some_and(|p| p < 0.01)
+        || runs_p < RUNS_P;
+    if let Some(i) = mu_index {
+        let e = &mut est.params[i].1;
+        if windows_p.is_some_and(|p| p < 0.01) {
+            widen(e, uncertainty::window_spread(&windows, e.value), "windows");
+        }
+        // Models close in the criterion that give another mu_kinetic: their spread joins the
+        // interval (model uncertainty), and the report names them.
+        model_uncertainty(e, models, &mut f.warnings);
+        // A model that still misfits is one more nuisance away from another mu: the interval
+        // keeps room for as much as mu moved along the selection's path.
+        if misfit {
+            let shift = models
+                .iter()
+                .filter(|m| m.path && m.mu_kinetic.is_finite())
+                .map(|m| (m.mu_kinetic - e.value).abs())
+                .fold(0.0, f64::max);
+            widen(e, shift, "path");
+        }
+    }
+    // Physical bounds: no interval reaches below mu_kinetic = 0 or negative damping.
+    for (q, e) in est.params.iter_mut() {
+        *e = within_bounds(*q, *e, 0.0);
+    }
+    let mu = mu_index.map(|i| &est.params[i].1);
+    let mut limited = adequacy_sentence(a, block_ratio, windows_p, runs_p, mu);
+    let failed = pinned_friction(problem, mu);
+    if let Some(why) = &failed {
+        limited = Some(match limited {
+            Some(s) => format!("{why} {s}"),
+            None => why.clone(),
+        });
+    }
+    let (rms_per_marker_m, rms_residual_m) = marker_rms(problem, a.r.as_slice(), f.p.len());
+    let noise_free = is_noise_free(
+        problem.sigma,
+        rms_residual_m,
+        problem.rig.marker_length,
+        settings.options.rtol,
+        a.reduced_chi2,
+    );
+    if noise_free && failed.is_none() {
+        limited = None;
+        if let Some(e) = mu {
+            f.warnings.push(format!(
+                "the recording is noise-free to the model's numerical accuracy (noise measured from the tracks {:.1e} m, residual RMS {:.1e} m): mu_kinetic is recovered as {:.10}, and its standard error and interval are not meaningful",
+                problem.sigma[0].max(problem.sigma[1]),
+                rms_residual_m,
+                e.value
+            ));
+        }
+    }
+    Verdict {
+        lag1: uncertainty::lag1(problem, a.r.as_slice()),
+        windows,
+        windows_p,
+        runs_p,
+        block_ratio,
+        limited,
+        failed,
+        noise_free,
+        rms_per_marker_m,
+        rms_residual_m,
+    }
+}
+
+/// Stage 11: mu_static. Free above mu_kinetic: its profile interval, starting no lower than
+/// mu_kinetic's. At its bound (or with onsets that show none above mu_kinetic): mu_kinetic and
+/// the upper limit the data allow (one-sided profile). Stuck throughout: the lower bound the
+/// motion needs. Otherwise not identifiable.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn mu_static(
+    f: &mut Fitting,
+    est: &mut Estimates,
+    state: StaticState,
+    slides: bool,
+    motion: &Motion,
+    base: &Base,
+    obs: &Observations,
+    settings: &FitSettings,
+) -> StaticResult {
+    let slip_after_stick = motion
+        .sol
+        .events
+        .iter()
+        .any(|e| e.kind == EventKind::Slip && e.t > 0.0);
+    let mu_kinetic = est.mu_index.map(|i| est.params[i].1);
+    if let Some(i) = idx(&f.problem, Param::MuStatic).filter(|_| state.free) {
+        if settings.profile {
+            let a = &est.a;
+            match uncertainty::profile_interval(
+                &f.problem,
+                &f.p,
+                i,
+                a.se[i],
+                est.scale,
+                settings,
+                f.p[0],
+                Some((&a.cov, a.chi2)),
+            ) {
+                Some(ci) => {
+                    est.params[i].1.ci95 = ci;
+                    est.params[i].1.interval = "profile";
+                }
+                None => f
+                    .warnings
+                    .push("the profile interval for mu_static did not close".into()),
+            }
+        }
+        // mu_static >= mu_kinetic: its interval starts no lower than mu_kinetic's.
+        let mu_k_low = mu_kinetic.map_or(0.0, |e| e.ci95[0]);
+        est.params[i].1 = within_bounds(Param::MuStatic, est.params[i].1, mu_k_low);
+        return StaticResult::Estimated(est.params[i].1);
+    }
+    if !slides {
+        return StaticResult::LowerBound(motion.needed_ratio);
+    }
+    if state.at_bound || (slip_after_stick && base.static_evidence == Some(false)) {
+        return static_upper_limit(f, est.scale, obs, settings);
+    }
+    if !motion.sticks {
+        f.warnings
+            .push("the slider never sticks: the recording says nothing about mu_static".into());
+    }
+    StaticResult::NotIdentifiable
+}
+
+/// mu_static at its bound mu_static = mu_kinetic: the upper limit the data allow, from the
+/// one-sided profile (on a long recording's first frames, refitted there).
+fn static_upper_limit(
+    f: &mut Fitting,
+    scale: f64,
+    obs: &Observations,
+    settings: &FitSettings,
+) -> StaticResult {
+    let mu = f.p[0];
+    if !settings.profile {
+        f.warnings.push(
+            "mu_static fits at its bound mu_static = mu_kinetic (no upper limit computed: profiles are off)"
+                .into(),
+        );
+        return StaticResult::NotIdentifiable;
+    }
+    let mut free_static = f.problem.clone();
+    free_static.free.push(Param::MuStatic);
+    free_static.tie_static = false;
+    let mut q = free_static.values();
+    // A long recording's limit comes from its first frames, refitted there: a limit from
+    // fewer frames is looser, never narrower, and the search probes mu_static from afar, a
+    // full-length fit each time.
+    let prefix_limit = obs.times.len() > settings.long_prefix.saturating_mul(2);
+    if prefix_limit {
+        free_static = free_static.on(Arc::new(obs.prefix(settings.long_prefix)));
+        if let Ok((opt, _, it)) = solve(&free_static, q.clone(), settings.max_iters) {
+            f.iterations += it;
+            q = opt;
+            free_static.set_values(&q);
+        }
+    }
+    let upper = uncertainty::profile_interval(
+        &free_static,
+        &q,
+        q.len() - 1,
+        f64::NAN,
+        scale,
+        settings,
+        q[0],
+        None,
+    )
+    .map(|ci| ci[1]);
+    match upper {
+        Some(u) => {
+            let from = if prefix_limit {
+                format!(" (from the first {} frames)", settings.long_prefix)
+            } else {
+                String::new()
+            };
+            f.warnings.push(format!(
+                "mu_static fits at its bound mu_static = mu_kinetic; the data allow up to {u:.5}{from}"
+            ));
+            StaticResult::Estimated(Estimate {
+                value: mu,
+                stderr: (u - mu) / 1.96,
+                ci95: [mu, u],
+                interval: "profile (one-sided)",
+            })
+        }
+        None => {
+            f.warnings.push(
+                "mu_static fits at its bound mu_static = mu_kinetic (its upper limit's profile did not close)"
+                    .into(),
+            );
+            StaticResult::NotIdentifiable
+        }
+    }
+}
+
+/// Stage 12: starts that ended statistically as good as the best (cost within the 1-dof
+/// likelihood ratio) but at a different mu are a real ambiguity, said as such.
+pub(super) fn starts_agree(f: &mut Fitting, base: &Base, est: &Estimates) {
+    let starts = &base.starts;
+    let best_cost = starts.iter().map(|s| s.cost).fold(f64::INFINITY, f64::min);
+    let tied: Vec<f64> = starts
+        .iter()
+        .filter(|s| s.cost <= best_cost + 2.0 * est.scale)
+        .map(|s| s.mu_end)
+        .collect();
+    if let (Some(lo), Some(hi), Some(i)) = (
+        tied.iter().cloned().reduce(f64::min),
+        tied.iter().cloned().reduce(f64::max),
+        est.mu_index,
+    ) {
+        if hi - lo > 3.0 * est.se[i].max(1e-6) {
+            f.warnings.push(format!("starts disagree: equally good fits have mu_kinetic from {lo:.5} to {hi:.5}; the best was kept"));
+        }
+    }
+}
+
+/// Everything the report is built from.
+pub(super) struct Parts<'a> {
+    pub data: Prepared,
+    pub base: Base,
+    pub rig_guess: &'a Rig<f64>,
+    pub settings: &'a FitSettings,
+    pub est: Estimates,
+    pub verdict: Verdict,
+    pub models: Vec<ModelRow>,
+    pub nuisances: Vec<Nuisance>,
+    pub outliers: [usize; 2],
+    pub motion: Motion,
+    pub mu_static: StaticResult,
+    pub identifiable: bool,
+    pub stop_reason: String,
+}
+
+/// Stage 13: the report.
+pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
+    let Parts {
+        data,
+        mut base,
+        rig_guess,
+        settings,
+        est,
+        verdict: v,
+        models,
+        nuisances,
+        outliers,
+        motion,
+        mu_static,
+        identifiable,
+        stop_reason,
+    } = parts;
+    let problem = f.problem;
+    let a = &est.a;
+    let k = f.p.len();
+    base.starts
+        .sort_by(|a, b| a.mu_start.total_cmp(&b.mu_start));
+    let fixed = Param::ALL
+        .into_iter()
+        // The Stribeck speed means nothing under Coulomb's law.
+        .filter(|q| {
+            *q != Param::StribeckVelocity || problem.rig.friction_law == FrictionLaw::Stribeck
+        })
+        // A point pendulum's equivalent length and mass ratio are its rod and masses.
+        .filter(|q| {
+            !matches!(q, Param::PendulumLength | Param::MassRatio) || problem.rig.pendulum.is_some()
+        })
+        .filter(|q| !problem.free.contains(q))
+        .map(|q| (q, problem.get(q)))
+        .collect();
+    let start_problem = TrajectoryProblem::new(
+        data.obs.clone(),
+        *rig_guess,
+        base.y0_guess,
+        problem.free.clone(),
+        settings.options,
+    );
+    let start_values = problem
+        .free
+        .iter()
+        .map(|&q| {
+            let v = if q == Param::MuKinetic {
+                base.mu0
+            } else {
+                start_problem.get(q)
+            };
+            (q, v)
+        })
+        .collect();
+    let n_rows = problem.rows_used();
+    let adequacy = Adequacy {
+        chi2: a.chi2,
+        dof: a.dof,
+        reduced_chi2: a.reduced_chi2,
+        p_value: a.p_value,
+        aic: a.chi2 + 2.0 * k as f64,
+        bic: a.chi2 + k as f64 * (n_rows as f64).ln(),
+        lag1: v.lag1,
+        runs_p_value: v.runs_p,
+        block_se_ratio: v.block_ratio,
+        block_frames: a.block_frames,
+        windows_p_value: v.windows_p,
+        limited_by_model: v.limited,
+        noise_free: v.noise_free,
+    };
+    let pendulum = pendulum_found(&problem, &est.params, &est.correlation, rig_guess);
+    let c = &problem.counters;
+    FitReport {
+        mu_kinetic: est.mu_index.map(|i| est.params[i].1),
+        params: est.params,
+        start_values,
+        fixed,
+        mu_static,
+        rig: problem.rig,
+        initial: problem.initial,
+        camera: problem.camera,
+        correlation: est.correlation,
+        rms_residual_m: v.rms_residual_m,
+        rms_per_marker_m: v.rms_per_marker_m,
+        noise_m: problem.sigma,
+        noise: data.noise,
+        reduced_chi2: adequacy.reduced_chi2,
+        residual_autocorrelation: v.lag1,
+        adequacy,
+        models,
+        nuisances,
+        windows: v.windows,
+        outliers,
+        sliding_speed_range: motion.slide_speeds,
+        events: motion.sol.events,
+        identifiable,
+        starts: base.starts,
+        n_residuals: n_rows,
+        n_frames: data.n_frames,
+        work: Work {
+            iterations: f.iterations,
+            residual_evals: c.residuals.load(Ordering::Relaxed),
+            jacobian_evals: c.jacobians.load(Ordering::Relaxed),
+        },
+        stop_reason,
+        warnings: f.warnings,
+        pendulum,
+        failed: v.failed,
+    }
+}
