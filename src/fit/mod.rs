@@ -6,6 +6,7 @@
 //! the adequacy checks (chi-square against the measured noise, fits of the windows) that widen
 //! the interval when the model does not describe the recording.
 
+mod base;
 pub mod guess;
 pub mod lm;
 pub mod noise;
@@ -25,8 +26,6 @@ use crate::sim::{simulate_each, Event, Options, Request, Sample, Solution};
 use argmin::core::{Executor, State as _};
 use lm::LevenbergMarquardt;
 use nalgebra::{DMatrix, DVector};
-use rayon::prelude::*;
-use std::sync::Arc;
 use thiserror::Error;
 
 /// Loss applied to the standardised residuals.
@@ -544,244 +543,6 @@ pub(crate) const STAGE_FTOL: f64 = 1e-6;
 /// models are fitted on (recordings up to twice this are fitted whole from every start).
 pub const PREFIX_FRAMES: usize = 8000;
 
-/// Step 3: the base model (mu_kinetic and the initial state; released from rest or moving;
-/// mu_static when the onsets demand it) from several starts in mu, the best by AIC.
-fn base_fit(
-    obs: &Arc<Observations>,
-    rig: &Rig<f64>,
-    sigma: [f64; 2],
-    settings: &FitSettings,
-    warnings: &mut Vec<String>,
-) -> Result<Base, FitError> {
-    let n = obs.times.len();
-    let dt = (obs.times[n - 1] / (n - 1) as f64).max(1e-6);
-    let window = ((0.012 / dt).round() as usize).clamp(5, 40);
-    let (y0, x_dot_se) = guess::initial_state(obs, window).unwrap_or(([0.0; 4], f64::INFINITY));
-    let at_rest = y0[2].abs() < 3.0 * x_dot_se;
-    if let Some(l) = guess::rod_length(obs) {
-        if (l - rig.marker_length).abs() > 0.05 * rig.marker_length {
-            warnings.push(format!(
-                "the markers are {l:.4} m apart (median) but the rig says rod_length = {:.4} m: check the scale or the rig",
-                rig.marker_length
-            ));
-        }
-    }
-    // Second derivatives need a wider window than the initial slope: about 40 ms each side.
-    let mu_data = guess::mu_from_sliding(obs, rig, ((0.04 / dt).round() as usize).clamp(4, 200));
-    let mut free = vec![
-        Param::MuKinetic,
-        Param::X,
-        Param::Theta,
-        Param::XDot,
-        Param::ThetaDot,
-    ];
-    if settings.fit_rod_length {
-        free.push(Param::RodLength);
-    }
-    // A long recording's starts and candidates are fitted on its first frames, and the winner
-    // is carried over the whole recording by doubling the length, each fit starting where the
-    // shorter one ended: a few full-length fits instead of one per start, and a start that
-    // never meets a far-off part of the recording whose events it cannot yet match.
-    let prefix = settings.long_prefix.max(1);
-    let long = n > prefix.saturating_mul(2);
-    let fit_obs = if long {
-        Arc::new(obs.prefix(prefix))
-    } else {
-        obs.clone()
-    };
-    let mut problem = TrajectoryProblem::new(fit_obs, *rig, y0, free, settings.options);
-    problem.tie_static = settings.mu_static != StaticMode::Fixed;
-    problem.sigma = sigma;
-    let mu_s_data = (settings.mu_static == StaticMode::Auto)
-        .then(|| {
-            guess::mu_static_from_onsets(obs, rig, ((0.01 / dt).round() as usize).clamp(3, 50))
-        })
-        .flatten();
-    let static_evidence =
-        mu_s_data.map(|m| m > 1.25 * rig.mu_kinetic.min(mu_data.unwrap_or(f64::INFINITY)));
-    // Candidate models. Released from rest, x'(0) = 0 exactly: the motion may start stuck,
-    // which no small nonzero x'(0) reproduces.
-    let free_model = problem.clone();
-    let mut candidates = Vec::new();
-    // Both starts compete: a release from rest looks like a moving start within a few noisy
-    // frames (the slider accelerates at once), and a wrong x'(0) is a deep local minimum.
-    let mut rest = problem.clone();
-    rest.free.retain(|&q| q != Param::XDot);
-    rest.initial[2] = 0.0;
-    if at_rest {
-        candidates.push(rest.clone());
-        if let (Some(mu_s), Some(true)) = (mu_s_data, static_evidence) {
-            let mut m = rest.clone();
-            m.free.push(Param::MuStatic);
-            m.tie_static = false;
-            m.rig.mu_static = mu_s;
-            candidates.push(m);
-        }
-        candidates.push(free_model.clone());
-    } else {
-        candidates.push(free_model.clone());
-        candidates.push(rest);
-    }
-    let mu0 = mu_data.unwrap_or(rig.mu_kinetic);
-    let start_values = |m: &TrajectoryProblem, mu: f64| {
-        let mut p0 = m.values();
-        p0[0] = mu;
-        if let Some(i) = m.free.iter().position(|&q| q == Param::MuStatic) {
-            p0[i] = p0[i].max(mu);
-        }
-        p0
-    };
-    // Starts over mu: the data's, the rig's, a low one (a start above the truth can stall
-    // in a motion that never slides, where mu has no gradient), and the user's. The far
-    // starts go first: they take the most iterations.
-    let mut jobs: Vec<(usize, f64)> = Vec::new();
-    for mu in [rig.mu_kinetic, 0.4 * mu0]
-        .into_iter()
-        .chain(settings.extra_starts.iter().copied())
-    {
-        if (mu - mu0).abs() > 1e-3 * mu0.abs().max(1e-3)
-            && !jobs
-                .iter()
-                .any(|j| (j.1 - mu).abs() < 1e-3 * mu.abs().max(1e-3))
-        {
-            jobs.push((0, mu));
-        }
-    }
-    jobs.extend((0..candidates.len()).map(|m| (m, mu0)));
-    // A long recording's starts only pick the model and basin the doubling stages refine:
-    // they stop where a stage before the last does.
-    let start_ftol = long.then_some(STAGE_FTOL);
-    let solved: Vec<(usize, f64, Solved)> = jobs
-        .par_iter()
-        .with_max_len(1)
-        .map(|&(m, mu)| {
-            let c = &candidates[m];
-            let p0 = start_values(c, mu);
-            (m, mu, solve_loose(c, p0, settings.max_iters, start_ftol))
-        })
-        .collect();
-    // Akaike's criterion chi2 + 2k picks among the candidates.
-    let aic = |p: &DVector<f64>, c: f64| 2.0 * c + 2.0 * p.len() as f64;
-    let mut starts = Vec::new();
-    let mut last_err = String::new();
-    let mut iterations = 0;
-    let mut best: Option<(usize, DVector<f64>, f64)> = None;
-    for (m, mu, r) in solved {
-        match r {
-            Ok((p, c, it)) => {
-                iterations += it;
-                starts.push(StartOutcome {
-                    mu_start: mu,
-                    mu_end: p[0],
-                    cost: c,
-                });
-                if best
-                    .as_ref()
-                    .is_none_or(|(_, bp, bc)| aic(&p, c) < aic(bp, *bc))
-                {
-                    best = Some((m, p, c));
-                }
-            }
-            Err(e) => last_err = e,
-        }
-    }
-    let (choice, mut p, cost) = best.ok_or(FitError::NoStart(last_err))?;
-    problem = candidates.swap_remove(choice);
-    // A release judged "from rest" whose fit leaves structured residuals may have had a small
-    // push: then the model with x'(0) free competes too.
-    if at_rest {
-        let rho = problem
-            .residuals(&p)
-            .map(|r| uncertainty::lag1(&problem, r.as_slice()));
-        if rho.is_ok_and(|rho| rho > 0.3) {
-            let mut p0 = free_model.values();
-            p0[0] = p[0];
-            if let Ok((q, c, it)) = solve_loose(&free_model, p0, settings.max_iters, start_ftol) {
-                iterations += it;
-                starts.push(StartOutcome {
-                    mu_start: p[0],
-                    mu_end: q[0],
-                    cost: c,
-                });
-                if aic(&q, c) < aic(&p, cost) {
-                    problem = free_model;
-                    p = q;
-                }
-            }
-        }
-    }
-    let mut settled = None;
-    if long {
-        let mut len = prefix;
-        while len < n {
-            // Doubling, without a last stage much shorter than the one before it.
-            len = if 3 * len >= n { n } else { 2 * len };
-            let stage = problem.on(if len == n {
-                obs.clone()
-            } else {
-                Arc::new(obs.prefix(len))
-            });
-            // A stage before the last only has to start the next one well.
-            let mut lm = LevenbergMarquardt::default();
-            if len < n {
-                (lm.ftol, lm.xtol) = (STAGE_FTOL, STAGE_FTOL);
-            }
-            let (q, _, it, reason) = run_lm(&stage, p, settings.max_iters, lm).map_err(|e| {
-                FitError::NoStart(format!(
-                    "carrying the fit of the first {} frames over {len}: {e}",
-                    problem.frame_times().len()
-                ))
-            })?;
-            // The whole recording's fit, converged: nothing to polish unless the model or
-            // the weights change after it.
-            settled = (len == n).then_some(reason);
-            iterations += it;
-            p = q;
-            problem = stage;
-        }
-    }
-    problem.set_values(&p);
-    // A robust loss reweights the rows by their standardised residuals, a few rounds.
-    if settings.loss != Loss::Squares {
-        settled = None;
-        for _ in 0..3 {
-            let Ok(raw) = problem.raw_residuals(&p) else {
-                break;
-            };
-            let weights = problem
-                .rows()
-                .zip(&raw)
-                .map(|(row, &r)| {
-                    let z = (r / problem.sigma[row.marker]).abs();
-                    match settings.loss {
-                        Loss::Squares => 1.0,
-                        Loss::Huber(k) if z > k => (k / z).sqrt(),
-                        Loss::Huber(_) => 1.0,
-                        Loss::Cauchy(k) => (1.0 / (1.0 + (z / k).powi(2))).sqrt(),
-                    }
-                })
-                .collect();
-            problem.set_row_weights(weights);
-            if let Ok((q, _, it)) = solve(&problem, p.clone(), settings.max_iters) {
-                iterations += it;
-                p = q;
-                problem.set_values(&p);
-            }
-        }
-    }
-    Ok(Base {
-        problem,
-        p,
-        starts,
-        iterations,
-        mu_s_data,
-        static_evidence,
-        y0_guess: y0,
-        mu0,
-        settled,
-    })
-}
-
 /// Residuals this many noise deviations out are mis-tracked frames the track check missed.
 const RESIDUAL_OUTLIER: f64 = 6.0;
 
@@ -970,7 +731,7 @@ pub fn fit(
 ) -> Result<FitReport, FitError> {
     let data = stages::prepare(obs, settings)?;
     let mut warnings = Vec::new();
-    let base = base_fit(&data.obs, rig_guess, data.sigma, settings, &mut warnings)?;
+    let base = base::fit(&data.obs, rig_guess, data.sigma, settings, &mut warnings)?;
     let mut f = stages::Fitting {
         problem: base.problem.clone(),
         p: base.p.clone(),
@@ -1225,6 +986,7 @@ fn adequacy_sentence(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use std::sync::Arc;
 
     fn problem(free: Vec<Param>) -> TrajectoryProblem {
         let obs = Arc::new(Observations {

@@ -184,6 +184,9 @@ pub struct WindowFit {
     pub stderr: f64,
 }
 
+/// Fewest sliding frames for a window to say something about mu_kinetic.
+const MIN_SLIDING_FRAMES: usize = 30;
+
 /// Most windows the motion is cut into (each is one more fit).
 pub const MAX_WINDOWS: usize = 6;
 
@@ -327,7 +330,9 @@ pub fn windows(
                 &mut |s: Sample<f64>| sliding += usize::from(matches!(s.mode, Mode::Slide(_))),
             )
             .ok()?;
-            let slides = sliding >= 10;
+            // A slide of a few frames fixes mu poorly and non-linearly (its linear standard
+            // error is then too small): 30 sliding frames at least.
+            let slides = sliding >= MIN_SLIDING_FRAMES;
             if !slides {
                 return None;
             }
