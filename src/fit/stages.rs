@@ -259,7 +259,7 @@ pub(super) struct Estimates {
 }
 
 /// Stage 9: standard errors (Jacobian, block covariance) and mu_kinetic's profile interval,
-/// widened by the block excess, and under a misfit never narrower than +- 1.96 stderr.
+/// widened by the block excess; under a misfit the interval is +- 1.96 stderr instead.
 pub(super) fn estimates(
     f: &mut Fitting,
     noise_dof: f64,
@@ -291,7 +291,12 @@ pub(super) fn estimates(
         })
         .collect();
     let mu_index = idx(problem, Param::MuKinetic).filter(|_| identifiable);
-    if let (true, Some(i)) = (settings.profile, mu_index) {
+    // A model that misfits bends the profile by its misfit, not by the data's information:
+    // there the interval is +- 1.96 stderr (the errors scaled by the reduced chi-square and the
+    // block covariance), which the adequacy stage widens further; the profile's fits, a
+    // second or more on a misfitting recording, are not run.
+    let misfit = select::misfits(problem, a.chi2);
+    if let (true, Some(i), false) = (settings.profile, mu_index, misfit) {
         let profile = uncertainty::profile_interval(
             problem,
             p,
@@ -310,14 +315,6 @@ pub(super) fn estimates(
                 let v = p[i];
                 let e = &mut params[i].1;
                 e.ci95 = [v - (v - ci[0]) * ratio, v + (ci[1] - v) * ratio];
-                // A model that misfits bends the profile by its misfit, not by the data's
-                // information: there the interval is no narrower than +- 1.96 stderr.
-                if select::misfits(problem, a.chi2) {
-                    e.ci95 = [
-                        e.ci95[0].min(v - 1.96 * se[i]),
-                        e.ci95[1].max(v + 1.96 * se[i]),
-                    ];
-                }
                 e.interval = if ratio > 1.0001 {
                     "profile+block"
                 } else {
@@ -470,7 +467,18 @@ pub(super) fn mu_static(
         .any(|e| e.kind == EventKind::Slip && e.t > 0.0);
     let mu_kinetic = est.mu_index.map(|i| est.params[i].1);
     if let Some(i) = idx(&f.problem, Param::MuStatic).filter(|_| state.free) {
-        if settings.profile {
+        // A mu_static the fitted motion does not feel (no slip after a stick, or one the
+        // other parameters take over) has no standard error: that is no measurement.
+        let se = est.params[i].1.stderr;
+        if !(se.is_finite() && se > 0.0) {
+            f.warnings.push(format!(
+                "mu_static ended at {:.5} but the fitted motion does not depend on it (standard error {se:.1e}): it is not measured",
+                est.params[i].1.value
+            ));
+            return StaticResult::NotIdentifiable;
+        }
+        // Under a misfit the profile is bent by the misfit (as mu_kinetic's): +- 1.96 stderr.
+        if settings.profile && !select::misfits(&f.problem, est.a.chi2) {
             let a = &est.a;
             match uncertainty::profile_interval(
                 &f.problem,
@@ -500,7 +508,7 @@ pub(super) fn mu_static(
         return StaticResult::LowerBound(motion.needed_ratio);
     }
     if state.at_bound || (slip_after_stick && base.static_evidence == Some(false)) {
-        return static_upper_limit(f, est.scale, obs, settings);
+        return static_upper_limit(f, est, obs, settings);
     }
     if !motion.sticks {
         f.warnings
@@ -513,11 +521,21 @@ pub(super) fn mu_static(
 /// one-sided profile (on a long recording's first frames, refitted there).
 fn static_upper_limit(
     f: &mut Fitting,
-    scale: f64,
+    est: &Estimates,
     obs: &Observations,
     settings: &FitSettings,
 ) -> StaticResult {
     let mu = f.p[0];
+    let scale = est.scale;
+    if select::misfits(&f.problem, est.a.chi2) {
+        // The one-sided profile of a misfitting model says what the misfit allows, not the
+        // data: no limit is given.
+        f.warnings.push(
+            "mu_static fits at its bound mu_static = mu_kinetic (no upper limit: the model misfits the recording)"
+                .into(),
+        );
+        return StaticResult::NotIdentifiable;
+    }
     if !settings.profile {
         f.warnings.push(
             "mu_static fits at its bound mu_static = mu_kinetic (no upper limit computed: profiles are off)"
