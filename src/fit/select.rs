@@ -720,3 +720,54 @@ pub fn forward(
         iterations,
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::{model_spread, model_weights, ModelRow};
+
+    fn row(name: &str, delta_bic: f64, mu: f64, chosen: bool) -> ModelRow {
+        ModelRow {
+            name: name.to_owned(),
+            free: Vec::new(),
+            chi2: 0.0,
+            bic: delta_bic,
+            delta_bic,
+            chosen,
+            mu_kinetic: mu,
+            failed: None,
+            weight: 0.0,
+            path: false,
+        }
+    }
+
+    /// Weights exp(-dBIC / 2c): equal criteria share, a model 10 units worse gets e^-5 of the
+    /// best's weight (e^-2.5 under an overdispersion c = 2), a failed model and a second fit of
+    /// the same nuisances get none; the spread is the weighted variance about the chosen mu.
+    #[test]
+    fn model_weights_follow_the_criterion() {
+        let mut rows = vec![
+            row("base", 10.0, 0.20, false),
+            row("rail_tilt", 0.0, 0.25, true),
+            row("rail_tilt+marker_lag", 0.0, 0.27, false),
+            row("marker_lag+rail_tilt", 0.0, 0.27, false),
+            ModelRow {
+                failed: Some("did not converge".into()),
+                ..row("pivot_damping", -50.0, 0.9, false)
+            },
+        ];
+        model_weights(&mut rows, 1.0);
+        let total = 2.0 + (-5.0f64).exp();
+        assert!((rows[1].weight - 1.0 / total).abs() < 1e-12);
+        assert!((rows[2].weight - rows[1].weight).abs() < 1e-12);
+        assert!((rows[0].weight / rows[1].weight - (-5.0f64).exp()).abs() < 1e-12);
+        assert_eq!(rows[3].weight, 0.0);
+        assert_eq!(rows[4].weight, 0.0);
+        let (var, names) = model_spread(&rows, 0.25);
+        let want = rows[0].weight * 0.05f64.powi(2) + rows[2].weight * 0.02f64.powi(2);
+        assert!((var - want).abs() < 1e-15);
+        assert!(names.iter().any(|n| n.starts_with("rail_tilt+marker_lag")));
+        assert!(names.iter().any(|n| n.starts_with("rail_tilt ")));
+        model_weights(&mut rows, 2.0);
+        assert!((rows[0].weight / rows[1].weight - (-2.5f64).exp()).abs() < 1e-12);
+    }
+}

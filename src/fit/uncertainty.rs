@@ -543,7 +543,80 @@ pub fn profile_interval(
 
 #[cfg(test)]
 mod tests {
-    use super::runs_p;
+    use super::{motion_bounds, runs_p, window_spread, WindowFit, MAX_WINDOWS};
+    use crate::model::{Direction, Mode};
+    use crate::sim::{Event, EventKind, Outcome};
+
+    fn event(t: f64, kind: EventKind) -> Event {
+        Event {
+            t,
+            from: Mode::Stick,
+            to: Outcome::Mode(Mode::Slide(Direction::Positive)),
+            kind,
+            state: [0.0; 4],
+            alternatives: Vec::new(),
+            impulse: None,
+            peak_normal: None,
+        }
+    }
+
+    /// The windows are cut in the middle of each stick between two slides and at each
+    /// reversal; a stick at the end is no cut; at most MAX_WINDOWS; fewer than two slides give
+    /// the thirds.
+    #[test]
+    fn windows_are_cut_by_the_motion() {
+        let times: Vec<f64> = (0..=2000).map(|i| i as f64 * 1e-3).collect();
+        let events = [
+            event(0.30, EventKind::Reversal),
+            event(0.70, EventKind::Stick),
+            event(0.90, EventKind::Slip),
+            event(1.40, EventKind::Stick),
+            event(1.60, EventKind::Slip),
+            event(1.95, EventKind::Stick),
+        ];
+        // Within a frame of the cut times (a cut lands on the first frame at or after it).
+        let near = |got: Vec<usize>, want: &[usize]| {
+            assert_eq!(got.len(), want.len(), "{got:?}");
+            for (g, w) in got.iter().zip(want) {
+                assert!(g.abs_diff(*w) <= 1, "{got:?} against {want:?}");
+            }
+        };
+        near(motion_bounds(&times, &events), &[0, 300, 800, 1500, 2000]);
+        // One slide that ends stuck: the thirds.
+        let one = [event(0.5, EventKind::Stick)];
+        assert_eq!(motion_bounds(&times, &one), vec![0, 666, 1333, 2000]);
+        // A cut closer than 30 frames to the last is skipped.
+        let close = [
+            event(0.30, EventKind::Reversal),
+            event(0.31, EventKind::Reversal),
+        ];
+        near(motion_bounds(&times, &close), &[0, 300, 2000]);
+        // Many stick-slip cycles: at most MAX_WINDOWS windows.
+        let many: Vec<Event> = (0..20)
+            .flat_map(|k| {
+                let t = 0.05 + 0.09 * k as f64;
+                [event(t, EventKind::Stick), event(t + 0.02, EventKind::Slip)]
+            })
+            .collect();
+        assert_eq!(motion_bounds(&times, &many).len(), MAX_WINDOWS + 1);
+    }
+
+    /// The spread weighs each window by 1/se^2: a window that says little moves it little.
+    #[test]
+    fn window_spread_weighs_by_precision() {
+        let w = |mu: f64, stderr: f64| WindowFit {
+            t_start: 0.0,
+            t_end: 1.0,
+            mu_kinetic: mu,
+            stderr,
+        };
+        assert_eq!(window_spread(&[w(0.25, 1e-4), w(0.25, 1e-4)], 0.25), 0.0);
+        let s = window_spread(&[w(0.26, 1e-4), w(0.24, 1e-4)], 0.25);
+        assert!((s - 0.01).abs() < 1e-12);
+        // A poorly determined window far off (0.05 +- 0.03) barely counts.
+        let s = window_spread(&[w(0.25, 1e-4), w(0.25, 1e-4), w(0.05, 0.03)], 0.25);
+        assert!(s < 1e-3, "{s}");
+    }
 
     /// A reproducible stream of independent signs (xorshift), symmetric about zero.
     fn noise(n: usize, seed: u64) -> Vec<f64> {
