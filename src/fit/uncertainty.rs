@@ -290,6 +290,27 @@ pub fn windows(
             m.camera = problem.camera;
             m.tie_static = problem.tie_static && !problem.free.contains(&Param::MuStatic);
             m.sigma = problem.sigma;
+            // Only a stretch where the whole fit slides says anything about mu_kinetic, and a
+            // slide of a few frames fixes it poorly and non-linearly (its linear standard error
+            // is then too small): 30 sliding frames of the whole fit's motion at least (a
+            // refit with a far-off mu may slide longer: it does not count).
+            let mut sliding = 0;
+            simulate_each(
+                &m.rig,
+                &m.initial,
+                m.frame_times().last().copied().unwrap_or(0.0),
+                &m.options,
+                &Request {
+                    sample_times: m.frame_times().to_vec(),
+                    friction_work: false,
+                    positions_only: true,
+                },
+                &mut |s: Sample<f64>| sliding += usize::from(matches!(s.mode, Mode::Slide(_))),
+            )
+            .ok()?;
+            if sliding < MIN_SLIDING_FRAMES {
+                return None;
+            }
             // A long recording's thirds start next to their optimum (the whole fit's state):
             // one Gauss-Newton step from there, checked below against the chi-square it
             // predicts; a looser stop for the minimisation when that check fails.
@@ -315,27 +336,6 @@ pub fn windows(
                 None => (minimise(&m)?, None),
             };
             m.set_values(&q);
-            // Only a stretch that slides says anything about mu_kinetic.
-            let mut sliding = 0;
-            simulate_each(
-                &m.rig,
-                &m.initial,
-                m.frame_times().last().copied().unwrap_or(0.0),
-                &m.options,
-                &Request {
-                    sample_times: m.frame_times().to_vec(),
-                    friction_work: false,
-                    positions_only: true,
-                },
-                &mut |s: Sample<f64>| sliding += usize::from(matches!(s.mode, Mode::Slide(_))),
-            )
-            .ok()?;
-            // A slide of a few frames fixes mu poorly and non-linearly (its linear standard
-            // error is then too small): 30 sliding frames at least.
-            let slides = sliding >= MIN_SLIDING_FRAMES;
-            if !slides {
-                return None;
-            }
             let mut fit = assess(&m, &q, f64::INFINITY).ok()?;
             // The step missed the chi-square it predicted by more than a tenth of a unit:
             // the problem is not linear enough here, so minimise properly.
