@@ -55,7 +55,7 @@ pub struct Args {
     plain: bool,
     /// Put these nuisances in the model whatever the data say (e.g. a rail known to be
     /// tilted): mu_static, stribeck, rail_tilt, pivot_damping, viscous_friction, camera_scale,
-    /// bob_marker_offset, slider_marker_offset, marker_lag, rigid_pendulum. With --plain, only these.
+    /// bob_marker_offset, bob_marker_across, slider_marker_offset, marker_lag, rigid_pendulum. With --plain, only these.
     #[arg(long, value_delimiter = ',', value_name = "NUISANCE,...", value_parser = nuisance)]
     with: Vec<Nuisance>,
     #[command(flatten)]
