@@ -306,7 +306,7 @@ fn reweight(problem: &mut TrajectoryProblem, p: &mut DVector<f64>, settings: &Fi
     iterations
 }
 
-/// Stage 2 of [`super::fit`]: the base model from several starts, the best by AIC. A long
+/// The base model of [`super::fit`] from several starts, the best by AIC. A long
 /// recording's starts and candidates are fitted on its first frames, and the winner carried
 /// over the whole recording ([`carry_over`]): a few full-length fits instead of one per
 /// start, and a start that never meets a far-off part of the recording whose events it cannot

@@ -446,7 +446,7 @@ fn marker_rms(problem: &TrajectoryProblem, weighted: &[f64], n_params: usize) ->
     (rms, ((ss[0] + ss[1]) / total as f64).sqrt())
 }
 
-/// Step 1: the recording is usable: enough frames with both markers; times from zero.
+/// The recording is usable: enough frames with both markers; times from zero.
 fn check_data(mut obs: Observations) -> Result<Observations, FitError> {
     enough_frames(&obs)?;
     let t0 = obs.times[0];
@@ -471,7 +471,7 @@ fn enough_frames(obs: &Observations) -> Result<(), FitError> {
 /// The noise used as weights (m), the measurements behind it, and the positions dropped.
 type NoiseAndOutliers = ([f64; 2], [Option<NoiseEstimate>; 2], [usize; 2]);
 
-/// Step 2: each marker's noise, measured from its track (or given), and the mis-tracked
+/// Each marker's noise, measured from its track (or given), and the mis-tracked
 /// positions dropped. Returns the noise used as weights, the measurements and the drops.
 fn noise_and_outliers(
     obs: &mut Observations,
@@ -558,7 +558,7 @@ struct ResidualOutliers {
     deferred: bool,
 }
 
-/// Step 4: positions whose residual is beyond [`RESIDUAL_OUTLIER`] deviations. Dropped (weight
+/// Positions whose residual is beyond [`RESIDUAL_OUTLIER`] deviations. Dropped (weight
 /// zero, and the fit redone) only when the model describes the rest of the recording (its
 /// chi-square passes [`select::misfits`]): a model that misfits leaves large residuals where it
 /// is wrong, and dropping those would throw real positions away to fit a wrong model. Then the

@@ -265,9 +265,8 @@ fn score_drops(
                     );
                 }
                 for (n, c) in group.iter().chain(seen.iter()).zip(&cols) {
-                    let base: Vec<usize> = (0..k).collect();
                     let g = nq.jtr.select_rows(c);
-                    let bc = nq.jtj.select_rows(&base).select_columns(c);
+                    let bc = nq.jtj.rows(0, k).select_columns(c);
                     let ctc = nq.jtj.select_rows(c).select_columns(c);
                     let s = ctc - bc.transpose() * &btb_inv * &bc;
                     let drop = s

@@ -35,7 +35,7 @@ pub(super) struct Prepared {
     pub dropped: [usize; 2],
 }
 
-/// Stage 1: the data checked, the noise measured, the mis-tracked positions dropped.
+/// The data checked, the noise measured, the mis-tracked positions dropped.
 pub(super) fn prepare(obs: Observations, settings: &FitSettings) -> Result<Prepared, FitError> {
     let mut obs = check_data(obs)?;
     let n_frames = obs.times.len();
@@ -73,7 +73,7 @@ pub(super) struct Seen {
     pub onset: bool,
 }
 
-/// Stage 3: does the fitted motion slide? A slide shorter than the slider's noise is not seen;
+/// Does the fitted motion slide? A slide shorter than the slider's noise is not seen;
 /// a raw track that clearly moves while no fit slides is a failed fit, said as such.
 pub(super) fn seen(f: &Fitting, obs: &Observations, base: &Base) -> Result<Seen, FitError> {
     let motion = motion(&f.problem)?;
@@ -93,7 +93,7 @@ pub(super) fn seen(f: &Fitting, obs: &Observations, base: &Base) -> Result<Seen,
     })
 }
 
-/// Stage 4: the nuisances the data ask for (forward selection). Returns the models compared
+/// The nuisances the data ask for (forward selection). Returns the models compared
 /// and the nuisances chosen.
 pub(super) fn nuisances(
     f: &mut Fitting,
@@ -141,7 +141,7 @@ pub(super) fn nuisances(
     (sel.rows, sel.chosen)
 }
 
-/// Stage 5: the residual outliers a misfitting base model left for the chosen one
+/// The residual outliers a misfitting base model left for the chosen one
 /// ([`residual_outliers`]), and the report's note on every position left out or down-weighted.
 /// Returns the positions left out in all (slider, bob) and what this step did.
 pub(super) fn late_outliers(
@@ -170,7 +170,7 @@ pub(super) fn late_outliers(
     (out, late)
 }
 
-/// Stage 6, for a recording whose fit never slides: said as such (or as a failed fit when the
+/// For a recording whose fit never slides: said as such (or as a failed fit when the
 /// raw track moves), and the stuck pendulum fitted with mu where it never slips (0.999 mu*, no
 /// paradox either).
 pub(super) fn hold_stuck(f: &mut Fitting, raw_moves: Option<f64>, settings: &FitSettings) {
@@ -206,7 +206,7 @@ pub(super) struct StaticState {
     pub free: bool,
 }
 
-/// Stage 7: a free mu_static at its bound mu_static = mu_kinetic is tied again.
+/// A free mu_static at its bound mu_static = mu_kinetic is tied again.
 pub(super) fn static_bound(f: &mut Fitting, slides: bool) -> StaticState {
     let mut s = StaticState::default();
     if !slides {
@@ -226,7 +226,7 @@ pub(super) fn static_bound(f: &mut Fitting, slides: bool) -> StaticState {
     s
 }
 
-/// Stage 8: the final polish, unless a long recording's whole fit already converged on this
+/// The final polish, unless a long recording's whole fit already converged on this
 /// very model and weights (each pass over a million frames costs a third of a second).
 /// Returns why the solver stopped.
 pub(super) fn polish(f: &mut Fitting, settled: Option<String>, settings: &FitSettings) -> String {
@@ -258,7 +258,7 @@ pub(super) struct Estimates {
     pub mu_index: Option<usize>,
 }
 
-/// Stage 9: standard errors (Jacobian, block covariance) and mu_kinetic's profile interval,
+/// Standard errors (Jacobian, block covariance) and mu_kinetic's profile interval,
 /// widened by the block excess; under a misfit the interval is +- 1.96 stderr instead.
 pub(super) fn estimates(
     f: &mut Fitting,
@@ -353,7 +353,7 @@ pub(super) struct Verdict {
     pub rms_residual_m: f64,
 }
 
-/// Stage 10: adequacy. mu_kinetic on each window cut by the motion (a slide each), the runs
+/// Adequacy. mu_kinetic on each window cut by the motion (a slide each), the runs
 /// test, the chi-square and the block ratio; when any fails, mu's interval widens by the
 /// windows' spread and by mu's shift along the selection's path, and by the spread of close
 /// models in any case; then the physical bounds, the one plain sentence, a failed fit, and a
@@ -445,7 +445,7 @@ pub(super) fn adequacy(
     }
 }
 
-/// Stage 11: mu_static. Free above mu_kinetic: its profile interval, starting no lower than
+/// mu_static. Free above mu_kinetic: its profile interval, starting no lower than
 /// mu_kinetic's. At its bound (or with onsets that show none above mu_kinetic): mu_kinetic and
 /// the upper limit the data allow (one-sided profile). Stuck throughout: the lower bound the
 /// motion needs. Otherwise not identifiable.
@@ -597,7 +597,7 @@ fn static_upper_limit(
     }
 }
 
-/// Stage 12: starts that ended statistically as good as the best (cost within the 1-dof
+/// Starts that ended statistically as good as the best (cost within the 1-dof
 /// likelihood ratio) but at a different mu are a real ambiguity, said as such.
 pub(super) fn starts_agree(f: &mut Fitting, base: &Base, est: &Estimates) {
     let starts = &base.starts;
@@ -635,7 +635,7 @@ pub(super) struct Parts<'a> {
     pub stop_reason: String,
 }
 
-/// Stage 13: the report.
+/// The report.
 pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
     let Parts {
         data,
