@@ -372,8 +372,8 @@ fn solve(problem: &TrajectoryProblem, p0: DVector<f64>, max_iters: u64) -> Solve
 
 /// [`solve`] stopping at a relative cost decrease of `ftol` (and a relative step of the
 /// same size) when given.
-fn solve_loose(
-    problem: &TrajectoryProblem,
+fn solve_loose<P: lm::LeastSquares + Clone>(
+    problem: &P,
     p0: DVector<f64>,
     max_iters: u64,
     ftol: Option<f64>,
@@ -396,8 +396,8 @@ fn solve_traced(
 }
 
 /// Run `lm` on `problem` from `p0`: optimum, cost, iterations and termination reason.
-fn run_lm(
-    problem: &TrajectoryProblem,
+fn run_lm<P: lm::LeastSquares + Clone>(
+    problem: &P,
     p0: DVector<f64>,
     max_iters: u64,
     lm: LevenbergMarquardt,

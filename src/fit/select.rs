@@ -3,6 +3,7 @@
 //! Jacobian at the current optimum), the promising ones fitted, and the best kept while it
 //! lowers the Bayesian information criterion BIC = chi2 + k ln(n) (forward selection).
 
+use super::lm::LeastSquares;
 use super::problem::{Param, TrajectoryProblem, MAX_FREE};
 use super::{solve_loose, Solved, STAGE_FTOL};
 use crate::model::{FrictionLaw, State};
@@ -92,7 +93,7 @@ impl Nuisance {
     /// Whether a score test can screen it: a parameter whose neutral value is an interior
     /// point. mu_static at mu_static = mu_kinetic has a vanishing first-order effect (the slip
     /// then starts with x'' = 0), and Stribeck changes the law: both are fitted outright.
-    fn screened(self) -> bool {
+    pub(crate) fn screened(self) -> bool {
         !matches!(self, Nuisance::StaticFriction | Nuisance::Stribeck)
     }
 
@@ -117,12 +118,9 @@ impl Nuisance {
         (self == Nuisance::Stribeck).then_some(Nuisance::StaticFriction)
     }
 
-    /// Parameters it adds to `problem` (those not free already).
-    fn new_params(self, problem: &TrajectoryProblem) -> usize {
-        self.params()
-            .iter()
-            .filter(|q| !problem.free.contains(q))
-            .count()
+    /// Parameters it adds to each simulation of `m` (those not free already).
+    fn new_params<M: Candidate>(self, m: &M) -> usize {
+        self.params().iter().filter(|&&q| !m.frees(q)).count()
     }
 
     /// `chosen` with this nuisance added (and what it supersedes removed).
@@ -137,7 +135,7 @@ impl Nuisance {
     }
 
     /// `problem` with this nuisance added at its neutral value (mu_static from `mu_static`).
-    fn add_to(self, problem: &TrajectoryProblem, mu_static: f64) -> TrajectoryProblem {
+    pub(crate) fn add_to(self, problem: &TrajectoryProblem, mu_static: f64) -> TrajectoryProblem {
         let mut m = problem.clone();
         if self == Nuisance::Stribeck {
             m.rig.friction_law = FrictionLaw::Stribeck;
@@ -184,9 +182,9 @@ pub struct ModelRow {
 
 /// The outcome of forward selection: the chosen problem and optimum, the nuisances it holds
 /// and every model compared.
-pub struct Selection {
+pub struct Selection<M> {
     /// The chosen model, values set.
-    pub problem: TrajectoryProblem,
+    pub problem: M,
     /// Its optimum.
     pub p: DVector<f64>,
     /// Nuisances in the chosen model.
@@ -195,6 +193,139 @@ pub struct Selection {
     pub rows: Vec<ModelRow>,
     /// Levenberg-Marquardt iterations spent.
     pub iterations: u64,
+}
+
+/// What the forward selection needs of a model: one recording's problem
+/// ([`TrajectoryProblem`]) or several recordings fitted jointly (`fit::joint`). The selection
+/// ([`forward`]) is written once against this.
+pub trait Candidate: LeastSquares + Clone + Send + Sync + 'static {
+    /// A restart for a misfitting model: the data's own initial state(s) and mu_kinetic.
+    type Start: Clone + Send + Sync;
+    /// Residual rows (the sample size of the criterion).
+    fn n_rows(&self) -> usize;
+    /// Free parameters in all.
+    fn n_free(&self) -> usize;
+    /// Free parameters of the widest single simulation (the dual numbers' width, at most
+    /// [`MAX_FREE`]).
+    fn width(&self) -> usize;
+    /// Whether `q` is free.
+    fn frees(&self, q: Param) -> bool;
+    /// Names of the free parameters, for the model table.
+    fn free_names(&self) -> Vec<&'static str>;
+    /// Current values of the free parameters.
+    fn values(&self) -> DVector<f64>;
+    /// Store a parameter vector.
+    fn set_values(&mut self, v: &DVector<f64>);
+    /// Current mu_kinetic.
+    fn mu_kinetic(&self) -> f64;
+    /// Current mu_static.
+    fn mu_static(&self) -> f64;
+    /// Whether the rig file gives the pendulum's build (then it is not a candidate).
+    fn pendulum_given(&self) -> bool;
+    /// The model with `nu` added at its neutral value (mu_static from `mu_static`).
+    fn with_nuisance(&self, nu: Nuisance, mu_static: f64) -> Self;
+    /// The model restarted from `start` (parameters the start does not name keep their
+    /// values).
+    fn restarted(&self, start: &Self::Start) -> Self;
+    /// The model with mu_static no longer free, tied to mu_kinetic.
+    fn static_tied(&self) -> Self;
+    /// The model with mu_static just above mu_kinetic, where the static coefficient (and
+    /// Stribeck's law) does what Coulomb's law with one coefficient does.
+    fn static_near_tie(&self) -> Self;
+    /// Predicted chi-square drop of each screened candidate at `p` (the score test).
+    fn score_drops(&self, p: &DVector<f64>, candidates: &[Nuisance]) -> Vec<(Nuisance, f64)>;
+}
+
+impl Candidate for TrajectoryProblem {
+    type Start = (State<f64>, f64);
+    fn n_rows(&self) -> usize {
+        TrajectoryProblem::n_rows(self)
+    }
+    fn n_free(&self) -> usize {
+        self.free.len()
+    }
+    fn width(&self) -> usize {
+        self.free.len()
+    }
+    fn frees(&self, q: Param) -> bool {
+        self.free.contains(&q)
+    }
+    fn free_names(&self) -> Vec<&'static str> {
+        self.free.iter().map(|q| q.name()).collect()
+    }
+    fn values(&self) -> DVector<f64> {
+        TrajectoryProblem::values(self)
+    }
+    fn set_values(&mut self, v: &DVector<f64>) {
+        TrajectoryProblem::set_values(self, v)
+    }
+    fn mu_kinetic(&self) -> f64 {
+        self.rig.mu_kinetic
+    }
+    fn mu_static(&self) -> f64 {
+        self.rig.mu_static
+    }
+    fn pendulum_given(&self) -> bool {
+        self.rig.pendulum.is_some()
+    }
+    fn with_nuisance(&self, nu: Nuisance, mu_static: f64) -> Self {
+        nu.add_to(self, mu_static)
+    }
+    fn restarted(&self, start: &Self::Start) -> Self {
+        restarted(self, *start)
+    }
+    fn static_tied(&self) -> Self {
+        let mut tied = self.clone();
+        tied.free.retain(|&q| q != Param::MuStatic);
+        tied.tie_static = true;
+        tied.rig.mu_static = tied.rig.mu_kinetic;
+        tied
+    }
+    fn static_near_tie(&self) -> Self {
+        let mut tied = self.clone();
+        tied.rig.mu_static = tied.rig.mu_kinetic * (1.0 + 1e-9);
+        tied
+    }
+    fn score_drops(&self, p: &DVector<f64>, candidates: &[Nuisance]) -> Vec<(Nuisance, f64)> {
+        score_drops(self, p, candidates)
+    }
+}
+
+/// Score-test drops of `candidates` for any model, one augmented normal-equation pass per
+/// candidate: with residuals r and base columns B at the optimum and candidate columns C,
+/// drop = (C'r)' S^-1 (C'r) with S = C'C - C'B (B'B)^-1 B'C. `augmented(nu)` gives the model
+/// with `nu` added at its neutral value and the positions of the base model's parameters in
+/// its parameter vector.
+pub fn score_drops_by<M: Candidate>(
+    m: &M,
+    p: &DVector<f64>,
+    candidates: &[Nuisance],
+    augmented: impl Fn(Nuisance) -> (M, Vec<usize>) + Sync,
+) -> Vec<(Nuisance, f64)> {
+    let mut base = m.clone();
+    base.set_values(p);
+    candidates
+        .iter()
+        .filter(|nu| m.width() + nu.new_params(m) <= MAX_FREE)
+        .map(|&nu| {
+            let (aug, base_cols) = augmented(nu);
+            let q = aug.values();
+            let drop = aug.normal_equations(&q).ok().and_then(|nq| {
+                let cols: Vec<usize> = (0..q.len()).filter(|i| !base_cols.contains(i)).collect();
+                let btb_inv = nq
+                    .jtj
+                    .select_rows(&base_cols)
+                    .select_columns(&base_cols)
+                    .try_inverse()?;
+                let g = nq.jtr.select_rows(&cols);
+                let bc = nq.jtj.select_rows(&base_cols).select_columns(&cols);
+                let ctc = nq.jtj.select_rows(&cols).select_columns(&cols);
+                let s = ctc - bc.transpose() * &btb_inv * &bc;
+                s.try_inverse().map(|si| (g.transpose() * si * &g)[(0, 0)])
+            });
+            (nu, drop.filter(|d| d.is_finite()).unwrap_or(0.0))
+        })
+        .collect()
 }
 
 /// Chi-square of a solved model (the solver's cost is half of it).
@@ -295,7 +426,7 @@ fn score_drops(
 }
 
 /// Settings of the selection.
-pub struct SelectOptions {
+pub struct SelectOptions<S> {
     /// Try mu_static and Stribeck friction (the data show a stick-to-slide onset) in a round
     /// whose model misfits, or in every round when `static_evidence` is set.
     pub friction_candidates: bool,
@@ -314,7 +445,7 @@ pub struct SelectOptions {
     /// initial state and mu_kinetic. A misfitting model's optimum is often a compromise far
     /// from the truth (a drift fitted by a push), from which the right nuisance alone does
     /// not lead back.
-    pub fresh_start: Option<(State<f64>, f64)>,
+    pub fresh_start: Option<S>,
     /// Nuisances the user put in the model (`--with`): added first, whatever they cost.
     pub forced: Vec<Nuisance>,
 }
@@ -322,8 +453,8 @@ pub struct SelectOptions {
 /// Whether `problem`'s chi-square is far beyond its degrees of freedom (5 standard
 /// deviations): the model misfits, so the linear screening and the current optimum are not
 /// to be trusted.
-pub fn misfits(problem: &TrajectoryProblem, chi2: f64) -> bool {
-    let dof = (problem.n_rows().saturating_sub(problem.free.len()) as f64).max(1.0);
+pub fn misfits<M: Candidate>(problem: &M, chi2: f64) -> bool {
+    let dof = (problem.n_rows().saturating_sub(problem.n_free()) as f64).max(1.0);
     chi2 > dof + 5.0 * (2.0 * dof).sqrt()
 }
 
@@ -353,18 +484,18 @@ fn restarted(m: &TrajectoryProblem, (y0, mu0): (State<f64>, f64)) -> TrajectoryP
 /// chi-square to far below a unit (the criterion's differences that matter are units), while
 /// the last digits cost as many iterations again. The chosen model is polished after the
 /// selection.
-fn solve_candidate(m: &TrajectoryProblem, p0: DVector<f64>, max_iters: u64) -> Solved {
+fn solve_candidate<M: Candidate>(m: &M, p0: DVector<f64>, max_iters: u64) -> Solved {
     solve_loose(m, p0, max_iters, Some(STAGE_FTOL))
 }
 
 /// Solve `m` from its values and, when `fresh` is given, also from a restart; the lower
 /// cost wins. Iterations of both count.
-fn solve_starts(m: &TrajectoryProblem, fresh: Option<(State<f64>, f64)>, max_iters: u64) -> Solved {
+fn solve_starts<M: Candidate>(m: &M, fresh: Option<&M::Start>, max_iters: u64) -> Solved {
     let a = solve_candidate(m, m.values(), max_iters);
     let Some(start) = fresh else {
         return a;
     };
-    let f = restarted(m, start);
+    let f = m.restarted(start);
     let b = solve_candidate(&f, f.values(), max_iters);
     match (a, b) {
         (Ok(x), Ok(y)) => {
@@ -384,7 +515,7 @@ fn nested_slack(parent_chi2: f64) -> f64 {
 }
 
 /// The round's best candidate: its nuisances, problem, optimum, chi-square and row.
-type Best = (Vec<Nuisance>, TrajectoryProblem, DVector<f64>, f64, usize);
+type Best<M> = (Vec<Nuisance>, M, DVector<f64>, f64, usize);
 
 /// A failed candidate: why, the chi-square it reached (NaN when none) and the iterations.
 type Failure = (String, f64, u64);
@@ -393,10 +524,10 @@ type Failure = (String, f64, u64);
 /// current model (`parent`: that model's chi-square) yet ends worse than it has not converged:
 /// it is retried, longer and from the data's start, and is a failure when it still ends
 /// worse (it is then no evidence about the nuisance, and must not be compared as if it were).
-fn fit_candidate(
-    m: &TrajectoryProblem,
-    fresh: Option<(State<f64>, f64)>,
-    opts: &SelectOptions,
+fn fit_candidate<M: Candidate>(
+    m: &M,
+    fresh: Option<&M::Start>,
+    opts: &SelectOptions<M::Start>,
     parent: Option<f64>,
 ) -> Result<(DVector<f64>, f64, u64), Failure> {
     let worse = |cost: f64| parent.is_some_and(|c| chi2_of(cost) > c + nested_slack(c));
@@ -409,20 +540,18 @@ fn fit_candidate(
     };
     // The retries: on from where the first fit stopped with twice the iterations, and from
     // the data's start when the first fit did not use it.
-    let mut retries: Vec<(TrajectoryProblem, DVector<f64>)> = Vec::new();
+    let mut retries: Vec<(M, DVector<f64>)> = Vec::new();
     if let Some((q, _)) = &best {
         retries.push((m.clone(), q.clone()));
     }
-    if m.free.contains(&Param::MuStatic) && m.rig.mu_static > m.rig.mu_kinetic {
-        // From the current model itself: mu_static just above mu_kinetic, where the static
-        // coefficient (and Stribeck's law) does what Coulomb's law with one coefficient does.
-        let mut tied = m.clone();
-        tied.rig.mu_static = tied.rig.mu_kinetic * (1.0 + 1e-9);
+    if m.frees(Param::MuStatic) && m.mu_static() > m.mu_kinetic() {
+        // From the current model itself: mu_static just above mu_kinetic.
+        let tied = m.static_near_tie();
         let v = tied.values();
         retries.push((tied, v));
     }
-    if let (None, Some(start)) = (fresh, opts.fresh_start) {
-        let f = restarted(m, start);
+    if let (None, Some(start)) = (fresh, opts.fresh_start.as_ref()) {
+        let f = m.restarted(start);
         let v = f.values();
         retries.push((f, v));
     }
@@ -512,12 +641,12 @@ pub fn model_spread(rows: &[ModelRow], mu: f64) -> (f64, Vec<String>) {
 }
 
 /// Forward selection from the base model `problem` at its optimum `p` (chi-square `chi2`).
-pub fn forward(
-    problem: TrajectoryProblem,
+pub fn forward<M: Candidate>(
+    problem: M,
     p: DVector<f64>,
     chi2: f64,
-    opts: &SelectOptions,
-) -> Selection {
+    opts: &SelectOptions<M::Start>,
+) -> Selection<M> {
     let n = problem.n_rows() as f64;
     let bic = |k: usize, chi2: f64| chi2 + k as f64 * n.ln();
     let name_of = |ns: &[Nuisance]| {
@@ -527,14 +656,14 @@ pub fn forward(
             ns.iter().map(|n| n.name()).collect::<Vec<_>>().join("+")
         }
     };
-    let row = |ns: &[Nuisance], m: &TrajectoryProblem, chi2: f64| ModelRow {
+    let row = |ns: &[Nuisance], m: &M, chi2: f64| ModelRow {
         name: name_of(ns),
-        free: m.free.iter().map(|q| q.name()).collect(),
+        free: m.free_names(),
         chi2,
-        bic: bic(m.free.len(), chi2),
+        bic: bic(m.n_free(), chi2),
         delta_bic: 0.0,
         chosen: false,
-        mu_kinetic: m.rig.mu_kinetic,
+        mu_kinetic: m.mu_kinetic(),
         failed: None,
         weight: 0.0,
         path: false,
@@ -550,8 +679,8 @@ pub fn forward(
         if chosen.contains(&nu) || chosen.iter().any(|c| c.conflicts(nu)) {
             continue;
         }
-        let m = nu.add_to(&current.0, opts.mu_static_start);
-        match fit_candidate(&m, opts.fresh_start, opts, Some(current.2)) {
+        let m = current.0.with_nuisance(nu, opts.mu_static_start);
+        match fit_candidate(&m, opts.fresh_start.as_ref(), opts, Some(current.2)) {
             Ok((q, cost, iters)) => {
                 iterations += iters;
                 let mut m = m;
@@ -579,22 +708,22 @@ pub fn forward(
         let open: Vec<Nuisance> = Nuisance::ALL
             .into_iter()
             .filter(|n| !chosen.contains(n) && !chosen.iter().any(|c| c.conflicts(*n)))
-            .filter(|n| cur_problem.free.len() + n.new_params(cur_problem) <= MAX_FREE)
+            .filter(|n| cur_problem.width() + n.new_params(cur_problem) <= MAX_FREE)
             .filter(|n| n.screened() || friction)
             // A pendulum the rig file gives is used as given (`--with` may still free it).
-            .filter(|n| *n != Nuisance::RigidPendulum || cur_problem.rig.pendulum.is_none())
+            .filter(|n| *n != Nuisance::RigidPendulum || !cur_problem.pendulum_given())
             .collect();
         if open.is_empty() {
             break;
         }
         let screened: Vec<Nuisance> = open.iter().copied().filter(|n| n.screened()).collect();
-        let mut drops = score_drops(cur_problem, cur_p, &screened);
+        let mut drops = cur_problem.score_drops(cur_p, &screened);
         drops.sort_by(|a, b| b.1.total_cmp(&a.1));
         // Fit the two most promising screened candidates whose predicted drop pays their BIC
         // penalty, and the friction candidates outright. A misfitting model's linearisation
         // ranks poorly: then every screened candidate is fitted, from two starts.
         let misfit = misfits(cur_problem, *cur_chi2);
-        let fresh = opts.fresh_start.filter(|_| misfit);
+        let fresh = opts.fresh_start.as_ref().filter(|_| misfit);
         let mut to_fit: Vec<Nuisance> = drops
             .iter()
             .filter(|(nu, d)| misfit || *d > nu.params().len() as f64 * n.ln())
@@ -628,14 +757,11 @@ pub fn forward(
             // can be no worse than the current one's.
             jobs.push((
                 nu.join(&chosen),
-                nu.add_to(cur_problem, opts.mu_static_start),
+                cur_problem.with_nuisance(nu, opts.mu_static_start),
                 Some(*cur_chi2),
             ));
             if drop_static && nu.supersedes() != Some(Nuisance::StaticFriction) {
-                let mut tied = cur_problem.clone();
-                tied.free.retain(|&q| q != Param::MuStatic);
-                tied.tie_static = true;
-                tied.rig.mu_static = tied.rig.mu_kinetic;
+                let tied = cur_problem.static_tied();
                 let without: Vec<Nuisance> = chosen
                     .iter()
                     .copied()
@@ -643,12 +769,12 @@ pub fn forward(
                     .collect();
                 jobs.push((
                     nu.join(&without),
-                    nu.add_to(&tied, opts.mu_static_start),
+                    tied.with_nuisance(nu, opts.mu_static_start),
                     None,
                 ));
             }
         }
-        let run = |jobs: Vec<(Vec<Nuisance>, TrajectoryProblem, Option<f64>)>| {
+        let run = |jobs: Vec<(Vec<Nuisance>, M, Option<f64>)>| {
             jobs.into_par_iter()
                 .with_max_len(1)
                 .map(|(set, m, parent)| {
@@ -658,15 +784,15 @@ pub fn forward(
                 .collect::<Vec<_>>()
         };
         let mut fits = run(first);
-        let cur_bic = bic(cur_problem.free.len(), *cur_chi2);
+        let cur_bic = bic(cur_problem.n_free(), *cur_chi2);
         let earns = fits.iter().any(|(_, m, s)| {
             s.as_ref()
-                .is_ok_and(|(_, cost, _)| bic(m.free.len(), chi2_of(*cost)) < cur_bic - 2.0)
+                .is_ok_and(|(_, cost, _)| bic(m.n_free(), chi2_of(*cost)) < cur_bic - 2.0)
         });
         if !earns {
             fits.extend(run(rest));
         }
-        let mut best: Option<Best> = None;
+        let mut best: Option<Best<M>> = None;
         for (set, m, solved) in fits {
             let (q, cost, iters) = match solved {
                 Ok(s) => s,
@@ -684,7 +810,7 @@ pub fn forward(
             let at = rows.len() - 1;
             if best
                 .as_ref()
-                .is_none_or(|b| bic(m.free.len(), c2) < bic(b.1.free.len(), b.3))
+                .is_none_or(|b| bic(m.n_free(), c2) < bic(b.1.n_free(), b.3))
             {
                 best = Some((set, m, q, c2, at));
             }
@@ -693,7 +819,7 @@ pub fn forward(
             break;
         };
         // Positive evidence (Kass and Raftery): a BIC lower by more than 2.
-        if bic(m.free.len(), c2) < bic(cur_problem.free.len(), *cur_chi2) - 2.0 {
+        if bic(m.n_free(), c2) < bic(cur_problem.n_free(), *cur_chi2) - 2.0 {
             m.set_values(&q);
             chosen = set;
             rows[at].path = true;
@@ -703,12 +829,12 @@ pub fn forward(
         }
     }
     let chosen_name = name_of(&chosen);
-    let best_bic = bic(current.0.free.len(), current.2);
+    let best_bic = bic(current.0.n_free(), current.2);
     for r in &mut rows {
         r.delta_bic = r.bic - best_bic;
         r.chosen = r.failed.is_none() && r.name == chosen_name && (r.bic - best_bic).abs() < 1e-9;
     }
-    let dof = (n - current.0.free.len() as f64).max(1.0);
+    let dof = (n - current.0.n_free() as f64).max(1.0);
     model_weights(&mut rows, (current.2 / dof).max(1.0));
     let (problem, p, _) = current;
     Selection {
