@@ -5,8 +5,10 @@ use super::recording_args::RecordingArgs;
 use super::Failure;
 use anyhow::anyhow;
 use appell::data::{read_recording, ReadOptions};
+use appell::fit::joint::{fit_joint, JointError, JointSettings, Release};
 use appell::fit::{fit, FitReport, FitSettings, Loss, Nuisance, Observations, StaticMode};
 use appell::report::fit::{fit_json, fit_text, FitFigure};
+use appell::report::joint::{joint_json, joint_text, JointFigure};
 use appell::report::plot::render;
 use appell::scene::RigFile;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -17,8 +19,29 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, clap::Args)]
 pub struct Args {
     /// Recording file(s) (Tracker: one file per marker), or one directory of recordings.
-    #[arg(required = true, value_name = "RECORDING")]
+    #[arg(required_unless_present = "release", value_name = "RECORDING")]
     inputs: Vec<PathBuf>,
+    /// Fit the recordings together as releases of one rig: the friction law, tilt, viscous
+    /// terms and the pendulum shared, each release's state (and camera) its own. Give a
+    /// directory, or the releases with --release.
+    #[arg(long)]
+    joint: bool,
+    /// One release of a joint fit (repeat it): a recording file, or a Tracker pair as
+    /// `SLIDER.txt,BOB.txt`.
+    #[arg(
+        long,
+        value_name = "FILE[,FILE]",
+        requires = "joint",
+        conflicts_with = "inputs"
+    )]
+    release: Vec<String>,
+    /// Joint fit: one camera for every release (its scale and marker offsets shared).
+    #[arg(long, requires = "joint")]
+    same_camera: bool,
+    /// Joint fit: a release that cannot be read or fitted is named and left out, and the
+    /// others are fitted.
+    #[arg(long, requires = "joint")]
+    keep_going: bool,
     /// Rig file: the [rig] section of a scene; mu values there are only starting guesses.
     #[arg(long, value_name = "RIG.toml")]
     rig: PathBuf,
@@ -218,6 +241,9 @@ pub fn run(args: Args) -> Result<(), Failure> {
     if let Some(p) = &args.plot {
         appell::report::plot::ImageFormat::from_path(p).map_err(|e| Failure::Input(e.into()))?;
     }
+    if args.joint {
+        return run_joint(&args, &opts, &rig, &settings);
+    }
     if args.inputs.len() == 1 && args.inputs[0].is_dir() {
         let files = directory_files(&args.inputs[0], opts.format.is_some())?;
         let bar = ProgressBar::new(files.len() as u64);
@@ -294,6 +320,84 @@ pub fn run(args: Args) -> Result<(), Failure> {
         outln!("{}", fit_json(&rep));
     } else {
         out!("{}", fit_text(&rep));
+        if let Some(p) = &args.plot {
+            outln!("figure written to {}", p.display());
+        }
+    }
+    Ok(())
+}
+
+/// The releases of a joint fit: a directory's recordings, or each `--release`.
+fn release_paths(args: &Args, format_given: bool) -> Result<Vec<Vec<PathBuf>>, Failure> {
+    if !args.release.is_empty() {
+        return Ok(args
+            .release
+            .iter()
+            .map(|r| r.split(',').map(PathBuf::from).collect())
+            .collect());
+    }
+    match args.inputs.as_slice() {
+        [dir] if dir.is_dir() => Ok(directory_files(dir, format_given)?
+            .into_iter()
+            .map(|f| vec![f])
+            .collect()),
+        _ => Err(Failure::Input(anyhow!(
+            "--joint takes one directory of recordings, or each release with --release FILE (a Tracker pair as --release SLIDER.txt,BOB.txt)"
+        ))),
+    }
+}
+
+/// `appell fit --joint`: the releases read (in parallel), fitted together and reported.
+fn run_joint(
+    args: &Args,
+    opts: &ReadOptions,
+    rig: &appell::model::Rig<f64>,
+    settings: &FitSettings,
+) -> Result<(), Failure> {
+    let paths = release_paths(args, opts.format.is_some())?;
+    let read: Vec<(String, Result<Observations, Failure>)> = paths
+        .par_iter()
+        .map(|p| {
+            let name = p
+                .iter()
+                .map(|f| f.display().to_string())
+                .collect::<Vec<_>>()
+                .join(",");
+            let obs = read_recording(p, opts)
+                .map(|rec| Observations::from(&rec))
+                .map_err(|e| Failure::Input(e.into()));
+            (name, obs)
+        })
+        .collect();
+    let mut releases = Vec::new();
+    let mut unread = Vec::new();
+    for (name, obs) in read {
+        match obs {
+            Ok(obs) => releases.push(Release { name, obs }),
+            Err(Failure::Input(e) | Failure::Run(e)) if args.keep_going => {
+                let message = super::messages(&e).join(": ");
+                eprintln!("error: {message} (left out)");
+                unread.push((name, message));
+            }
+            Err(e) => return Err(e),
+        }
+    }
+    let joint = JointSettings {
+        same_camera: args.same_camera,
+        keep_going: args.keep_going,
+    };
+    let mut rep = fit_joint(&releases, rig, settings, &joint).map_err(|e| match e {
+        JointError::OtherRig(_) | JointError::TooFew(_) => Failure::Input(anyhow!(e)),
+        e => Failure::Run(anyhow!(e)),
+    })?;
+    rep.left_out.extend(unread);
+    if let Some(p) = &args.plot {
+        render(p, &JointFigure { report: &rep }).map_err(|e| Failure::Run(anyhow!(e)))?;
+    }
+    if args.json {
+        outln!("{}", joint_json(&rep));
+    } else {
+        out!("{}", joint_text(&rep));
         if let Some(p) = &args.plot {
             outln!("figure written to {}", p.display());
         }

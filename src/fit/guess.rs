@@ -85,17 +85,21 @@ pub fn initial_state(obs: &Observations, window: usize) -> Option<([f64; 4], f64
     Some(([x[0], a[0], x[1], a[1]], x_dot_se))
 }
 
-/// Median rod length seen in the frames with both markers.
-pub fn rod_length(obs: &Observations) -> Option<f64> {
-    let mut d: Vec<f64> = obs
-        .slider
+/// The markers' distance (the rod as the camera sees it) in each frame with both markers.
+pub fn marker_distances(obs: &Observations) -> Vec<f64> {
+    obs.slider
         .iter()
         .zip(&obs.bob)
         .filter_map(|(s, b)| {
             let (s, b) = ((*s)?, (*b)?);
             Some(((b[0] - s[0]).powi(2) + (b[1] - s[1]).powi(2)).sqrt())
         })
-        .collect();
+        .collect()
+}
+
+/// Median rod length seen in the frames with both markers.
+pub fn rod_length(obs: &Observations) -> Option<f64> {
+    let mut d = marker_distances(obs);
     if d.is_empty() {
         return None;
     }

@@ -8,6 +8,7 @@
 
 mod base;
 pub mod guess;
+pub mod joint;
 pub mod lm;
 pub mod noise;
 mod outliers;
@@ -346,6 +347,9 @@ pub struct FitReport {
     /// Why the fit failed although it ran (mu_kinetic pinned at zero with the friction
     /// carried by another term): the value is then not a friction coefficient.
     pub failed: Option<String>,
+    /// The chosen model at its optimum, with its noise scales and row weights (outliers at
+    /// zero): what a fit built on this one (the joint fit) starts from.
+    pub problem: TrajectoryProblem,
 }
 
 /// A recording that cannot be fitted.

@@ -291,19 +291,16 @@ impl Candidate for TrajectoryProblem {
     }
 }
 
-/// Score-test drops of `candidates` for any model, one augmented normal-equation pass per
+/// Score-test drops of `candidates` for any model `m` (its values at the optimum), one augmented normal-equation pass per
 /// candidate: with residuals r and base columns B at the optimum and candidate columns C,
 /// drop = (C'r)' S^-1 (C'r) with S = C'C - C'B (B'B)^-1 B'C. `augmented(nu)` gives the model
 /// with `nu` added at its neutral value and the positions of the base model's parameters in
 /// its parameter vector.
 pub fn score_drops_by<M: Candidate>(
     m: &M,
-    p: &DVector<f64>,
     candidates: &[Nuisance],
-    augmented: impl Fn(Nuisance) -> (M, Vec<usize>) + Sync,
+    augmented: impl Fn(Nuisance) -> (M, Vec<usize>),
 ) -> Vec<(Nuisance, f64)> {
-    let mut base = m.clone();
-    base.set_values(p);
     candidates
         .iter()
         .filter(|nu| m.width() + nu.new_params(m) <= MAX_FREE)

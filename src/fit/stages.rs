@@ -743,5 +743,6 @@ pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
         warnings: f.warnings,
         pendulum,
         failed: v.failed,
+        problem,
     }
 }

@@ -1,0 +1,233 @@
+//! The joint fit's report: the rail's parameters with their intervals, the releases' table
+//! and their agreement, as text, JSON and a figure of each release's own mu against the
+//! joint band.
+
+use super::plot::{data_range, Figure, PlotError};
+use crate::fit::joint::JointReport;
+use crate::fit::Estimate;
+use plotters::coord::Shift;
+use plotters::prelude::*;
+use serde_json::{json, Value};
+use std::fmt::Write as _;
+
+fn estimate_json(e: &Estimate) -> Value {
+    json!({"value": e.value, "stderr": e.stderr, "ci95": e.ci95, "interval": e.interval})
+}
+
+/// The joint fit as one JSON object: `mu_kinetic`, `shared` (each shared parameter), the
+/// `shared_covariance` (names and matrix: what the releases know, for `plan --after`), the
+/// `releases` table, the agreement test and the models compared.
+pub fn joint_json(rep: &JointReport) -> Value {
+    let shared: serde_json::Map<String, Value> = rep
+        .shared
+        .iter()
+        .map(|(q, e)| {
+            let mut v = estimate_json(e);
+            v["unit"] = json!(q.unit());
+            (q.name().to_owned(), v)
+        })
+        .collect();
+    let names: Vec<&str> = rep.shared.iter().map(|(q, _)| q.name()).collect();
+    let cov: Vec<Vec<f64>> = (0..rep.shared_covariance.nrows())
+        .map(|i| rep.shared_covariance.row(i).iter().copied().collect())
+        .collect();
+    json!({
+        "joint": true,
+        "mu_kinetic": estimate_json(&rep.mu_kinetic),
+        "shared": shared,
+        "shared_covariance": {"names": names, "matrix": cov},
+        "nuisances": rep.nuisances.iter().map(|n| n.name()).collect::<Vec<_>>(),
+        "releases": rep.releases,
+        "left_out": rep.left_out.iter().map(|(n, w)| json!({"recording": n, "error": w})).collect::<Vec<_>>(),
+        "consistency_p_value": rep.consistency_p,
+        "disagreeing": rep.disagreeing,
+        "mu_without_disagreeing": rep.mu_without_disagreeing.as_ref().map(estimate_json),
+        "adequacy": {"chi2": rep.chi2, "dof": rep.dof, "reduced_chi2": rep.reduced_chi2},
+        "n_params": rep.n_params,
+        "models": rep.models,
+        "sentence": rep.sentence,
+        "warnings": rep.warnings,
+        "iterations": rep.iterations,
+    })
+}
+
+/// The joint fit as text: the shared parameters, the plain sentence, the releases' table.
+pub fn joint_text(rep: &JointReport) -> String {
+    let mut s = String::new();
+    let e = &rep.mu_kinetic;
+    let _ = writeln!(
+        s,
+        "joint fit of {} releases: mu_kinetic {:.6} +- {:.2e}, 95% [{:.6}, {:.6}] [{}]",
+        rep.releases.len(),
+        e.value,
+        e.stderr,
+        e.ci95[0],
+        e.ci95[1],
+        e.interval
+    );
+    let _ = writeln!(s, "{}", rep.sentence);
+    let _ = writeln!(s, "shared by every release:");
+    for (q, e) in &rep.shared {
+        let _ = writeln!(
+            s,
+            "  {:<22} {:>12.6e} +- {:.2e}  [{:.6e}, {:.6e}] {}",
+            q.name(),
+            e.value,
+            e.stderr,
+            e.ci95[0],
+            e.ci95[1],
+            q.unit()
+        );
+    }
+    let nuis: Vec<&str> = rep.nuisances.iter().map(|n| n.name()).collect();
+    let _ = writeln!(
+        s,
+        "nuisances: {}; chi-square {:.1} on {:.0} degrees of freedom (reduced {:.3}), {} parameters",
+        if nuis.is_empty() {
+            "none".to_owned()
+        } else {
+            nuis.join(", ")
+        },
+        rep.chi2,
+        rep.dof,
+        rep.reduced_chi2,
+        rep.n_params
+    );
+    let _ = writeln!(
+        s,
+        "{:<28} {:>6} {:>5} {:>22} {:>10} {:>8} {:>7}  single fit",
+        "release", "frames", "trans", "own mu +- se", "rms (m)", "chi2/n", "z"
+    );
+    for r in &rep.releases {
+        let own = r.own_mu.map_or("-".to_owned(), |e| {
+            format!("{:.5} +- {:.1e}", e.value, e.stderr)
+        });
+        let single = r.single_mu.map_or("-".to_owned(), |e| {
+            format!(
+                "{:.5} +- {:.1e} ({})",
+                e.value,
+                e.stderr,
+                if r.single_nuisances.is_empty() {
+                    "no nuisance".to_owned()
+                } else {
+                    r.single_nuisances.join("+")
+                }
+            )
+        });
+        let _ = writeln!(
+            s,
+            "{:<28} {:>6} {:>5} {:>22} {:>10.2e} {:>8.3} {:>7.2}{} {}",
+            r.name,
+            r.frames,
+            r.transitions,
+            own,
+            r.rms_residual_m,
+            r.chi2 / r.n_residuals.max(1) as f64,
+            r.z,
+            if r.agrees { " " } else { "!" },
+            single
+        );
+    }
+    for (n, why) in &rep.left_out {
+        let _ = writeln!(s, "left out: {n}: {why}");
+    }
+    for w in &rep.warnings {
+        let _ = writeln!(s, "warning: {w}");
+    }
+    s
+}
+
+/// Each release's own mu with its 95 % interval against the joint estimate's band.
+pub struct JointFigure<'a> {
+    /// The joint fit.
+    pub report: &'a JointReport,
+}
+
+impl Figure for JointFigure<'_> {
+    fn size(&self) -> (u32, u32) {
+        (1000, 250 + 40 * self.report.releases.len().min(40) as u32)
+    }
+
+    fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
+        let rep = self.report;
+        let n = rep.releases.len();
+        let mu = &rep.mu_kinetic;
+        let x_range = data_range(
+            rep.releases
+                .iter()
+                .filter_map(|r| r.own_mu)
+                .flat_map(|e| [e.value - 1.96 * e.stderr, e.value + 1.96 * e.stderr])
+                .chain(mu.ci95),
+            0.08,
+        );
+        let mut chart = ChartBuilder::on(root)
+            .caption(
+                format!(
+                    "mu_kinetic of each release (95 %) and the joint {:.5} [{:.5}, {:.5}]",
+                    mu.value, mu.ci95[0], mu.ci95[1]
+                ),
+                ("sans-serif", 20),
+            )
+            .margin(14)
+            .x_label_area_size(45)
+            .y_label_area_size(210)
+            .build_cartesian_2d(x_range, -0.5f64..(n as f64 - 0.5))?;
+        // File names only: the directory is the same for every release.
+        let names: Vec<String> = rep
+            .releases
+            .iter()
+            .map(|r| {
+                r.name
+                    .split(',')
+                    .map(|f| {
+                        std::path::Path::new(f)
+                            .file_name()
+                            .map_or(f.to_owned(), |n| n.to_string_lossy().into_owned())
+                    })
+                    .collect::<Vec<_>>()
+                    .join(",")
+            })
+            .collect();
+        chart
+            .configure_mesh()
+            .disable_y_mesh()
+            .light_line_style(WHITE)
+            .y_labels(n.max(1))
+            .y_label_formatter(&|y| {
+                let i = y.round();
+                if (y - i).abs() < 1e-6 && i >= 0.0 && (i as usize) < names.len() {
+                    names[n - 1 - i as usize].clone()
+                } else {
+                    String::new()
+                }
+            })
+            .x_desc("mu_kinetic")
+            .label_style(("sans-serif", 14))
+            .draw()?;
+        let band = RGBColor(120, 160, 220);
+        chart.draw_series(std::iter::once(Rectangle::new(
+            [(mu.ci95[0], -0.5), (mu.ci95[1], n as f64 - 0.5)],
+            band.mix(0.3).filled(),
+        )))?;
+        chart.draw_series(std::iter::once(PathElement::new(
+            vec![(mu.value, -0.5), (mu.value, n as f64 - 0.5)],
+            band.stroke_width(2),
+        )))?;
+        for (i, r) in rep.releases.iter().enumerate() {
+            let Some(e) = r.own_mu else { continue };
+            let y = (n - 1 - i) as f64;
+            let color = if r.agrees { BLACK } else { RED };
+            let (lo, hi) = (e.value - 1.96 * e.stderr, e.value + 1.96 * e.stderr);
+            chart.draw_series(std::iter::once(PathElement::new(
+                vec![(lo, y), (hi, y)],
+                color.stroke_width(2),
+            )))?;
+            chart.draw_series(std::iter::once(Circle::new(
+                (e.value, y),
+                5,
+                color.filled(),
+            )))?;
+        }
+        Ok(())
+    }
+}
