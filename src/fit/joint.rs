@@ -472,19 +472,58 @@ fn own_mus(jp: &JointProblem, settings: &FitSettings) -> Vec<(f64, f64)> {
         .collect()
 }
 
+/// Each release's own (mu, se) and z, keyed by release index.
+type Zs = Vec<(usize, (f64, f64), f64)>;
+
+/// The releases other than `out` refitted jointly (same model): their mu, each release's own
+/// mu and z (the rest's leave-one-out z; those in `out` against the rest's mu, their own mu
+/// under the rest's shared values), and whether the rest agree.
+fn fit_rest(
+    jp: &JointProblem,
+    out: &[usize],
+    settings: &FitSettings,
+) -> Option<(Estimate, Zs, bool)> {
+    let keep: Vec<usize> = (0..jp.parts.len()).filter(|i| !out.contains(i)).collect();
+    let mut rest = JointProblem::new(
+        keep.iter().map(|&i| jp.parts[i].clone()).collect(),
+        jp.same_camera,
+    );
+    let (p, cost, _) = solve_loose(&rest, rest.values(), settings.max_iters, None).ok()?;
+    rest.set_values(&p);
+    let mu = wald_mu(&rest, &p, cost)?;
+    let pairs = own_mus(&rest, settings);
+    let rz = leave_one_out(&pairs);
+    let mut zs: Zs = keep
+        .iter()
+        .zip(&pairs)
+        .zip(&rz)
+        .map(|((&i, &own), &zi)| (i, own, zi))
+        .collect();
+    for &i in out {
+        let mut m = jp.parts[i].clone();
+        for &q in &rest.shared {
+            let v = rest.parts[0].get(q);
+            set_param(&mut m, q, v);
+        }
+        if let Some(e) = own_mu(&m, &rest.shared, settings) {
+            let zi = (e.value - mu.value) / e.stderr.hypot(mu.stderr);
+            zs.push((i, (e.value, e.stderr), zi));
+        }
+    }
+    let agree = consistency(&pairs).is_none_or(|p| p >= AGREE_P);
+    Some((mu, zs, agree))
+}
+
 /// The releases that disagree: the one with the largest |z| set aside, the rest refitted
-/// jointly (same model) and tested again, until the rest agree or only half are left. The
-/// releases set aside, and the rest's mu with each release's z against it (the rest's own
-/// leave-one-out z, the set-aside ones' against the rest's mu).
-#[allow(clippy::type_complexity)]
+/// jointly (same model) and tested again, until the rest agree or only half are left; then
+/// a release set aside whose own mu lies within 3 standard errors of the rest's is taken
+/// back (an odd release pulls the shared tilt, and with it the first |z|s). The releases
+/// that disagree, and the others' fit ([`fit_rest`]).
 fn set_aside(
     jp: &JointProblem,
     z: &[f64],
     settings: &FitSettings,
-) -> (
-    Vec<usize>,
-    Option<(Estimate, Vec<(usize, (f64, f64), f64)>)>,
-) {
+) -> (Vec<usize>, Option<(Estimate, Zs)>) {
     let n = jp.parts.len();
     let mut out: Vec<usize> = Vec::new();
     let mut z = z.to_vec();
@@ -497,46 +536,22 @@ fn set_aside(
             break;
         };
         out.push(worst);
-        let keep: Vec<usize> = (0..n).filter(|i| !out.contains(i)).collect();
-        let mut rest = JointProblem::new(
-            keep.iter().map(|&i| jp.parts[i].clone()).collect(),
-            jp.same_camera,
-        );
-        let Ok((p, cost, _)) = solve_loose(&rest, rest.values(), settings.max_iters, None) else {
+        let Some((mu, zs, agree)) = fit_rest(jp, &out, settings) else {
             break;
         };
-        rest.set_values(&p);
-        let Some(mu) = wald_mu(&rest, &p, cost) else {
-            break;
-        };
-        let pairs = own_mus(&rest, settings);
-        let rz = leave_one_out(&pairs);
-        let mut zs: Vec<(usize, (f64, f64), f64)> = keep
-            .iter()
-            .zip(&pairs)
-            .zip(&rz)
-            .map(|((&i, &own), &zi)| (i, own, zi))
-            .collect();
-        // The releases set aside against the rest's mu, with their own mu under the rest's
-        // shared values.
-        for &i in &out {
-            let mut m = jp.parts[i].clone();
-            for &q in &rest.shared {
-                let v = rest.parts[0].get(q);
-                set_param(&mut m, q, v);
-            }
-            if let Some(e) = own_mu(&m, &rest.shared, settings) {
-                let zi = (e.value - mu.value) / e.stderr.hypot(mu.stderr);
-                zs.push((i, (e.value, e.stderr), zi));
-            }
-        }
         for &(i, _, zi) in &zs {
             z[i] = zi;
         }
-        let agree = consistency(&pairs).is_none_or(|p| p >= AGREE_P);
         rest_fit = Some((mu, zs));
         if agree {
             break;
+        }
+    }
+    let back: Vec<usize> = out.iter().copied().filter(|&i| z[i].abs() <= 3.0).collect();
+    if !back.is_empty() && back.len() < out.len() {
+        out.retain(|i| !back.contains(i));
+        if let Some((mu, zs, _)) = fit_rest(jp, &out, settings) {
+            rest_fit = Some((mu, zs));
         }
     }
     (out, rest_fit)
