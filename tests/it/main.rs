@@ -8,6 +8,7 @@ mod fit;
 mod fit_real;
 mod hardening;
 mod helpers;
+mod joint;
 mod misspec;
 mod paradox;
 mod plan;
