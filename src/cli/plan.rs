@@ -3,6 +3,7 @@
 
 use super::Failure;
 use anyhow::anyhow;
+use appell::plan::prior::Prior;
 use appell::plan::{plan_with_progress, PlanSpec};
 use appell::report::plan::{plan_json, plan_table, PlanFigure};
 use appell::report::plot::{render, ImageFormat};
@@ -20,13 +21,24 @@ pub struct Args {
     /// Draw the proposals in the (theta, theta') plane over the stick region (.svg or .png).
     #[arg(long, value_name = "FILE.svg|FILE.png")]
     plot: Option<PathBuf>,
+    /// Plan the next release after a fit (`appell fit --json`, single or `--joint`): its mu
+    /// and standard error for the robustness draws, its chosen nuisances in the simulated
+    /// rig, and its covariance as what is already known; releases are ranked by mu's
+    /// standard error after adding them.
+    #[arg(long, value_name = "FIT.json")]
+    after: Option<PathBuf>,
 }
 
 pub fn run(args: Args) -> Result<(), Failure> {
     if let Some(path) = &args.plot {
         ImageFormat::from_path(path).map_err(|e| Failure::Input(e.into()))?;
     }
-    let spec = PlanSpec::from_path(&args.plan).map_err(|e| Failure::Input(e.into()))?;
+    let mut spec = PlanSpec::from_path(&args.plan).map_err(|e| Failure::Input(e.into()))?;
+    if let Some(fit) = &args.after {
+        let prior = Prior::from_path(fit).map_err(|e| Failure::Input(e.into()))?;
+        prior.apply(&mut spec);
+        spec.prior = Some(prior);
+    }
     // Drawn only when stderr is a terminal (indicatif hides it otherwise).
     let bar = ProgressBar::new(0);
     bar.set_style(

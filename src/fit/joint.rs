@@ -944,6 +944,14 @@ pub fn fit_joint(
     }
     mu = super::within_bounds(Param::MuKinetic, mu, 0.0);
     shared[mu_i].1 = mu;
+    // mu's row and column carry its final standard error (widened by the models and the
+    // releases), so what a plan takes as known is no more than the report claims.
+    let mut shared_cov = shared_cov;
+    let ratio = mu.stderr / shared_cov[(mu_i, mu_i)].max(1e-300).sqrt();
+    for j in 0..s {
+        shared_cov[(mu_i, j)] *= ratio;
+        shared_cov[(j, mu_i)] *= ratio;
+    }
     Ok(JointReport {
         mu_kinetic: mu,
         shared,

@@ -7,6 +7,7 @@
 //! nearest achievable release is.
 
 pub mod criteria;
+pub mod prior;
 pub mod search;
 pub mod spec;
 
@@ -73,6 +74,9 @@ pub struct PlanReport {
     pub evaluated: usize,
     /// The rig at nominal friction.
     pub rig: Rig<f64>,
+    /// mu's standard error known before (the fit of `--after`): each proposal's predicted
+    /// standard error is mu's after adding it to that knowledge.
+    pub prior_mu_stderr: Option<f64>,
 }
 
 /// A plan that could not be computed.
@@ -116,6 +120,7 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
             notes,
             evaluated,
             rig: spec.rig,
+            prior_mu_stderr: prior_mu_stderr(spec),
         });
     }
     grid_found.sort_by(|a, b| a.objective(min_rob).total_cmp(&b.objective(min_rob)));
@@ -202,7 +207,16 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
         notes,
         evaluated,
         rig: spec.rig,
+        prior_mu_stderr: prior_mu_stderr(spec),
     })
+}
+
+/// mu's standard error from the fit of `--after`, when given.
+fn prior_mu_stderr(spec: &PlanSpec) -> Option<f64> {
+    spec.prior
+        .as_ref()
+        .and_then(|p| p.get(crate::fit::Param::MuKinetic))
+        .map(|(_, se)| se)
 }
 
 /// Candidates (sorted best first) at least half a grid cell apart, so the proposals differ.

@@ -153,35 +153,59 @@ impl<'a> Evaluator<'a> {
     /// Predicted standard error of mu_kinetic from a recording of this release with the
     /// plan's camera: sqrt of the (mu, mu) element of (J^T J)^-1, J the Jacobian of the
     /// noise-weighted marker residuals with respect to mu and the whole initial state (the
-    /// nuisance), at the nominal friction. Infinite when mu is not identifiable.
+    /// nuisance), at the nominal friction. With an earlier fit's knowledge (`prior`), J also
+    /// holds the rig's parameters that fit estimated; the release's information about them,
+    /// its own initial state marginalised (a Schur complement), is added to the fit's, and
+    /// the error is mu's after both. Infinite when mu is not identifiable.
     pub fn mu_stderr(&self, p: &ReleaseValues) -> f64 {
-        let mut free = vec![
-            Param::MuKinetic,
-            Param::X,
-            Param::Theta,
-            Param::XDot,
-            Param::ThetaDot,
-        ];
-        if self.spec.mu_static.is_some() {
+        let state = [Param::X, Param::Theta, Param::XDot, Param::ThetaDot];
+        let mut free: Vec<Param> = match &self.spec.prior {
+            Some(prior) => prior.names.clone(),
+            None => vec![Param::MuKinetic],
+        };
+        let rig_params = free.len();
+        free.extend(state);
+        if self.spec.prior.is_none() && self.spec.mu_static.is_some() {
             free.push(Param::MuStatic);
         }
+        let mu_index = free
+            .iter()
+            .position(|q| *q == Param::MuKinetic)
+            .unwrap_or(0);
         let mut problem = TrajectoryProblem::new(
             self.obs.clone(),
             self.spec.rig,
             self.initial(p),
-            free,
+            free.clone(),
             self.options,
         );
-        problem.tie_static = self.spec.mu_static.is_none();
+        problem.tie_static = !free.contains(&Param::MuStatic);
         let noise = self.spec.camera.noise_m;
         problem.sigma = [noise, noise];
         let Ok(normal) = problem.normal_equations(&problem.values()) else {
             return f64::INFINITY;
         };
-        let info = normal.jtj;
+        let info = match &self.spec.prior {
+            None => normal.jtj,
+            Some(prior) => {
+                let k = free.len();
+                let a = normal.jtj.view((0, 0), (rig_params, rig_params));
+                let b = normal
+                    .jtj
+                    .view((0, rig_params), (rig_params, k - rig_params));
+                let c = normal
+                    .jtj
+                    .view((rig_params, rig_params), (k - rig_params, k - rig_params))
+                    .into_owned();
+                let Some(c_inv) = c.cholesky().map(|ch| ch.inverse()) else {
+                    return f64::INFINITY;
+                };
+                a - b * c_inv * b.transpose() + &prior.information
+            }
+        };
         match info.cholesky() {
             Some(ch) => {
-                let var = ch.inverse()[(0, 0)];
+                let var = ch.inverse()[(mu_index, mu_index)];
                 if var.is_finite() && var > 0.0 {
                     var.sqrt()
                 } else {

@@ -372,6 +372,9 @@ pub struct PlanSpec {
     pub goal: Goal,
     /// Search settings.
     pub search: SearchSpec,
+    /// What an earlier fit knows (`--after`): the releases are then ranked by mu's standard
+    /// error with that knowledge added.
+    pub prior: Option<super::prior::Prior>,
 }
 
 fn invalid(path: &Path, key: &str, expected: &str, value: impl fmt::Debug) -> SceneError {
@@ -639,6 +642,7 @@ impl PlanFile {
             release,
             goal,
             search: self.search,
+            prior: None,
         })
     }
 }

@@ -136,7 +136,32 @@ pub fn fit_json(rep: &FitReport) -> Value {
     if let (Value::Object(m), Value::Object(extra)) = (&mut v, more) {
         m.extend(extra);
     }
+    if rep.mu_kinetic.is_some() && rep.failed.is_none() {
+        v["shared_covariance"] = rig_covariance(rep);
+    }
     v
+}
+
+/// The covariance of the rig's fitted parameters (mu and the rig's nuisances; not the
+/// release's state or camera) from the correlations and the reported standard errors (which
+/// hold any widening): what `plan --after` takes as known, in the joint fit's form.
+fn rig_covariance(rep: &FitReport) -> Value {
+    let rig: Vec<usize> = (0..rep.params.len())
+        .filter(|&i| {
+            let q = rep.params[i].0;
+            !q.is_camera() && !matches!(q, Param::X | Param::Theta | Param::XDot | Param::ThetaDot)
+        })
+        .collect();
+    let names: Vec<&str> = rig.iter().map(|&i| rep.params[i].0.name()).collect();
+    let matrix: Vec<Vec<f64>> = rig
+        .iter()
+        .map(|&i| {
+            rig.iter()
+                .map(|&j| rep.correlation[(i, j)] * rep.params[i].1.stderr * rep.params[j].1.stderr)
+                .collect()
+        })
+        .collect();
+    json!({"names": names, "matrix": matrix})
 }
 
 /// The rigid pendulum the data found, in a lab's words.

@@ -52,7 +52,7 @@ fn finite(v: f64) -> Value {
 
 fn proposal_json(report: &PlanReport, rank: usize, p: &Proposal) -> Value {
     let y = p.initial;
-    json!({
+    let mut v = json!({
         "rank": rank,
         "initial": {"x": y[0], "theta": y[1], "x_dot": y[2], "theta_dot": y[3]},
         "theta_deg": y[1].to_degrees(),
@@ -68,7 +68,13 @@ fn proposal_json(report: &PlanReport, rank: usize, p: &Proposal) -> Value {
             "fov_margin_m": p.nominal.fov_margin_m,
             "slider_range_m": p.nominal.slider_range,
         },
-    })
+    });
+    // Only with --after: what the release adds to the earlier fit's knowledge.
+    if let Some(prior) = report.prior_mu_stderr {
+        v["prior_mu_stderr"] = finite(prior);
+        v["shrinks_mu_stderr_by"] = finite(prior / p.predicted_mu_stderr);
+    }
+    v
 }
 
 /// The plan as one JSON object: `feasible`, `targets`, `proposals` (best first), `nearest`
@@ -151,12 +157,16 @@ pub fn plan_table(report: &PlanReport) -> String {
     for (i, p) in report.proposals.iter().enumerate() {
         let _ = writeln!(
             s,
-            "\n#{} robustness {:.3} (one-sided 95% bound; observed {:.3} of {} draws), predicted stderr(mu) {:.3e}",
+            "\n#{} robustness {:.3} (one-sided 95% bound; observed {:.3} of {} draws), predicted stderr(mu) {:.3e}{}",
             i + 1,
             p.robustness,
             p.robustness_observed,
             p.draws,
-            p.predicted_mu_stderr
+            p.predicted_mu_stderr,
+            report.prior_mu_stderr.map_or(String::new(), |prior| format!(
+                " with the earlier fit's {prior:.3e} (it shrinks mu's stderr by a factor {:.2})",
+                prior / p.predicted_mu_stderr
+            ))
         );
         for h in p.nominal.hits.iter().flatten() {
             let _ = writeln!(

@@ -33,7 +33,7 @@ fn releases(dir: &Path) -> Vec<Release> {
         .map(|f| Release {
             name: f.file_name().unwrap().to_string_lossy().into_owned(),
             obs: Observations::from(
-                &read_recording(&[f.clone()], &ReadOptions::default()).unwrap(),
+                &read_recording(std::slice::from_ref(f), &ReadOptions::default()).unwrap(),
             ),
         })
         .collect()
