@@ -271,3 +271,101 @@ fn keep_going_leaves_out_a_broken_release() {
     assert!(mu[0].as_f64().unwrap() <= 0.25 && 0.25 <= mu[1].as_f64().unwrap());
     std::fs::remove_dir_all(&tmp).unwrap();
 }
+
+/// What a release adds to what a fit knows, against the closed form: with the fit's knowledge
+/// of mu alone (standard error s0), mu's standard error after a release that alone would give
+/// s1 is 1/sqrt(1/s0^2 + 1/s1^2); with knowledge that is nothing (s0 huge) it is s1.
+#[test]
+fn plan_after_adds_information_as_the_closed_form_says() {
+    use appell::fit::Param;
+    use appell::plan::prior::Prior;
+    use appell::plan::search::Evaluator;
+    use appell::plan::PlanSpec;
+    use nalgebra::DMatrix;
+    let mut spec = PlanSpec::from_path(&repo("configs/plan_campaign.toml")).unwrap();
+    spec.mu_static = None;
+    let release = [60f64.to_radians(), 1.5, -0.6];
+    let s1 = Evaluator::new(&spec).mu_stderr(&release);
+    assert!(s1.is_finite() && s1 > 0.0);
+    let prior = |s0: f64| Prior {
+        path: "fit.json".into(),
+        names: vec![Param::MuKinetic],
+        values: vec![spec.rig.mu_kinetic],
+        covariance: DMatrix::from_element(1, 1, s0 * s0),
+        information: DMatrix::from_element(1, 1, 1.0 / (s0 * s0)),
+    };
+    for s0 in [0.5 * s1, s1, 3.0 * s1] {
+        let mut with = spec.clone();
+        with.prior = Some(prior(s0));
+        let s = Evaluator::new(&with).mu_stderr(&release);
+        let want = 1.0 / (1.0 / (s0 * s0) + 1.0 / (s1 * s1)).sqrt();
+        assert!((s / want - 1.0).abs() < 1e-9, "s0 {s0}: {s} against {want}");
+    }
+    let mut none = spec.clone();
+    none.prior = Some(prior(1e6));
+    let s = Evaluator::new(&none).mu_stderr(&release);
+    assert!((s / s1 - 1.0).abs() < 1e-9, "{s} against {s1}");
+}
+
+/// `plan --after` on a joint fit's JSON: every proposal's predicted error is below the fit's
+/// (information only adds), the JSON says by how much, and the rig simulated holds the fitted
+/// tilt; a fit JSON without the covariance is refused with exit 2 naming the file and field.
+#[test]
+fn plan_after_a_joint_fit() {
+    let dir = repo("tests/data/campaign");
+    let tmp = std::env::temp_dir().join(format!("appell-plan-after-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    let fit = Command::new(env!("CARGO_BIN_EXE_appell"))
+        .args(["fit", "--joint", "--json", "--rig"])
+        .arg(dir.join("rig_measured.toml"))
+        .arg(&dir)
+        .output()
+        .unwrap();
+    assert!(fit.status.success());
+    let fit_json = tmp.join("fit.json");
+    std::fs::write(&fit_json, &fit.stdout).unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&fit.stdout).unwrap();
+    let prior_se = v["mu_kinetic"]["stderr"].as_f64().unwrap();
+    let plan = Command::new(env!("CARGO_BIN_EXE_appell"))
+        .arg("plan")
+        .arg(repo("configs/plan_campaign.toml"))
+        .arg("--after")
+        .arg(&fit_json)
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(
+        plan.status.success(),
+        "{}",
+        String::from_utf8_lossy(&plan.stderr)
+    );
+    let p: serde_json::Value = serde_json::from_slice(&plan.stdout).unwrap();
+    let proposals = p["proposals"].as_array().unwrap();
+    assert!(!proposals.is_empty());
+    for q in proposals {
+        let se = q["predicted_mu_stderr"].as_f64().unwrap();
+        assert!(se < prior_se, "{se} against {prior_se}");
+        let shrink = q["shrinks_mu_stderr_by"].as_f64().unwrap();
+        assert!((shrink - prior_se / se).abs() < 1e-9 * shrink);
+    }
+    // A single fit's JSON of an older form (no covariance) is refused, naming the field.
+    std::fs::write(
+        &fit_json,
+        r#"{"mu_kinetic": {"value": 0.25, "stderr": 0.001}}"#,
+    )
+    .unwrap();
+    let bad = Command::new(env!("CARGO_BIN_EXE_appell"))
+        .arg("plan")
+        .arg(repo("configs/plan_campaign.toml"))
+        .arg("--after")
+        .arg(&fit_json)
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&bad.stderr);
+    assert_eq!(bad.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("fit.json") && stderr.contains("shared_covariance"),
+        "{stderr}"
+    );
+    std::fs::remove_dir_all(&tmp).unwrap();
+}
