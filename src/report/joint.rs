@@ -93,9 +93,16 @@ pub fn joint_text(rep: &JointReport) -> String {
         rep.reduced_chi2,
         rep.n_params
     );
+    let w = rep
+        .releases
+        .iter()
+        .map(|r| r.name.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(7);
     let _ = writeln!(
         s,
-        "{:<28} {:>6} {:>5} {:>22} {:>10} {:>8} {:>7}  single fit",
+        "{:<w$} {:>6} {:>5} {:>22} {:>10} {:>8} {:>7}  single fit (its own nuisances)",
         "release", "frames", "trans", "own mu +- se", "rms (m)", "chi2/n", "z"
     );
     for r in &rep.releases {
@@ -116,7 +123,7 @@ pub fn joint_text(rep: &JointReport) -> String {
         });
         let _ = writeln!(
             s,
-            "{:<28} {:>6} {:>5} {:>22} {:>10.2e} {:>8.3} {:>7.2}{} {}",
+            "{:<w$} {:>6} {:>5} {:>22} {:>10.2e} {:>8.3} {:>7.2}{} {}",
             r.name,
             r.frames,
             r.transitions,
@@ -163,7 +170,7 @@ impl Figure for JointFigure<'_> {
         let mut chart = ChartBuilder::on(root)
             .caption(
                 format!(
-                    "mu_kinetic of each release (95 %) and the joint {:.5} [{:.5}, {:.5}]",
+                    "mu_kinetic of each release (95 %) and the joint {:.6} [{:.6}, {:.6}]",
                     mu.value, mu.ci95[0], mu.ci95[1]
                 ),
                 ("sans-serif", 20),
