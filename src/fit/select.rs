@@ -325,6 +325,10 @@ pub fn score_drops_by<M: Candidate>(
         .collect()
 }
 
+/// Under misfit, a screened candidate predicted to lower the chi-square by this share of the
+/// best candidate's drop or more is fitted in the round's first batch.
+const LEADING_SHARE: f64 = 0.1;
+
 /// Chi-square of a solved model (the solver's cost is half of it).
 fn chi2_of(cost: f64) -> f64 {
     2.0 * cost
@@ -739,8 +743,17 @@ pub fn forward<M: Candidate>(
         // variants) are fitted first, and the rest only when neither of those earns its place
         // (lowers the criterion by more than 2). The selection is greedy: one that does is
         // taken, and the next round screens the others again from the better model; fitting
-        // every candidate in every round of a misfitting model cost seconds.
-        let leading = if misfit { 2 } else { to_fit.len() };
+        // every candidate in every round of a misfitting model cost seconds. A candidate whose
+        // predicted drop is a tenth of the leader's or more is among the first too: two
+        // nuisances that explain the same misfit (a marker off the rod's line and a rail
+        // tilt both shift where the pendulum hangs) must both be fitted, or the one left out
+        // gets no weight and mu's interval holds only the other's value.
+        let top = drops.first().map_or(0.0, |d| d.1);
+        let strong = drops
+            .iter()
+            .filter(|(_, d)| *d >= LEADING_SHARE * top)
+            .count();
+        let leading = if misfit { strong.max(2) } else { to_fit.len() };
         let (mut first, mut rest) = (Vec::new(), Vec::new());
         for (i, &nu) in to_fit.iter().enumerate() {
             // The friction laws, which no score test ranks, are among the first when the
