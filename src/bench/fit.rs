@@ -214,3 +214,57 @@ pub fn length_ladder(lengths: &[(f64, f64)], profile: bool) -> Result<Vec<Length
     }
     Ok(out)
 }
+
+/// One point of the joint fit's cost against the number of releases.
+#[derive(Debug, Clone, Serialize)]
+pub struct JointPoint {
+    /// Releases fitted together.
+    pub releases: usize,
+    /// Median CPU time of one joint fit, every thread (s).
+    pub cpu_seconds: f64,
+    /// Median wall time (s).
+    pub wall_seconds: f64,
+    /// The joint mu_kinetic and its standard error.
+    pub mu: f64,
+    /// Its standard error.
+    pub stderr: f64,
+}
+
+/// Time the joint fit (default settings) of the first `n` of `releases` for each `n` in
+/// `counts`: the median over `batches` runs of CPU and wall time, which should grow linearly.
+pub fn joint_benchmark(
+    releases: &[crate::fit::joint::Release],
+    rig: &crate::model::Rig<f64>,
+    counts: &[usize],
+    batches: usize,
+) -> Result<Vec<JointPoint>, String> {
+    use crate::fit::joint::{fit_joint, JointSettings};
+    let median = |mut v: Vec<f64>| {
+        v.sort_by(f64::total_cmp);
+        v[v.len() / 2]
+    };
+    counts
+        .iter()
+        .map(|&n| {
+            let set = &releases[..n.min(releases.len())];
+            let (mut cpu, mut wall) = (Vec::new(), Vec::new());
+            let mut last = None;
+            for _ in 0..batches.max(1) {
+                let (cpu0, wall0) = (cpu_seconds(), std::time::Instant::now());
+                let rep = fit_joint(set, rig, &FitSettings::default(), &JointSettings::default())
+                    .map_err(|e| e.to_string())?;
+                cpu.push(cpu_seconds() - cpu0);
+                wall.push(wall0.elapsed().as_secs_f64());
+                last = Some(rep.mu_kinetic);
+            }
+            let mu = last.expect("at least one batch");
+            Ok(JointPoint {
+                releases: set.len(),
+                cpu_seconds: median(cpu),
+                wall_seconds: median(wall),
+                mu: mu.value,
+                stderr: mu.stderr,
+            })
+        })
+        .collect()
+}

@@ -55,6 +55,16 @@ pub struct Args {
     /// uses: median seconds and frames per second per format.
     #[arg(long, conflicts_with_all = ["work_precision", "scene", "fit", "skips", "plan"])]
     read: bool,
+    /// Time the joint fit of a directory's recordings (`fit --joint`) against their number:
+    /// the first 5, 10 and 20 (or --counts), median CPU and wall time of --batches runs (3).
+    #[arg(long, value_name = "DIR", requires = "rig", conflicts_with_all = ["work_precision", "scene", "fit", "skips", "plan", "read"])]
+    joint: Option<PathBuf>,
+    /// Joint benchmark: the rig file of its recordings.
+    #[arg(long, value_name = "RIG.toml", requires = "joint")]
+    rig: Option<PathBuf>,
+    /// Joint benchmark: how many releases to fit together, e.g. 5,10,20.
+    #[arg(long, value_delimiter = ',', requires = "joint")]
+    counts: Vec<usize>,
     /// Read benchmark: frames in the recording (10 kHz).
     #[arg(long, default_value_t = appell::bench::read::DEFAULT_FRAMES, requires = "read")]
     frames: usize,
@@ -417,6 +427,9 @@ fn run_read(args: &Args) -> Result<(), Failure> {
 }
 
 pub fn run(args: Args) -> Result<(), Failure> {
+    if let Some(dir) = &args.joint {
+        return run_joint(&args, dir);
+    }
     if args.read {
         return run_read(&args);
     }
@@ -465,6 +478,81 @@ pub fn run(args: Args) -> Result<(), Failure> {
             timing.stats.rejected,
             timing.stats.rhs_evals,
             timing.stats.events
+        );
+    }
+    Ok(())
+}
+
+/// `--joint DIR`: the joint fit's cost against the number of releases.
+fn run_joint(args: &Args, dir: &std::path::Path) -> Result<(), Failure> {
+    use appell::data::{read_recording, ReadOptions};
+    use appell::fit::joint::Release;
+    use appell::fit::Observations;
+    let rig_path = args
+        .rig
+        .as_ref()
+        .ok_or_else(|| Failure::Input(anyhow!("--joint needs --rig")))?;
+    let rig = appell::scene::RigFile::load_for_fit(rig_path, 0.3)
+        .map_err(|e| Failure::Input(e.into()))?;
+    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
+        .map_err(|e| Failure::Input(anyhow!("{}: cannot list: {e}", dir.display())))?
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv")))
+        .collect();
+    files.sort();
+    let counts = if args.counts.is_empty() {
+        vec![5, 10, 20]
+    } else {
+        args.counts.clone()
+    };
+    let need = counts.iter().copied().max().unwrap_or(0);
+    if counts.iter().any(|&n| n < 2) || files.len() < need {
+        return Err(Failure::Input(anyhow!(
+            "{}: --counts {:?} need 2 to {} .csv recordings, the directory has {}",
+            dir.display(),
+            counts,
+            files.len(),
+            files.len()
+        )));
+    }
+    let releases = files[..need]
+        .iter()
+        .map(|f| {
+            let rec = read_recording(std::slice::from_ref(f), &ReadOptions::default())
+                .map_err(|e| Failure::Input(e.into()))?;
+            Ok(Release {
+                name: f.display().to_string(),
+                obs: Observations::from(&rec),
+            })
+        })
+        .collect::<Result<Vec<_>, Failure>>()?;
+    let points =
+        appell::bench::fit::joint_benchmark(&releases, &rig, &counts, args.batches.unwrap_or(3))
+            .map_err(|e| Failure::Run(anyhow!(e)))?;
+    if args.json {
+        outln!("{}", serde_json::json!({"joint": points}));
+        return Ok(());
+    }
+    outln!(
+        "joint fit (fit --joint, default settings) of the first N recordings of {}:",
+        dir.display()
+    );
+    outln!(
+        "{:>9} {:>12} {:>13} {:>12} {:>10}",
+        "releases",
+        "median CPU s",
+        "median wall s",
+        "mu",
+        "stderr"
+    );
+    for p in points {
+        outln!(
+            "{:>9} {:>12.2} {:>13.2} {:>12.8} {:>10.2e}",
+            p.releases,
+            p.cpu_seconds,
+            p.wall_seconds,
+            p.mu,
+            p.stderr
         );
     }
     Ok(())
