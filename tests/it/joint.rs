@@ -377,3 +377,31 @@ fn plan_after_a_joint_fit() {
     );
     std::fs::remove_dir_all(&tmp).unwrap();
 }
+
+/// `--release SLIDER.txt,BOB.txt` is one release (a Tracker pair), not two: twice the pair
+/// gives two releases, each with both markers, and mu as made (0.12).
+#[test]
+fn a_tracker_pair_is_one_release() {
+    let pair = format!(
+        "{},{}",
+        repo("tests/data/tracker_slider.txt").display(),
+        repo("tests/data/tracker_bob.txt").display()
+    );
+    let out = Command::new(env!("CARGO_BIN_EXE_appell"))
+        .args(["fit", "--joint", "--json", "--rig"])
+        .arg(repo("configs/markers_example.toml"))
+        .args(["--release", &pair, "--release", &pair])
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let releases = v["releases"].as_array().unwrap();
+    assert_eq!(releases.len(), 2);
+    assert_eq!(releases[0]["name"], serde_json::json!(pair));
+    assert_eq!(releases[0]["frames"], serde_json::json!(201));
+    assert!((v["mu_kinetic"]["value"].as_f64().unwrap() - 0.12).abs() < 1e-5);
+}
