@@ -93,7 +93,7 @@ impl Nuisance {
     /// Whether a score test can screen it: a parameter whose neutral value is an interior
     /// point. mu_static at mu_static = mu_kinetic has a vanishing first-order effect (the slip
     /// then starts with x'' = 0), and Stribeck changes the law: both are fitted outright.
-    pub(crate) fn screened(self) -> bool {
+    fn screened(self) -> bool {
         !matches!(self, Nuisance::StaticFriction | Nuisance::Stribeck)
     }
 
@@ -135,7 +135,7 @@ impl Nuisance {
     }
 
     /// `problem` with this nuisance added at its neutral value (mu_static from `mu_static`).
-    pub(crate) fn add_to(self, problem: &TrajectoryProblem, mu_static: f64) -> TrajectoryProblem {
+    fn add_to(self, problem: &TrajectoryProblem, mu_static: f64) -> TrajectoryProblem {
         let mut m = problem.clone();
         if self == Nuisance::Stribeck {
             m.rig.friction_law = FrictionLaw::Stribeck;
