@@ -405,3 +405,45 @@ fn a_tracker_pair_is_one_release() {
     assert_eq!(releases[0]["frames"], serde_json::json!(201));
     assert!((v["mu_kinetic"]["value"].as_f64().unwrap() - 0.12).abs() < 1e-5);
 }
+
+/// `--same-camera`: a camera scale put in the model is one shared parameter (its interval
+/// holding the truth, no scale error), not one per release: three fewer parameters than per
+/// release over four releases, and mu the same within a tenth of its standard error.
+#[test]
+fn the_same_camera_shares_its_scale() {
+    let dir = repo("tests/data/campaign");
+    let run = |extra: &[&str]| -> serde_json::Value {
+        let out = Command::new(env!("CARGO_BIN_EXE_appell"))
+            .args([
+                "fit",
+                "--joint",
+                "--json",
+                "--with",
+                "camera_scale",
+                "--rig",
+            ])
+            .arg(dir.join("rig_measured.toml"))
+            .args(extra)
+            .arg(&dir)
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        serde_json::from_slice(&out.stdout).unwrap()
+    };
+    let own = run(&[]);
+    let same = run(&["--same-camera"]);
+    assert!(own["shared"]["camera_scale_error"].is_null());
+    let scale = &same["shared"]["camera_scale_error"]["ci95"];
+    assert!(scale[0].as_f64().unwrap() <= 0.0 && 0.0 <= scale[1].as_f64().unwrap());
+    assert_eq!(
+        own["n_params"].as_u64().unwrap(),
+        same["n_params"].as_u64().unwrap() + 3
+    );
+    let mu = |v: &serde_json::Value| v["mu_kinetic"]["value"].as_f64().unwrap();
+    let se = own["mu_kinetic"]["stderr"].as_f64().unwrap();
+    assert!((mu(&own) - mu(&same)).abs() < 0.1 * se);
+}
