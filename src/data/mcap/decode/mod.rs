@@ -1,0 +1,267 @@
+//! Message decoding: which decoder a channel gets ([`decoder_for`]), and one message to
+//! marker samples ([`decode`]). JSON lives in `json`, protobuf in `protobuf`; ROS 2 CDR is
+//! read by `data::ros_cdr`.
+
+mod json;
+mod protobuf;
+
+pub(crate) use json::{PreFrame, PreParsed};
+
+use super::tf::Acc;
+use super::{NOT_POSITIONS, POINTS_NAMES};
+use crate::data::{ros_cdr, Plane};
+use json::{canonical_frame, FastMsg, JMsg, JStamp};
+use prost_reflect::{DescriptorPool, MessageDescriptor};
+use protobuf::{pb_decode, pb_f64, pb_field, pb_stamp};
+use std::fmt;
+
+/// How a channel's messages are decoded. The protobuf ones carry the message descriptor built
+/// from the channel's schema (the file's own definition, not one compiled in).
+#[derive(Clone)]
+pub(super) enum Decoder {
+    Json,
+    PointStamped,
+    PoseStamped,
+    TransformStamped,
+    TfMessage,
+    FrameTransform(MessageDescriptor),
+    PointsAnnotation(MessageDescriptor),
+}
+
+// By hand so channel lists show the type name, not the whole descriptor.
+impl fmt::Debug for Decoder {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(match self {
+            Decoder::Json => "Json",
+            Decoder::PointStamped => "PointStamped",
+            Decoder::PoseStamped => "PoseStamped",
+            Decoder::TransformStamped => "TransformStamped",
+            Decoder::TfMessage => "TfMessage",
+            Decoder::FrameTransform(_) => "protobuf FrameTransform",
+            Decoder::PointsAnnotation(_) => "protobuf PointsAnnotation",
+        })
+    }
+}
+
+/// Why a channel gets no decoder.
+pub(super) enum Reject {
+    /// An encoding or type this reader does not decode.
+    Unsupported(String),
+    /// A supported type whose schema is unusable.
+    Invalid(String),
+}
+
+fn xy(x: Option<f64>, y: Option<f64>, z: Option<f64>, plane: Option<Plane>) -> Option<[f64; 2]> {
+    match (x, y, z, plane) {
+        (Some(x), Some(y), Some(z), Some(p)) => Some(p.project([x, y, z])),
+        (Some(x), Some(y), _, _) => Some([x, y]),
+        _ => None,
+    }
+}
+
+pub(super) fn decoder_for(
+    encoding: &str,
+    schema_name: &str,
+    schema_encoding: &str,
+    schema_data: &[u8],
+) -> Result<Decoder, Reject> {
+    match encoding {
+        // Foxglove's JSON types that hold no position: a velocity in a Vector3 is not a marker.
+        "json" if NOT_POSITIONS.contains(&schema_name) => Err(Reject::Invalid(format!(
+            "{schema_name} holds no marker position"
+        ))),
+        "json" => Ok(Decoder::Json),
+        "cdr" => {
+            if schema_encoding != "ros2msg" && schema_encoding != "ros2idl" {
+                return Err(Reject::Unsupported(format!(
+                    "cdr with schema encoding {schema_encoding:?}"
+                )));
+            }
+            match schema_name {
+                "geometry_msgs/msg/PointStamped" => Ok(Decoder::PointStamped),
+                "geometry_msgs/msg/PoseStamped" => Ok(Decoder::PoseStamped),
+                "geometry_msgs/msg/TransformStamped" => Ok(Decoder::TransformStamped),
+                "tf2_msgs/msg/TFMessage" => Ok(Decoder::TfMessage),
+                other => Err(Reject::Unsupported(format!("cdr schema {other:?}"))),
+            }
+        }
+        "protobuf" => {
+            if schema_encoding != "protobuf" {
+                return Err(Reject::Unsupported(format!(
+                    "protobuf with schema encoding {schema_encoding:?}"
+                )));
+            }
+            let wrap: fn(MessageDescriptor) -> Decoder = match schema_name {
+                "foxglove.FrameTransform" => Decoder::FrameTransform,
+                "foxglove.PointsAnnotation" => Decoder::PointsAnnotation,
+                other => return Err(Reject::Unsupported(format!("protobuf schema {other:?}"))),
+            };
+            // The schema data is the FileDescriptorSet the writer compiled against; decoding with
+            // it (rather than a built-in copy) follows the file if Foxglove's types grow fields.
+            let pool = DescriptorPool::decode(schema_data).map_err(|e| {
+                Reject::Invalid(format!(
+                    "its schema {schema_name} is not a valid binary FileDescriptorSet ({e})"
+                ))
+            })?;
+            let desc = pool.get_message_by_name(schema_name).ok_or_else(|| {
+                Reject::Invalid(format!(
+                    "its schema's FileDescriptorSet does not define {schema_name}"
+                ))
+            })?;
+            Ok(wrap(desc))
+        }
+        other => Err(Reject::Unsupported(format!("message encoding {other:?}"))),
+    }
+}
+
+/// Decode one message into samples; `Err` is a message for the caller to locate.
+pub(super) fn decode(
+    dec: &Decoder,
+    topic: &str,
+    data: &[u8],
+    log_time: i64,
+    plane: Option<Plane>,
+    acc: &mut Acc,
+    pre: Option<PreFrame<'_>>,
+) -> Result<usize, String> {
+    let p3 = |p: [f64; 3]| xy(Some(p[0]), Some(p[1]), Some(p[2]), plane);
+    match dec {
+        Decoder::Json => {
+            if let Some(f) = pre {
+                // Parsed ahead by canonical_frame from these same bytes.
+                let stamp = JStamp::Parts {
+                    sec: f.sec,
+                    nsec: f.nsec,
+                }
+                .ns()?;
+                for (at, x, y) in f.markers {
+                    let id = data
+                        .get(at.clone())
+                        .and_then(|b| std::str::from_utf8(b).ok())
+                        .ok_or("a marker name parsed ahead is not in the message")?;
+                    acc.push(topic, id, stamp, xy(*x, *y, None, plane));
+                }
+                return Ok(f.markers.len());
+            }
+            if let Some(f) = canonical_frame(data) {
+                let stamp = JStamp::Parts {
+                    sec: f.sec,
+                    nsec: f.nsec,
+                }
+                .ns()?;
+                for &(id, x, y) in &f.markers[..f.len] {
+                    acc.push(topic, id, stamp, xy(x, y, None, plane));
+                }
+                return Ok(f.len);
+            }
+            if let Ok(m) = serde_json::from_slice::<FastMsg>(data) {
+                let stamp = match m.timestamp.or(m.header.and_then(|h| h.stamp)) {
+                    Some(s) => JStamp::Parts {
+                        sec: s.sec,
+                        nsec: s.nsec,
+                    }
+                    .ns()?,
+                    None => log_time,
+                };
+                if let Some(markers) = m.markers {
+                    for mk in &markers {
+                        acc.push(topic, &mk.id, stamp, xy(mk.x, mk.y, mk.z, plane));
+                    }
+                    return Ok(markers.len());
+                }
+                if let Some(p) = m.point.or(m.position) {
+                    acc.push(topic, topic, stamp, xy(p.x, p.y, p.z, plane));
+                    return Ok(1);
+                }
+                if m.x.is_some() || m.y.is_some() {
+                    acc.push(topic, topic, stamp, xy(m.x, m.y, m.z, plane));
+                    return Ok(1);
+                }
+            }
+            let m: JMsg = serde_json::from_slice(data).map_err(|e| format!("JSON: {e}"))?;
+            let stamp = match m.timestamp.or(m.header.and_then(|h| h.stamp)) {
+                Some(s) => s.ns()?,
+                None => log_time,
+            };
+            if let Some(markers) = m.markers {
+                let n = markers.len();
+                for mk in markers {
+                    acc.push(topic, &mk.id, stamp, xy(mk.x, mk.y, mk.z, plane));
+                }
+                Ok(n)
+            } else if let Some(p) = m.point.or(m.position) {
+                acc.push(topic, topic, stamp, xy(p.x, p.y, p.z, plane));
+                Ok(1)
+            } else if m.x.is_some() || m.y.is_some() {
+                acc.push(topic, topic, stamp, xy(m.x, m.y, m.z, plane));
+                Ok(1)
+            } else {
+                Err("a JSON object with a \"markers\" array, a \"point\", or x and y".into())
+            }
+        }
+        Decoder::PointStamped | Decoder::PoseStamped => {
+            let pose = matches!(dec, Decoder::PoseStamped);
+            let (h, p) = ros_cdr::point_stamped(data, pose).map_err(|e| {
+                format!(
+                    "CDR {}: {e}",
+                    if pose { "PoseStamped" } else { "PointStamped" }
+                )
+            })?;
+            acc.push(topic, topic, h.stamp.ns(), p3(p));
+            Ok(1)
+        }
+        Decoder::TransformStamped => {
+            let t = ros_cdr::transform_stamped(data)
+                .map_err(|e| format!("CDR TransformStamped: {e}"))?;
+            acc.push_tf(t, topic.ends_with("tf_static"));
+            Ok(1)
+        }
+        Decoder::TfMessage => {
+            let ts = ros_cdr::tf_message(data).map_err(|e| format!("CDR TFMessage: {e}"))?;
+            let n = ts.len();
+            for t in ts {
+                acc.push_tf(t, topic.ends_with("tf_static"));
+            }
+            Ok(n)
+        }
+        Decoder::FrameTransform(desc) => {
+            let m = pb_decode(desc, data)?;
+            let stamp = pb_stamp(&m)?.unwrap_or(log_time);
+            let name = pb_field(&m, "child_frame_id")?;
+            let name = name.as_str().unwrap_or_default();
+            if name.is_empty() {
+                return Err("a FrameTransform whose child_frame_id names the marker".into());
+            }
+            // An unset translation is a marker the tracker lost in this frame, not the origin.
+            let p = if m.has_field_by_name("translation") {
+                let v = pb_field(&m, "translation")?;
+                let t = v.as_message().ok_or("a foxglove.Vector3 in translation")?;
+                p3([pb_f64(t, "x")?, pb_f64(t, "y")?, pb_f64(t, "z")?])
+            } else {
+                None
+            };
+            acc.push(topic, name, stamp, p);
+            Ok(1)
+        }
+        Decoder::PointsAnnotation(desc) => {
+            let m = pb_decode(desc, data)?;
+            let stamp = pb_stamp(&m)?.unwrap_or(log_time);
+            let v = pb_field(&m, "points")?;
+            let points = v.as_list().ok_or("a repeated foxglove.Point2 in points")?;
+            let mut xys = Vec::with_capacity(points.len());
+            for p in points {
+                let p = p.as_message().ok_or("foxglove.Point2 messages in points")?;
+                xys.push([pb_f64(p, "x")?, pb_f64(p, "y")?]);
+            }
+            // Identity by index; the two roles get a sample every frame so a short list reads
+            // as missing markers rather than shifting the others.
+            for (k, name) in POINTS_NAMES.iter().enumerate() {
+                acc.push(topic, name, stamp, xys.get(k).copied());
+            }
+            for (k, p) in xys.iter().enumerate().skip(POINTS_NAMES.len()) {
+                acc.push(topic, &format!("point{k}"), stamp, Some(*p));
+            }
+            Ok(xys.len())
+        }
+    }
+}
