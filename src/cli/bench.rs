@@ -55,7 +55,7 @@ pub struct Args {
     /// uses: median seconds and frames per second per format.
     #[arg(long, conflicts_with_all = ["work_precision", "scene", "fit", "skips", "plan"])]
     read: bool,
-    /// Time the joint fit of a directory's recordings (`fit --joint`) against their number:
+    /// Time the joint fit of a directory's recordings (`fit --joint DIR`) against their number:
     /// the first 5, 10 and 20 (or --counts), median CPU and wall time of --batches runs (3).
     #[arg(long, value_name = "DIR", requires = "rig", conflicts_with_all = ["work_precision", "scene", "fit", "skips", "plan", "read"])]
     joint: Option<PathBuf>,
@@ -494,12 +494,8 @@ fn run_joint(args: &Args, dir: &std::path::Path) -> Result<(), Failure> {
         .ok_or_else(|| Failure::Input(anyhow!("--joint needs --rig")))?;
     let rig = appell::scene::RigFile::load_for_fit(rig_path, 0.3)
         .map_err(|e| Failure::Input(e.into()))?;
-    let mut files: Vec<PathBuf> = std::fs::read_dir(dir)
-        .map_err(|e| Failure::Input(anyhow!("{}: cannot list: {e}", dir.display())))?
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv")))
-        .collect();
-    files.sort();
+    // The recordings `fit --joint DIR` would take, in the same order.
+    let files = super::fit::directory_files(dir, false)?;
     let counts = if args.counts.is_empty() {
         vec![5, 10, 20]
     } else {
@@ -508,10 +504,9 @@ fn run_joint(args: &Args, dir: &std::path::Path) -> Result<(), Failure> {
     let need = counts.iter().copied().max().unwrap_or(0);
     if counts.iter().any(|&n| n < 2) || files.len() < need {
         return Err(Failure::Input(anyhow!(
-            "{}: --counts {:?} need 2 to {} .csv recordings, the directory has {}",
+            "{}: --counts {:?}: each count must be from 2 to the directory's {} recordings",
             dir.display(),
             counts,
-            files.len(),
             files.len()
         )));
     }

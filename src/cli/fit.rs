@@ -169,7 +169,7 @@ const RECORDING_EXTENSIONS: [&str; 8] = ["csv", "mcap", "txt", "tsv", "h5", "hdf
 /// Recordings in a directory: files with a recording extension, sorted. Without `--format`,
 /// a file whose format cannot be told from its start (a `notes.txt`) is not a recording: it
 /// is skipped with a note on stderr and the rest are fitted.
-fn directory_files(dir: &Path, format_given: bool) -> Result<Vec<PathBuf>, Failure> {
+pub(super) fn directory_files(dir: &Path, format_given: bool) -> Result<Vec<PathBuf>, Failure> {
     let entries = std::fs::read_dir(dir)
         .map_err(|e| Failure::Input(anyhow!("{}: cannot list: {e}", dir.display())))?;
     let mut files: Vec<PathBuf> = entries

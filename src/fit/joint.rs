@@ -23,11 +23,7 @@ use serde::Serialize;
 /// Whether a parameter is the rig's (one value for every release) rather than the release's.
 /// The camera's parameters are the release's unless the camera is the same in all.
 fn is_shared(q: Param, same_camera: bool) -> bool {
-    match q {
-        Param::X | Param::Theta | Param::XDot | Param::ThetaDot | Param::Lag => false,
-        q if q.is_camera() => same_camera,
-        _ => true,
-    }
+    q.is_rig() || (same_camera && q.is_camera() && q != Param::Lag)
 }
 
 /// Several releases' problems with their shared parameters tied: the parameter vector is the
@@ -488,9 +484,9 @@ fn fit_rest(
         keep.iter().map(|&i| jp.parts[i].clone()).collect(),
         jp.same_camera,
     );
-    let (p, cost, _) = solve_loose(&rest, rest.values(), settings.max_iters, None).ok()?;
+    let (p, _, _) = solve_loose(&rest, rest.values(), settings.max_iters, None).ok()?;
     rest.set_values(&p);
-    let mu = wald_mu(&rest, &p, cost)?;
+    let mu = wald_mu(&rest, &p)?;
     let pairs = own_mus(&rest, settings);
     let rz = leave_one_out(&pairs);
     let mut zs: Zs = keep
@@ -564,14 +560,15 @@ fn set_param(m: &mut TrajectoryProblem, q: Param, v: f64) {
     m.free = free;
 }
 
-/// mu_kinetic of `jp` at its optimum `p` (cost `cost`) with the Jacobian's standard error,
-/// scaled by the reduced chi-square when above one.
-fn wald_mu(jp: &JointProblem, p: &DVector<f64>, cost: f64) -> Option<Estimate> {
+/// mu_kinetic of `jp` at its optimum `p` with the Jacobian's standard error, scaled by the
+/// reduced chi-square when above one.
+fn wald_mu(jp: &JointProblem, p: &DVector<f64>) -> Option<Estimate> {
     let i = jp.shared.iter().position(|q| *q == Param::MuKinetic)?;
-    let n = jp.normal_equations(p).ok()?;
-    let inv = n.jtj.try_inverse()?;
-    let dof = (jp.n_rows().saturating_sub(p.len())).max(1) as f64;
-    let se = (inv[(i, i)] * (2.0 * cost / dof).max(1.0)).max(0.0).sqrt();
+    let c = uncertainty::covariances(jp.normal_equations(p).ok()?, jp.n_rows(), 1.0);
+    if c.singular {
+        return None;
+    }
+    let se = c.se[i];
     Some(Estimate {
         value: p[i],
         stderr: se,
@@ -709,10 +706,9 @@ pub fn fit_joint(
                 .iter()
                 .copied()
                 .filter(|q| {
-                    matches!(
-                        q,
-                        Param::MuKinetic | Param::X | Param::Theta | Param::XDot | Param::ThetaDot
-                    ) || (*q == Param::RodLength && settings.fit_rod_length)
+                    q.is_state()
+                        || *q == Param::MuKinetic
+                        || (*q == Param::RodLength && settings.fit_rod_length)
                 })
                 .collect();
             let mut part = single.clone();
@@ -766,39 +762,32 @@ pub fn fit_joint(
     jp.set_values(&p);
     // The covariance: the Jacobian's, scaled by the reduced chi-square when above one, and
     // the block covariance over each release's stretches of frames (the larger of the two).
-    let blocks: Vec<usize> = jp
-        .parts
+    let blocks: Vec<usize> = kept
         .iter()
-        .zip(&kept)
-        .map(|(_, (_, rep))| rep.adequacy.block_frames.max(5))
+        .map(|(_, rep)| rep.adequacy.block_frames.max(5))
         .collect();
     let normal = jp
         .normal_equations_blocked(&p, Some(&blocks))
         .map_err(|e| JointError::Joint(e.to_string()))?;
-    let n_rows: usize = jp.parts.iter().map(|m| m.rows_used()).sum();
-    let k = p.len();
-    let chi2 = 2.0 * normal.cost;
-    let dof = (n_rows.saturating_sub(k)).max(1) as f64;
-    let reduced = chi2 / dof;
-    let inv = normal
-        .jtj
-        .clone()
-        .try_inverse()
-        .ok_or_else(|| JointError::Joint("the joint information matrix is singular".into()))?;
-    let cov = &inv * reduced.max(1.0);
     let n_blocks: f64 = jp
         .parts
         .iter()
         .zip(&blocks)
         .map(|(m, b)| m.frame_times().len().div_ceil(*b) as f64)
         .sum();
-    let n = n_rows.max(k + 2) as f64;
-    let correction = n_blocks / (n_blocks - 1.0).max(1.0) * (n - 1.0) / (n - k as f64);
-    let cov_block = normal
-        .meat
-        .as_ref()
-        .map(|meat| &inv * meat * &inv * correction)
-        .unwrap_or_else(|| cov.clone());
+    let k = p.len();
+    let c = uncertainty::covariances(
+        normal,
+        jp.parts.iter().map(|m| m.rows_used()).sum(),
+        n_blocks,
+    );
+    if c.singular {
+        return Err(JointError::Joint(
+            "the joint information matrix is singular".into(),
+        ));
+    }
+    let (chi2, dof, reduced) = (c.chi2, c.dof, c.reduced_chi2);
+    let (cov, cov_block) = (&c.cov, &c.block);
     let s = jp.shared.len();
     let se: Vec<f64> = (0..s)
         .map(|i| cov[(i, i)].max(cov_block[(i, i)]).max(0.0).sqrt())

@@ -119,6 +119,20 @@ impl Param {
         )
     }
 
+    /// Whether it is part of a release's initial state.
+    pub fn is_state(self) -> bool {
+        matches!(
+            self,
+            Param::X | Param::Theta | Param::XDot | Param::ThetaDot
+        )
+    }
+
+    /// Whether it describes the rig itself, the same in every release: neither a release's
+    /// initial state nor the camera and marker model.
+    pub fn is_rig(self) -> bool {
+        !self.is_state() && !self.is_camera()
+    }
+
     /// Name in reports and JSON.
     pub fn name(self) -> &'static str {
         match self {

@@ -3,7 +3,7 @@
 //! (heteroskedasticity-and-autocorrelation-consistent) covariance over contiguous stretches of
 //! frames, fits of the recording's thirds, and the profile interval for a parameter.
 
-use super::lm::LeastSquares;
+use super::lm::{LeastSquares, Normal};
 use super::problem::{Observations, Param, TrajectoryProblem};
 use super::{solve, solve_loose, FitSettings};
 use crate::model::Mode;
@@ -52,44 +52,88 @@ pub fn assess(
     let normal = problem
         .normal_equations_blocked(p, Some(block))
         .map_err(|e| e.to_string())?;
-    let used = problem.rows_used();
-    let k = p.len();
+    let n_frames = problem.frame_times().len();
+    let c = covariances(
+        normal,
+        problem.rows_used(),
+        n_frames.div_ceil(block).max(1) as f64,
+    );
+    let p_value = if noise_dof.is_finite() && noise_dof > 1.0 {
+        FisherSnedecor::new(c.dof, noise_dof)
+            .map(|f| f.sf(c.reduced_chi2))
+            .unwrap_or(f64::NAN)
+    } else {
+        ChiSquared::new(c.dof)
+            .map(|d| d.sf(c.chi2))
+            .unwrap_or(f64::NAN)
+    };
+    Ok(Assessment {
+        chi2: c.chi2,
+        dof: c.dof,
+        reduced_chi2: c.reduced_chi2,
+        p_value,
+        cov: c.cov,
+        se: c.se,
+        se_block: c.se_block,
+        block_frames: block,
+        r,
+    })
+}
+
+/// The chi-square and covariances of an optimum from its normal equations.
+#[derive(Debug, Clone)]
+pub struct Covariances {
+    /// Chi-square (twice the cost).
+    pub chi2: f64,
+    /// Residual rows used minus parameters (at least 1).
+    pub dof: f64,
+    /// chi2 / dof.
+    pub reduced_chi2: f64,
+    /// (J'J)^-1 scaled by max(1, reduced chi-square).
+    pub cov: DMatrix<f64>,
+    /// Standard errors from `cov`.
+    pub se: Vec<f64>,
+    /// The block (cluster-robust) covariance from the normal equations' block sums.
+    pub block: DMatrix<f64>,
+    /// Standard errors from `block`.
+    pub se_block: Vec<f64>,
+    /// Whether J'J was singular (the covariances then come from its pseudo-inverse).
+    pub singular: bool,
+}
+
+/// Covariances from normal equations summed with their block sums (`normal.meat`) over
+/// `used` residual rows in `n_blocks` blocks: the Jacobian's, scaled by the reduced
+/// chi-square when above one, and the block covariance with the small-sample correction
+/// G / (G - 1) (n - 1) / (n - k). One recording's fit and the joint fit of many share it.
+pub fn covariances(normal: Normal, used: usize, n_blocks: f64) -> Covariances {
+    let k = normal.jtr.len();
     let dof = (used.saturating_sub(k)).max(1) as f64;
     let chi2 = 2.0 * normal.cost;
     let reduced = chi2 / dof;
-    let p_value = if noise_dof.is_finite() && noise_dof > 1.0 {
-        FisherSnedecor::new(dof, noise_dof)
-            .map(|f| f.sf(reduced))
-            .unwrap_or(f64::NAN)
-    } else {
-        ChiSquared::new(dof).map(|c| c.sf(chi2)).unwrap_or(f64::NAN)
-    };
     let jtj = normal.jtj;
-    let inv = jtj.clone().try_inverse().unwrap_or_else(|| {
+    let inverse = jtj.clone().try_inverse();
+    let singular = inverse.is_none();
+    let inv = inverse.unwrap_or_else(|| {
         jtj.pseudo_inverse(1e-14)
             .unwrap_or(DMatrix::from_element(k, k, f64::NAN))
     });
     let cov = &inv * reduced.max(1.0);
     let se: Vec<f64> = (0..k).map(|i| cov[(i, i)].max(0.0).sqrt()).collect();
     let meat = normal.meat.unwrap_or_else(|| DMatrix::zeros(k, k));
-    let n_frames = problem.frame_times().len();
-    let n_blocks = n_frames.div_ceil(block).max(1) as f64;
-    // Small-sample correction of the cluster-robust estimate: G / (G - 1) (n - 1) / (n - k).
     let n = used.max(k + 2) as f64;
     let correction = n_blocks / (n_blocks - 1.0).max(1.0) * (n - 1.0) / (n - k as f64);
-    let cov_block = &inv * meat * &inv * correction;
-    let se_block = (0..k).map(|i| cov_block[(i, i)].max(0.0).sqrt()).collect();
-    Ok(Assessment {
+    let block = &inv * meat * &inv * correction;
+    let se_block = (0..k).map(|i| block[(i, i)].max(0.0).sqrt()).collect();
+    Covariances {
         chi2,
         dof,
         reduced_chi2: reduced,
-        p_value,
         cov,
         se,
+        block,
         se_block,
-        block_frames: block,
-        r,
-    })
+        singular,
+    }
 }
 
 /// Frames per block: twice the lag at which the residuals' autocorrelation falls below 0.1,

@@ -37,11 +37,6 @@ fn invalid(path: &Path, message: String) -> SceneError {
     }
 }
 
-/// Whether `q` describes the rig (shared by releases) rather than one release's state or camera.
-fn is_rig(q: Param) -> bool {
-    !q.is_camera() && !matches!(q, Param::X | Param::Theta | Param::XDot | Param::ThetaDot)
-}
-
 impl Prior {
     /// Read the JSON of `appell fit --json` (one recording) or `appell fit --joint --json`.
     pub fn from_path(path: &Path) -> Result<Prior, SceneError> {
@@ -140,7 +135,7 @@ impl Prior {
                 })
         };
         // The rig's parameters only: the marginal covariance of a subset is its block.
-        let keep: Vec<usize> = (0..n).filter(|&i| is_rig(params[i])).collect();
+        let keep: Vec<usize> = (0..n).filter(|&i| params[i].is_rig()).collect();
         if !keep.iter().any(|&i| params[i] == Param::MuKinetic) {
             return Err(invalid(
                 path,

@@ -147,10 +147,7 @@ pub fn fit_json(rep: &FitReport) -> Value {
 /// hold any widening): what `plan --after` takes as known, in the joint fit's form.
 fn rig_covariance(rep: &FitReport) -> Value {
     let rig: Vec<usize> = (0..rep.params.len())
-        .filter(|&i| {
-            let q = rep.params[i].0;
-            !q.is_camera() && !matches!(q, Param::X | Param::Theta | Param::XDot | Param::ThetaDot)
-        })
+        .filter(|&i| rep.params[i].0.is_rig())
         .collect();
     let names: Vec<&str> = rig.iter().map(|&i| rep.params[i].0.name()).collect();
     let matrix: Vec<Vec<f64>> = rig
