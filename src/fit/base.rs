@@ -6,15 +6,32 @@
 //! loss's reweighting ([`reweight`]).
 
 use super::problem::{Observations, Param, TrajectoryProblem};
-use super::{
-    guess, run_lm, solve, solve_loose, uncertainty, Base, FitError, FitSettings, Loss, Solved,
-    StartOutcome, StaticMode, STAGE_FTOL,
-};
+use super::solve::{run_lm, solve, solve_loose, Solved, STAGE_FTOL};
+use super::{guess, uncertainty, FitError, FitSettings, Loss, StartOutcome, StaticMode};
 use crate::fit::lm::LevenbergMarquardt;
 use crate::model::{Rig, State};
 use nalgebra::DVector;
 use rayon::prelude::*;
 use std::sync::Arc;
+
+/// What the base fit found, for the steps after it.
+pub(super) struct Base {
+    pub(super) problem: TrajectoryProblem,
+    pub(super) p: DVector<f64>,
+    pub(super) starts: Vec<StartOutcome>,
+    pub(super) iterations: u64,
+    /// mu_static estimated from the data's stick-to-slide onsets.
+    pub(super) mu_s_data: Option<f64>,
+    /// Whether the onset estimate says mu_static exceeds mu_kinetic (`None`: no onset seen).
+    pub(super) static_evidence: Option<bool>,
+    /// The initial state guessed from the first frames (the start of every fit).
+    pub(super) y0_guess: State<f64>,
+    /// mu_kinetic from the data (the main start).
+    pub(super) mu0: f64,
+    /// How the last fit over the whole of a long recording stopped, when nothing changed
+    /// after it (it need not be polished again).
+    pub(super) settled: Option<String>,
+}
 
 /// What the recording says before any fit.
 struct Guesses {

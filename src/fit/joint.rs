@@ -6,13 +6,13 @@
 //! per-release blocks, so its cost grows linearly with the releases, and its nuisances are
 //! chosen by the single fit's selection ([`select::forward`] over [`Candidate`]).
 
+use super::intervals::{model_uncertainty, widen, within_bounds};
 use super::lm::{LeastSquares, Normal};
 use super::problem::{Observations, Param, TrajectoryProblem};
 use super::select::{self, Candidate, ModelRow, Nuisance, SelectOptions};
+use super::solve::{solve_loose, STAGE_FTOL};
 use super::uncertainty::{self, WindowFit};
-use super::{
-    fit, model_uncertainty, solve_loose, widen, Estimate, FitError, FitReport, FitSettings,
-};
+use super::{fit, Estimate, FitError, FitReport, FitSettings};
 use crate::model::{Rig, State};
 use crate::sim::{simulate, Request};
 use argmin::core::Error;
@@ -726,8 +726,7 @@ pub fn fit_joint(
     let jp = JointProblem::new(parts, joint.same_camera);
     let p0 = jp.values();
     let (p, cost, mut iterations) =
-        solve_loose(&jp, p0, settings.max_iters, Some(super::STAGE_FTOL))
-            .map_err(JointError::Joint)?;
+        solve_loose(&jp, p0, settings.max_iters, Some(STAGE_FTOL)).map_err(JointError::Joint)?;
     let mut jp = jp;
     jp.set_values(&p);
     let static_evidence = kept.iter().any(|(_, rep)| {
@@ -931,7 +930,7 @@ pub fn fit_joint(
             "the joint model misfits the releases (reduced chi-square {reduced:.2}): the interval is the Jacobian's scaled by it"
         ));
     }
-    mu = super::within_bounds(Param::MuKinetic, mu, 0.0);
+    mu = within_bounds(Param::MuKinetic, mu, 0.0);
     shared[mu_i].1 = mu;
     // mu's row and column carry its final standard error (widened by the models and the
     // releases), so what a plan takes as known is no more than the report claims.

@@ -1,8 +1,12 @@
 //! Mis-tracked frames found before any model is fitted: a frame whose marker lies far from
 //! the quadratic through its neighbours (which any smooth motion follows to far below the
-//! noise at camera rates) is dropped from the fit and counted.
+//! noise at camera rates) is dropped from the fit and counted. After a fit, the positions whose
+//! residual the model cannot explain ([`residual_outliers`]) are dropped or down-weighted.
 
-use super::problem::Observations;
+use super::problem::{Observations, TrajectoryProblem};
+use super::solve::solve;
+use super::FitSettings;
+use nalgebra::DVector;
 
 /// Neighbours on each side of the local quadratic.
 const HALF: usize = 6;
@@ -144,6 +148,116 @@ fn median_predict(near: &[(f64, [f64; 2])], k: usize) -> Option<f64> {
         .map(|(_, q)| *q)
         .collect();
     predict(&kept, k)
+}
+
+/// Residuals this many noise deviations out are mis-tracked frames the track check missed.
+pub(super) const RESIDUAL_OUTLIER: f64 = 6.0;
+
+/// What the residual outlier step did.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub(super) struct ResidualOutliers {
+    /// Positions dropped (slider, bob): the model describes the rest of the recording.
+    pub(super) dropped: [usize; 2],
+    /// Positions down-weighted, not dropped (slider, bob): the model does not describe the
+    /// rest either, so their residuals may be the model's error, not mis-tracking.
+    pub(super) weighted: [usize; 2],
+    /// Nothing done yet: the current model misfits the rest; the chosen model decides.
+    pub(super) deferred: bool,
+}
+
+/// Positions whose residual is beyond [`RESIDUAL_OUTLIER`] deviations. Dropped (weight
+/// zero, and the fit redone) only when the model describes the rest of the recording (its
+/// chi-square passes [`super::select::misfits`]): a model that misfits leaves large residuals
+/// where it is wrong, and dropping those would throw real positions away to fit a wrong model.
+/// Then the step is deferred to the chosen model (`last` false), or, on that model (`last` true), the
+/// positions are down-weighted by Huber's weight (their residual counts as if it were
+/// [`RESIDUAL_OUTLIER`] deviations), which keeps them in the fit.
+pub(super) fn residual_outliers(
+    problem: &mut TrajectoryProblem,
+    p: &mut DVector<f64>,
+    settings: &FitSettings,
+    iterations: &mut u64,
+    last: bool,
+) -> ResidualOutliers {
+    let mut out = ResidualOutliers::default();
+    let Ok(raw) = problem.raw_residuals(p) else {
+        return out;
+    };
+    // The scale: the measured noise, or the residuals' own robust spread when larger (a fit
+    // that misses the motion has large residuals everywhere, and those are not outliers).
+    let scale = [0, 1].map(|m| {
+        let mut a: Vec<f64> = problem
+            .rows()
+            .zip(&raw)
+            .filter(|(row, _)| row.marker == m)
+            .map(|(_, r)| r.abs())
+            .collect();
+        // The median by selection, not a sort: linear in a million frames.
+        let mid = a.len() / 2;
+        let median = if a.is_empty() {
+            0.0
+        } else {
+            *a.select_nth_unstable_by(mid, f64::total_cmp).1
+        };
+        problem.sigma[m].max(median / 0.6745)
+    });
+    // A position is one frame's marker: both its coordinates go together.
+    let mut bad = std::collections::HashSet::new();
+    for (i, (row, &r)) in problem.rows().zip(&raw).enumerate() {
+        if problem.row_weight(i) > 0.0 && (r / scale[row.marker]).abs() > RESIDUAL_OUTLIER {
+            bad.insert((row.frame, row.marker));
+        }
+    }
+    // More than 2% of the positions flagged is a misfit, not mis-tracking.
+    if bad.is_empty() || bad.len() * 2 * 50 > raw.len() {
+        return out;
+    }
+    let flagged: Vec<usize> = problem
+        .rows()
+        .enumerate()
+        .filter(|(_, row)| bad.contains(&(row.frame, row.marker)))
+        .map(|(i, _)| i)
+        .collect();
+    // The rest: its chi-square against the measured noise.
+    let (mut chi2_rest, mut n_rest) = (0.0, 0usize);
+    for (i, (row, &r)) in problem.rows().zip(&raw).enumerate() {
+        let w = problem.row_weight(i);
+        if w > 0.0 && !bad.contains(&(row.frame, row.marker)) {
+            chi2_rest += w * w * (r / problem.sigma[row.marker]).powi(2);
+            n_rest += 1;
+        }
+    }
+    let dof = (n_rest.saturating_sub(problem.free.len()) as f64).max(1.0);
+    let fits_rest = chi2_rest <= dof + 5.0 * (2.0 * dof).sqrt();
+    let counts = |out: &mut [usize; 2]| {
+        for &(_, m) in &bad {
+            out[m] += 1;
+        }
+    };
+    if fits_rest {
+        problem.drop_rows(flagged);
+        counts(&mut out.dropped);
+    } else if !last {
+        out.deferred = true;
+        return out;
+    } else {
+        let mut weights: Vec<f64> = (0..problem.n_rows())
+            .map(|i| problem.row_weight(i))
+            .collect();
+        let markers: Vec<usize> = problem.rows().map(|row| row.marker).collect();
+        for i in flagged {
+            let z = (raw[i] / scale[markers[i]]).abs();
+            weights[i] *= (RESIDUAL_OUTLIER / z).sqrt();
+        }
+        problem.set_row_weights(weights);
+        counts(&mut out.weighted);
+    }
+    if let Ok((q, _, it)) = solve(problem, p.clone(), settings.max_iters) {
+        *iterations += it;
+        *p = q;
+        problem.set_values(p);
+    }
+    out
 }
 
 #[cfg(test)]

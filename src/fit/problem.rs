@@ -803,6 +803,11 @@ impl TrajectoryProblem {
     }
 }
 
+/// Where `p` stands in `problem`'s parameter vector (`None` when it is not free).
+pub(super) fn idx(problem: &TrajectoryProblem, p: Param) -> Option<usize> {
+    problem.free.iter().position(|&f| f == p)
+}
+
 fn to_err(e: SimError) -> Error {
     Error::msg(e.to_string())
 }

@@ -5,7 +5,7 @@
 
 use super::lm::LeastSquares;
 use super::problem::{Param, TrajectoryProblem, MAX_FREE};
-use super::{solve_loose, Solved, STAGE_FTOL};
+use super::solve::{solve_loose, Solved, STAGE_FTOL};
 use crate::model::{FrictionLaw, State};
 use nalgebra::DVector;
 use rayon::prelude::*;

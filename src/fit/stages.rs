@@ -1,56 +1,26 @@
-//! The stages of [`super::fit`], each a function over the model being fitted ([`Fitting`]):
-//! the data prepared, the motion seen, the nuisances chosen, the late outliers, a recording
-//! that never slides, mu_static at its bound, the polish, the estimates, the adequacy and its
-//! widenings, mu_static's result and the report. Each stage says what it reads and returns;
+//! The stages of [`super::fit`] after the data are prepared (`prepare.rs`), each a function
+//! over the model being fitted ([`Fitting`]): the motion seen, the nuisances chosen, the late
+//! outliers, a recording that never slides, mu_static at its bound, the polish, the
+//! estimates, the adequacy and its widenings, mu_static's result and the report. Each stage says what it reads and returns;
 //! the driver only orders them.
 
-use super::problem::{Observations, Param, TrajectoryProblem};
+use super::adequacy::{adequacy_sentence, is_noise_free, marker_rms, RUNS_P};
+use super::base::Base;
+use super::intervals::{model_uncertainty, pinned_friction, widen, within_bounds};
+use super::motion::{motion, slider_moves, Motion};
+use super::outliers::{residual_outliers, ResidualOutliers, RESIDUAL_OUTLIER};
+use super::pendulum::pendulum_found;
+use super::prepare::Prepared;
+use super::problem::{idx, Observations, Param, TrajectoryProblem};
 use super::select::{self, ModelRow, Nuisance, SelectOptions};
+use super::solve::{solve, solve_traced};
 use super::uncertainty::{self, Assessment, WindowFit};
-use super::{
-    adequacy_sentence, check_data, enough_frames, idx, is_noise_free, marker_rms,
-    model_uncertainty, motion, noise_and_outliers, pendulum_found, pinned_friction,
-    residual_outliers, slider_moves, solve, solve_traced, widen, within_bounds, Adequacy, Base,
-    Estimate, FitError, FitReport, FitSettings, Motion, NoiseEstimate, ResidualOutliers,
-    StaticMode, StaticResult, Work, RESIDUAL_OUTLIER, RUNS_P,
-};
+use super::{Adequacy, Estimate, FitError, FitReport, FitSettings, StaticMode, StaticResult, Work};
 use crate::model::{FrictionLaw, Rig};
 use crate::sim::EventKind;
 use nalgebra::{DMatrix, DVector};
 use std::sync::atomic::Ordering;
 use std::sync::Arc;
-
-/// The recording ready to fit: times from zero, mis-tracked positions out, each marker's noise.
-pub(super) struct Prepared {
-    pub obs: Arc<Observations>,
-    /// Frames in the recording as read.
-    pub n_frames: usize,
-    /// Noise per marker used as weights (m).
-    pub sigma: [f64; 2],
-    /// The noise measurements (or the given noise).
-    pub noise: [Option<NoiseEstimate>; 2],
-    /// Degrees of freedom of the noise measurement (the chi-square's F test).
-    pub noise_dof: f64,
-    /// Positions dropped from the tracks (slider, bob).
-    pub dropped: [usize; 2],
-}
-
-/// The data checked, the noise measured, the mis-tracked positions dropped.
-pub(super) fn prepare(obs: Observations, settings: &FitSettings) -> Result<Prepared, FitError> {
-    let mut obs = check_data(obs)?;
-    let n_frames = obs.times.len();
-    let (sigma, noise, dropped) = noise_and_outliers(&mut obs, settings)?;
-    enough_frames(&obs)?;
-    let noise_dof = noise.iter().flatten().map(|e| e.dof).sum::<f64>().max(2.0);
-    Ok(Prepared {
-        obs: Arc::new(obs),
-        n_frames,
-        sigma,
-        noise,
-        noise_dof,
-        dropped,
-    })
-}
 
 /// The model being fitted and what the fit has spent and noted, passed from stage to stage.
 pub(super) struct Fitting {

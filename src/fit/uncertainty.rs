@@ -5,7 +5,8 @@
 
 use super::lm::{LeastSquares, Normal};
 use super::problem::{Observations, Param, TrajectoryProblem};
-use super::{solve, solve_loose, FitSettings};
+use super::solve::{solve, solve_loose, STAGE_FTOL};
+use super::FitSettings;
 use crate::model::Mode;
 use crate::sim::{simulate, simulate_each, Request, Sample};
 use nalgebra::{DMatrix, DVector};
@@ -370,7 +371,7 @@ pub fn windows(
                 })
                 .flatten();
             let minimise = |m: &TrajectoryProblem| {
-                let ftol = long.then_some(super::STAGE_FTOL);
+                let ftol = long.then_some(STAGE_FTOL);
                 solve_loose(m, p0.clone(), settings.max_iters, ftol)
                     .ok()
                     .map(|(q, _, _)| q)

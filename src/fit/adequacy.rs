@@ -1,0 +1,128 @@
+//! Whether the model describes the recording: the residuals' RMS per marker, a noise-free
+//! recording told apart, and the one plain sentence when the model limits the result.
+
+use super::problem::TrajectoryProblem;
+use super::uncertainty;
+use super::Estimate;
+
+/// Per-marker RMS of raw residuals (weight-zero rows left out), with a degrees-of-freedom
+/// correction, and the overall RMS.
+pub(super) fn marker_rms(
+    problem: &TrajectoryProblem,
+    weighted: &[f64],
+    n_params: usize,
+) -> ([f64; 2], f64) {
+    let mut ss = [0.0; 2];
+    let mut n = [0usize; 2];
+    for (i, (row, v)) in problem.rows().zip(weighted).enumerate() {
+        let (m, w) = (row.marker, problem.row_weight(i));
+        if w > 0.0 {
+            // Back in metres from the solver's weighted residual.
+            let r = v * problem.sigma[m] / w;
+            ss[m] += r * r;
+            n[m] += 1;
+        }
+    }
+    let total = (n[0] + n[1]).max(1);
+    let dof_frac = (1.0 - n_params as f64 / total as f64).max(1e-3);
+    let rms = [0, 1].map(|m| {
+        if n[m] > 0 {
+            (ss[m] / n[m] as f64 / dof_frac).sqrt()
+        } else {
+            f64::NAN
+        }
+    });
+    (rms, ((ss[0] + ss[1]) / total as f64).sqrt())
+}
+
+/// Below this many times the fit's relative tolerance times the rod length, a measured noise
+/// and the residuals are below what the model's own positions resolve: the integrator's global
+/// error over a recording's thousands of steps grows to hundreds of its local tolerance (a
+/// noise-free 10 kHz recording leaves residuals of 1e-8 m at rtol 1e-9). At the default
+/// tolerance this is 0.3 um on a 0.3 m rod, far below any camera's noise.
+const NOISE_FREE_TOLERANCES: f64 = 1000.0;
+
+/// Below this reduced chi-square the residuals are far smaller than the noise measured from the
+/// tracks (no real noise gives it over the thousands of rows of a recording): the "noise" was
+/// the smooth motion's leftover in the third differences, not noise.
+const NOISE_FREE_CHI2: f64 = 0.01;
+
+/// Whether a recording is noise-free for the fit (a synthetic recording written without
+/// noise): its measured noise `sigma` and the residuals' RMS `rms` (m) both below [`NOISE_FREE_TOLERANCES`] x `rtol` x `scale` (the model's
+/// numerical accuracy at the markers' distance), or the reduced chi-square below
+/// [`NOISE_FREE_CHI2`]. Then the residuals are the integrator's and the data's rounding, and
+/// the chi-square, block and window tests, which compare them with the noise, say nothing. A
+/// model that misfits a noise-free recording leaves residuals far above the model's accuracy:
+/// it is not noise-free and keeps its flag.
+pub fn is_noise_free(sigma: [f64; 2], rms: f64, scale: f64, rtol: f64, reduced_chi2: f64) -> bool {
+    sigma[0].max(sigma[1]).max(rms) < NOISE_FREE_TOLERANCES * rtol * scale
+        || reduced_chi2 < NOISE_FREE_CHI2
+}
+
+/// Below this p-value the runs test says the residuals are not noise (four streams of
+/// thousands of signs: a smooth miss of 3/4 of the noise is enough, whatever noise was measured).
+pub(super) const RUNS_P: f64 = 1e-4;
+
+/// The one plain sentence when the model limits the result: chi-square fails against the
+/// measured noise (p < 0.001), the residuals are correlated enough to widen the errors by half,
+/// the windows (a slide each) disagree (p < 0.01), or the residuals' signs run in long
+/// stretches (runs test p < [`RUNS_P`]).
+pub(super) fn adequacy_sentence(
+    a: &uncertainty::Assessment,
+    block_ratio: f64,
+    windows_p: Option<f64>,
+    runs_p: f64,
+    mu: Option<&Estimate>,
+) -> Option<String> {
+    let mut why = Vec::new();
+    if a.p_value < 1e-3 {
+        why.push(format!(
+            "chi-square is {:.0} for {:.0} degrees of freedom against the noise measured from the tracks (reduced {:.2}, p = {:.1e})",
+            a.chi2, a.dof, a.reduced_chi2, a.p_value
+        ));
+    }
+    if block_ratio > 1.5 {
+        why.push(format!(
+            "the residuals are correlated in time (block standard error {block_ratio:.1} times the plain one)"
+        ));
+    }
+    if runs_p < RUNS_P {
+        why.push(format!(
+            "the residuals keep their sign over long stretches (runs test p = {runs_p:.1e})"
+        ));
+    }
+    if let Some(pw) = windows_p.filter(|p| *p < 0.01) {
+        why.push(format!(
+            "the recording's slides, fitted one by one, disagree on mu_kinetic (p = {pw:.1e})"
+        ));
+    }
+    if why.is_empty() {
+        return None;
+    }
+    let interval = mu.map_or(String::new(), |e| {
+        let what: Vec<&str> = e
+            .interval
+            .split('+')
+            .filter_map(|tag| match tag {
+                "block" => Some("the residuals' correlation"),
+                "windows" => Some("the spread of the slides' values"),
+                "models" => Some("the spread of close models"),
+                "path" => Some("as much as mu moved while nuisances were added"),
+                _ => None,
+            })
+            .collect();
+        let held = if what.is_empty() {
+            String::new()
+        } else {
+            format!(" to hold {}", what.join(", "))
+        };
+        format!(
+            "; the interval for mu_kinetic was widened{held}: [{:.5}, {:.5}] ({})",
+            e.ci95[0], e.ci95[1], e.interval
+        )
+    });
+    Some(format!(
+        "The result is limited by the model, not by the noise: {}{interval}.",
+        why.join("; ")
+    ))
+}

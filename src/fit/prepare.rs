@@ -1,0 +1,110 @@
+//! The recording made ready to fit: enough frames with both markers, times from zero, each
+//! marker's noise measured from its track (or given) and the mis-tracked positions dropped.
+
+use super::noise::{self, NoiseEstimate};
+use super::outliers;
+use super::problem::Observations;
+use super::{FitError, FitSettings};
+use std::sync::Arc;
+
+/// The recording ready to fit: times from zero, mis-tracked positions out, each marker's noise.
+pub(super) struct Prepared {
+    pub obs: Arc<Observations>,
+    /// Frames in the recording as read.
+    pub n_frames: usize,
+    /// Noise per marker used as weights (m).
+    pub sigma: [f64; 2],
+    /// The noise measurements (or the given noise).
+    pub noise: [Option<NoiseEstimate>; 2],
+    /// Degrees of freedom of the noise measurement (the chi-square's F test).
+    pub noise_dof: f64,
+    /// Positions dropped from the tracks (slider, bob).
+    pub dropped: [usize; 2],
+}
+
+/// The data checked, the noise measured, the mis-tracked positions dropped.
+pub(super) fn prepare(obs: Observations, settings: &FitSettings) -> Result<Prepared, FitError> {
+    let mut obs = check_data(obs)?;
+    let n_frames = obs.times.len();
+    let (sigma, noise, dropped) = noise_and_outliers(&mut obs, settings)?;
+    enough_frames(&obs)?;
+    let noise_dof = noise.iter().flatten().map(|e| e.dof).sum::<f64>().max(2.0);
+    Ok(Prepared {
+        obs: Arc::new(obs),
+        n_frames,
+        sigma,
+        noise,
+        noise_dof,
+        dropped,
+    })
+}
+
+/// The recording is usable: enough frames with both markers; times from zero.
+fn check_data(mut obs: Observations) -> Result<Observations, FitError> {
+    enough_frames(&obs)?;
+    let t0 = obs.times[0];
+    obs.times.iter_mut().for_each(|t| *t -= t0);
+    Ok(obs)
+}
+
+/// At least ten frames with both markers.
+pub(super) fn enough_frames(obs: &Observations) -> Result<(), FitError> {
+    let both = obs
+        .slider
+        .iter()
+        .zip(&obs.bob)
+        .filter(|(s, b)| s.is_some() && b.is_some())
+        .count();
+    if both < 10 {
+        return Err(FitError::TooFewFrames(both));
+    }
+    Ok(())
+}
+
+/// The noise used as weights (m), the measurements behind it, and the positions dropped.
+type NoiseAndOutliers = ([f64; 2], [Option<NoiseEstimate>; 2], [usize; 2]);
+
+/// Each marker's noise, measured from its track (or given), and the mis-tracked
+/// positions dropped. Returns the noise used as weights, the measurements and the drops.
+fn noise_and_outliers(
+    obs: &mut Observations,
+    settings: &FitSettings,
+) -> Result<NoiseAndOutliers, FitError> {
+    if let Some(given) = settings.noise {
+        if !given.iter().all(|s| s.is_finite() && *s > 0.0) {
+            return Err(FitError::Settings(format!(
+                "noise must be finite and positive (m), got {given:?}"
+            )));
+        }
+    }
+    let measured = noise::from_tracks(obs);
+    let pick = |m: usize, est: &[Option<NoiseEstimate>; 2]| -> f64 {
+        match (settings.noise, est[m], est[1 - m]) {
+            (Some(g), _, _) => g[m],
+            (None, Some(e), _) if e.sigma > 0.0 => e.sigma,
+            (None, _, Some(o)) if o.sigma > 0.0 => o.sigma,
+            // Noiseless tracks: a floor far below any camera, so the weights stay finite.
+            _ => 1e-7,
+        }
+    };
+    let first = [pick(0, &measured), pick(1, &measured)];
+    let dropped = outliers::drop_from_tracks(obs, first);
+    // The trimmed measurement is robust already; measure again without the dropped frames.
+    let measured = if dropped.iter().any(|&d| d > 0) {
+        noise::from_tracks(obs)
+    } else {
+        measured
+    };
+    let sigma = [pick(0, &measured), pick(1, &measured)];
+    let reported = match settings.noise {
+        Some(g) => [0, 1].map(|m| {
+            Some(NoiseEstimate {
+                sigma: g[m],
+                dof: f64::INFINITY,
+                source: "given",
+            })
+        }),
+        None => measured,
+    };
+    Ok((sigma, reported, dropped))
+}
