@@ -1,13 +1,20 @@
 //! The estimation problem: predicted minus observed marker positions at every frame with data,
 //! weighted per marker, as a function of the free parameters (rig and initial state).
+//!
+//! `param.rs` names the parameters; `normal.rs` holds the exact normal equations by dual
+//! numbers; this file holds the observations, the problem's layout, its parameter vector and
+//! its residuals.
 
-use super::lm::{LeastSquares, Normal};
-use crate::model::{observed_markers, observed_markers_with, re_state, Camera, Rig, Scalar, State};
+mod normal;
+mod param;
+
+pub use normal::MAX_FREE;
+pub use param::Param;
+
+use crate::model::{observed_markers, Camera, Rig, Scalar, State};
 use crate::sim::{simulate_each, Options, Request, Sample, SimError};
 use argmin::core::Error;
-use nalgebra::{DMatrix, DVector, U1};
-use num_dual::{Derivative, DualSVec64};
-use serde::Serialize;
+use nalgebra::DVector;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
@@ -34,157 +41,6 @@ impl Observations {
     }
 }
 
-/// A quantity the fit can estimate.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Param {
-    /// Kinetic friction coefficient.
-    MuKinetic,
-    /// Static friction coefficient.
-    MuStatic,
-    /// Initial slider position (m).
-    X,
-    /// Initial rod angle (rad, PHYSICS.md convention).
-    Theta,
-    /// Initial slider velocity (m/s).
-    XDot,
-    /// Initial angular velocity (rad/s).
-    ThetaDot,
-    /// Rod length (m): the pivot to the bob's marker; a rigid pendulum's equivalent length
-    /// moves with it in proportion (unless [`Param::PendulumLength`] is free).
-    RodLength,
-    /// Equivalent length L of a rigid pendulum (m): the dynamics' rod, the marker staying at
-    /// the rod length (PHYSICS.md, "Rigid pendulum").
-    PendulumLength,
-    /// Equivalent mass ratio r' = (m1 + m_p - m_e) / m_e of a rigid pendulum, with the total
-    /// mass held (the motion depends on the masses through this ratio alone).
-    MassRatio,
-    /// Rail tilt alpha (rad, +x downhill).
-    RailTilt,
-    /// Viscous torque coefficient at the pivot (N m s).
-    PivotDamping,
-    /// Viscous rail friction (N s/m).
-    ViscousFriction,
-    /// Stribeck speed v_s (m/s).
-    StribeckVelocity,
-    /// Relative camera scale error (positions times 1 + this).
-    ScaleError,
-    /// Bob marker's offset along the rod from its end (m).
-    BobAlong,
-    /// Bob marker's offset across the rod (m).
-    BobAcross,
-    /// Slider marker's offset along the rail (m).
-    SliderDx,
-    /// Slider marker's offset perpendicular to the rail (m, y down).
-    SliderDy,
-    /// Lag of the bob's track behind the slider's (s).
-    Lag,
-}
-
-impl Param {
-    /// Every parameter, in report order.
-    pub const ALL: [Param; 19] = [
-        Param::MuKinetic,
-        Param::MuStatic,
-        Param::X,
-        Param::Theta,
-        Param::XDot,
-        Param::ThetaDot,
-        Param::RodLength,
-        Param::PendulumLength,
-        Param::MassRatio,
-        Param::RailTilt,
-        Param::PivotDamping,
-        Param::ViscousFriction,
-        Param::StribeckVelocity,
-        Param::ScaleError,
-        Param::BobAlong,
-        Param::BobAcross,
-        Param::SliderDx,
-        Param::SliderDy,
-        Param::Lag,
-    ];
-
-    /// Whether it belongs to the camera and marker model, which acts on the positions seen
-    /// and not on the motion.
-    pub fn is_camera(self) -> bool {
-        matches!(
-            self,
-            Param::ScaleError
-                | Param::BobAlong
-                | Param::BobAcross
-                | Param::SliderDx
-                | Param::SliderDy
-                | Param::Lag
-        )
-    }
-
-    /// Whether it is part of a release's initial state.
-    pub fn is_state(self) -> bool {
-        matches!(
-            self,
-            Param::X | Param::Theta | Param::XDot | Param::ThetaDot
-        )
-    }
-
-    /// Whether it describes the rig itself, the same in every release: neither a release's
-    /// initial state nor the camera and marker model.
-    pub fn is_rig(self) -> bool {
-        !self.is_state() && !self.is_camera()
-    }
-
-    /// Name in reports and JSON.
-    pub fn name(self) -> &'static str {
-        match self {
-            Param::MuKinetic => "mu_kinetic",
-            Param::MuStatic => "mu_static",
-            Param::X => "x",
-            Param::Theta => "theta",
-            Param::XDot => "x_dot",
-            Param::ThetaDot => "theta_dot",
-            Param::RodLength => "rod_length",
-            Param::PendulumLength => "pendulum_length",
-            Param::MassRatio => "equivalent_mass_ratio",
-            Param::RailTilt => "rail_tilt",
-            Param::PivotDamping => "pivot_damping",
-            Param::ViscousFriction => "viscous_friction",
-            Param::StribeckVelocity => "stribeck_velocity",
-            Param::ScaleError => "camera_scale_error",
-            Param::BobAlong => "bob_marker_along",
-            Param::BobAcross => "bob_marker_across",
-            Param::SliderDx => "slider_marker_dx",
-            Param::SliderDy => "slider_marker_dy",
-            Param::Lag => "marker_lag",
-        }
-    }
-
-    /// Unit of the parameter's value, for reports.
-    pub fn unit(self) -> &'static str {
-        match self {
-            Param::MuKinetic | Param::MuStatic | Param::ScaleError | Param::MassRatio => "",
-            Param::X
-            | Param::RodLength
-            | Param::PendulumLength
-            | Param::BobAlong
-            | Param::BobAcross
-            | Param::SliderDx
-            | Param::SliderDy => "m",
-            Param::Theta | Param::RailTilt => "rad",
-            Param::XDot | Param::StribeckVelocity => "m/s",
-            Param::ThetaDot => "rad/s",
-            Param::PivotDamping => "N m s",
-            Param::ViscousFriction => "N s/m",
-            Param::Lag => "s",
-        }
-    }
-}
-
-/// The most parameters a fit frees at once (the dual-number Jacobian is built for each count).
-pub const MAX_FREE: usize = 10;
-
-/// Parameters of the camera and marker model ([`Param::is_camera`]).
-pub const CAMERA_PARAMS: usize = 6;
-
 /// Which frames hold data, the requested sample times and the row count: fixed by the
 /// observations, so a problem's many clones share one copy.
 #[derive(Debug)]
@@ -209,59 +65,6 @@ pub struct RowInfo {
     pub coord: usize,
     /// Observed value (m).
     pub observed: f64,
-}
-
-/// Run `$body` with the const `$n` set to the dual width for `$k` free parameters, or give
-/// an error beyond [`MAX_FREE`]. Each width is a full copy of the simulator in the binary:
-/// widths 3, 4, 5, 6, 8 and 10 serve every size (a few derivative slots stay unused) and keep
-/// the build time down.
-macro_rules! by_width {
-    ($k:expr, $n:ident => $body:expr) => {
-        match $k {
-            0..=3 => {
-                const $n: usize = 3;
-                $body
-            }
-            4 => {
-                const $n: usize = 4;
-                $body
-            }
-            5 => {
-                const $n: usize = 5;
-                $body
-            }
-            6 => {
-                const $n: usize = 6;
-                $body
-            }
-            7 | 8 => {
-                const $n: usize = 8;
-                $body
-            }
-            9 | 10 => {
-                const $n: usize = 10;
-                $body
-            }
-            n => {
-                return Err(Error::msg(format!(
-                    "at most {MAX_FREE} free parameters, got {n}"
-                )))
-            }
-        }
-    };
-}
-
-/// `p` as dual numbers of width `N` >= `p.len()`, parameter i seeded in slot i (the slots
-/// beyond carry no seed).
-fn seed<const N: usize>(p: &DVector<f64>) -> Vec<DualSVec64<N>> {
-    (0..p.len())
-        .map(|i| {
-            DualSVec64::<N>::new(
-                p[i],
-                Derivative::derivative_generic(nalgebra::Const::<N>, U1, i),
-            )
-        })
-        .collect()
 }
 
 /// The residual function of a fit: fixed values, free parameters, weights.
@@ -612,195 +415,6 @@ impl TrajectoryProblem {
     pub fn frame_times(&self) -> &[f64] {
         &self.layout.request.sample_times
     }
-
-    /// The normal equations at `p` with dual numbers of width `N` >= `p.len()` (slots beyond
-    /// carry no seed), and the block sums over `block` frames when asked for.
-    fn normal_n<const N: usize>(
-        &self,
-        p: &DVector<f64>,
-        block: Option<usize>,
-    ) -> Result<Normal, SimError> {
-        let k = p.len();
-        let seeded = seed::<N>(p);
-        let mut ss = 0.0;
-        let mut jtj = [[0.0; N]; N];
-        let mut jtr = [0.0; N];
-        let mut meat = [[0.0; N]; N];
-        let mut g = [0.0; N];
-        let mut current = usize::MAX;
-        let flush = |g: &mut [f64; N], meat: &mut [[f64; N]; N]| {
-            for a in 0..k {
-                for b in 0..=a {
-                    meat[a][b] += g[a] * g[b];
-                }
-            }
-            *g = [0.0; N];
-        };
-        self.for_each_residual(&seeded, |row, frame, marker, d| {
-            let v = d * (self.row_weight(row) / self.sigma[marker]);
-            let r = v.re;
-            let e = v.eps.unwrap_generic(nalgebra::Const::<N>, U1);
-            ss += r * r;
-            // Over the whole width N, a constant, so the loops unroll: the unseeded slots
-            // only ever add zeros to entries nobody reads.
-            for a in 0..N {
-                jtr[a] += e[a] * r;
-                for b in 0..=a {
-                    jtj[a][b] += e[a] * e[b];
-                }
-            }
-            if let Some(len) = block {
-                let b = frame / len;
-                if b != current {
-                    flush(&mut g, &mut meat);
-                    current = b;
-                }
-                for a in 0..N {
-                    g[a] += e[a] * r;
-                }
-            }
-        })?;
-        flush(&mut g, &mut meat);
-        let sym = |m: &[[f64; N]; N]| DMatrix::from_fn(k, k, |a, b| m[a.max(b)][a.min(b)]);
-        Ok(Normal {
-            cost: 0.5 * ss,
-            jtj: sym(&jtj),
-            jtr: DVector::from_fn(k, |a, _| jtr[a]),
-            meat: block.map(|_| sym(&meat)),
-        })
-    }
-
-    /// Residuals and the whole Jacobian (rows x parameters) at `p`, by the same dual-number
-    /// run as the normal equations: for tests and small problems only (the fit never holds
-    /// the Jacobian).
-    pub fn jacobian(&self, p: &DVector<f64>) -> Result<(DVector<f64>, DMatrix<f64>), Error> {
-        fn dense<const N: usize>(
-            pr: &TrajectoryProblem,
-            p: &DVector<f64>,
-        ) -> Result<(DVector<f64>, DMatrix<f64>), SimError> {
-            let k = p.len();
-            let seeded = seed::<N>(p);
-            let n = pr.n_rows();
-            let (mut res, mut jac) = (DVector::zeros(n), DMatrix::zeros(n, k));
-            pr.for_each_residual(&seeded, |row, _, marker, d| {
-                let v = d * (pr.row_weight(row) / pr.sigma[marker]);
-                res[row] = v.re;
-                let e = v.eps.unwrap_generic(nalgebra::Const::<N>, U1);
-                for c in 0..k {
-                    jac[(row, c)] = e[c];
-                }
-            })?;
-            Ok((res, jac))
-        }
-        by_width!(p.len(), N => dense::<N>(self, p)).map_err(to_err)
-    }
-
-    /// Exact normal equations by forward-mode dual numbers through the integrator, with event
-    /// times differentiated implicitly at every mode switch; with `block`, also the block sums
-    /// of the block covariance (frames per block).
-    pub fn normal_equations_blocked(
-        &self,
-        p: &DVector<f64>,
-        block: Option<usize>,
-    ) -> Result<Normal, Error> {
-        self.counters.jacobians.fetch_add(1, Ordering::Relaxed);
-        by_width!(p.len(), N => self.normal_n::<N>(p, block)).map_err(to_err)
-    }
-}
-
-impl TrajectoryProblem {
-    /// The normal equations over the free parameters followed by `extra`, camera parameters
-    /// that are not free (at most [`CAMERA_PARAMS`]): their columns come from differentiating
-    /// the observation model alone at each frame's state, since they do not enter the motion.
-    /// The score test screens the camera's nuisances this way in the same pass as the rig's,
-    /// with dual numbers no wider than the rig's parameters need.
-    pub fn normal_equations_observed(
-        &self,
-        p: &DVector<f64>,
-        extra: &[Param],
-    ) -> Result<Normal, Error> {
-        if let Some(q) = extra
-            .iter()
-            .find(|q| !q.is_camera() || self.free.contains(q))
-        {
-            return Err(Error::msg(format!(
-                "{} is not a camera parameter held fixed",
-                q.name()
-            )));
-        }
-        if extra.len() > CAMERA_PARAMS {
-            return Err(Error::msg(format!(
-                "at most {CAMERA_PARAMS} camera parameters, got {}",
-                extra.len()
-            )));
-        }
-        self.counters.jacobians.fetch_add(1, Ordering::Relaxed);
-        by_width!(p.len(), N => self.normal_observed_n::<N>(p, extra)).map_err(to_err)
-    }
-
-    fn normal_observed_n<const N: usize>(
-        &self,
-        p: &DVector<f64>,
-        extra: &[Param],
-    ) -> Result<Normal, SimError> {
-        const M: usize = CAMERA_PARAMS;
-        const W: usize = MAX_FREE + CAMERA_PARAMS;
-        let (k, m) = (p.len(), extra.len());
-        // The rig and camera at p, with the extra camera parameters seeded.
-        let mut at_p = self.clone();
-        at_p.set_values(p);
-        at_p.free = extra.to_vec();
-        let values = at_p.values();
-        let (rig_m, _, cam_m) = at_p.apply(&seed::<M>(&values));
-        let mut ss = 0.0;
-        let mut jtj = [[0.0; W]; W];
-        let mut jtr = [0.0; W];
-        // A lag among the extra parameters differentiates along the motion: velocities.
-        self.for_each_residual_at(
-            &seed::<N>(p),
-            extra.contains(&Param::Lag),
-            |s: &Sample<DualSVec64<N>>| {
-                let y = re_state(&s.state);
-                // The lag's accelerations in f64: nothing in them depends on the camera.
-                let acc = (!cam_m.lag.is_exact_zero()).then(|| {
-                    let (a, b) = at_p.rig.accelerations(s.mode, &y);
-                    (DualSVec64::from(a), DualSVec64::from(b))
-                });
-                observed_markers_with(rig_m.marker_length, &cam_m, &y.map(DualSVec64::from), acc)
-            },
-            |row, _, marker, coord, d, cam| {
-                let scale = self.row_weight(row) / self.sigma[marker];
-                let r = d.re * scale;
-                let e = d.eps.unwrap_generic(nalgebra::Const::<N>, U1);
-                let c = cam[2 * marker + coord]
-                    .eps
-                    .unwrap_generic(nalgebra::Const::<M>, U1);
-                let mut g = [0.0; W];
-                g[..k]
-                    .iter_mut()
-                    .zip(e.iter())
-                    .for_each(|(g, e)| *g = e * scale);
-                g[k..k + m]
-                    .iter_mut()
-                    .zip(c.iter())
-                    .for_each(|(g, c)| *g = c * scale);
-                ss += r * r;
-                for a in 0..k + m {
-                    jtr[a] += g[a] * r;
-                    for b in 0..=a {
-                        jtj[a][b] += g[a] * g[b];
-                    }
-                }
-            },
-        )?;
-        let kk = k + m;
-        Ok(Normal {
-            cost: 0.5 * ss,
-            jtj: DMatrix::from_fn(kk, kk, |a, b| jtj[a.max(b)][a.min(b)]),
-            jtr: DVector::from_fn(kk, |a, _| jtr[a]),
-            meat: None,
-        })
-    }
 }
 
 /// Where `p` stands in `problem`'s parameter vector (`None` when it is not free).
@@ -810,41 +424,6 @@ pub(super) fn idx(problem: &TrajectoryProblem, p: Param) -> Option<usize> {
 
 fn to_err(e: SimError) -> Error {
     Error::msg(e.to_string())
-}
-
-impl LeastSquares for TrajectoryProblem {
-    fn normal_equations(&self, p: &DVector<f64>) -> Result<Normal, Error> {
-        self.normal_equations_blocked(p, None)
-    }
-
-    fn project(&self, p: &mut DVector<f64>) {
-        let idx = |q: Param| self.free.iter().position(|&f| f == q);
-        if let Some(i) = idx(Param::MuKinetic) {
-            p[i] = p[i].max(0.0);
-        }
-        let mu_k = idx(Param::MuKinetic).map_or(self.rig.mu_kinetic, |i| p[i]);
-        if let Some(i) = idx(Param::MuStatic) {
-            p[i] = p[i].max(mu_k);
-        }
-        // Physical ranges: the solver steps back inside them rather than simulating nonsense.
-        let clamp = |p: &mut DVector<f64>, q: Param, lo: f64, hi: f64| {
-            if let Some(i) = idx(q) {
-                p[i] = p[i].clamp(lo, hi);
-            }
-        };
-        clamp(p, Param::RodLength, 1e-6, f64::INFINITY);
-        // A rigid pendulum's L lies between half and twice the bob's distance for any rod
-        // and bob a lab builds (a bare uniform rod has L = 2l/3).
-        let l = self.rig.marker_length;
-        clamp(p, Param::PendulumLength, 0.5 * l, 2.0 * l);
-        clamp(p, Param::MassRatio, 1e-4, 1e4);
-        clamp(p, Param::PivotDamping, 0.0, f64::INFINITY);
-        clamp(p, Param::ViscousFriction, 0.0, f64::INFINITY);
-        clamp(p, Param::StribeckVelocity, 1e-4, 10.0);
-        clamp(p, Param::RailTilt, -0.3, 0.3);
-        clamp(p, Param::ScaleError, -0.5, 0.5);
-        clamp(p, Param::Lag, -0.05, 0.05);
-    }
 }
 
 impl From<&crate::data::Recording> for Observations {
