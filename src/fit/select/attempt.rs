@@ -1,0 +1,114 @@
+//! One candidate model fitted: from its own start and the data's, retried when a nested model
+//! ends worse than the model it extends, and marked failed when it still does.
+
+use super::{chi2_of, Candidate, ModelRow, SelectOptions};
+use crate::fit::problem::Param;
+use crate::fit::solve::{solve_loose, Solved, STAGE_FTOL};
+use nalgebra::DVector;
+
+/// A candidate's fit: to a relative cost decrease of [`STAGE_FTOL`], which settles its
+/// chi-square to far below a unit (the criterion's differences that matter are units), while
+/// the last digits cost as many iterations again. The chosen model is polished after the
+/// selection.
+fn solve_candidate<M: Candidate>(m: &M, p0: DVector<f64>, max_iters: u64) -> Solved {
+    solve_loose(m, p0, max_iters, Some(STAGE_FTOL))
+}
+
+/// Solve `m` from its values and, when `fresh` is given, also from a restart; the lower
+/// cost wins. Iterations of both count.
+fn solve_starts<M: Candidate>(m: &M, fresh: Option<&M::Start>, max_iters: u64) -> Solved {
+    let a = solve_candidate(m, m.values(), max_iters);
+    let Some(start) = fresh else {
+        return a;
+    };
+    let f = m.restarted(start);
+    let b = solve_candidate(&f, f.values(), max_iters);
+    match (a, b) {
+        (Ok(x), Ok(y)) => {
+            let iters = x.2 + y.2;
+            let (p, c) = if y.1 < x.1 { (y.0, y.1) } else { (x.0, x.1) };
+            Ok((p, c, iters))
+        }
+        (Ok(x), Err(_)) => Ok(x),
+        (Err(_), b) => b,
+    }
+}
+
+/// Chi-square a candidate may end above the model it nests and still count as converged:
+/// the solvers' stopping tolerance, with a floor of one unit.
+fn nested_slack(parent_chi2: f64) -> f64 {
+    (1e-4 * parent_chi2).max(1.0)
+}
+
+/// A failed candidate: why, the chi-square it reached (NaN when none) and the iterations.
+type Failure = (String, f64, u64);
+
+/// Fit candidate `m` from its own start (and `fresh` when given). A candidate that nests the
+/// current model (`parent`: that model's chi-square) yet ends worse than it has not converged:
+/// it is retried, longer and from the data's start, and is a failure when it still ends
+/// worse (it is then no evidence about the nuisance, and must not be compared as if it were).
+pub(super) fn fit_candidate<M: Candidate>(
+    m: &M,
+    fresh: Option<&M::Start>,
+    opts: &SelectOptions<M::Start>,
+    parent: Option<f64>,
+) -> Result<(DVector<f64>, f64, u64), Failure> {
+    let worse = |cost: f64| parent.is_some_and(|c| chi2_of(cost) > c + nested_slack(c));
+    let first = solve_starts(m, fresh, opts.max_iters);
+    let (mut best, mut iters) = match first {
+        Ok((q, cost, it)) if !worse(cost) => return Ok((q, cost, it)),
+        Ok((q, cost, it)) => (Some((q, cost)), it),
+        Err(e) if parent.is_none() => return Err((e, f64::NAN, 0)),
+        Err(_) => (None, 0),
+    };
+    // The retries: on from where the first fit stopped with twice the iterations, and from
+    // the data's start when the first fit did not use it.
+    let mut retries: Vec<(M, DVector<f64>)> = Vec::new();
+    if let Some((q, _)) = &best {
+        retries.push((m.clone(), q.clone()));
+    }
+    if m.frees(Param::MuStatic) && m.mu_static() > m.mu_kinetic() {
+        // From the current model itself: mu_static just above mu_kinetic.
+        let tied = m.static_near_tie();
+        let v = tied.values();
+        retries.push((tied, v));
+    }
+    if let (None, Some(start)) = (fresh, opts.fresh_start.as_ref()) {
+        let f = m.restarted(start);
+        let v = f.values();
+        retries.push((f, v));
+    }
+    let mut last_err = String::from("no start converged");
+    for (r, p0) in retries {
+        match solve_candidate(&r, p0, 2 * opts.max_iters) {
+            Ok((q, cost, it)) => {
+                iters += it;
+                if best.as_ref().is_none_or(|b| cost < b.1) {
+                    best = Some((q, cost));
+                }
+            }
+            Err(e) => last_err = e,
+        }
+    }
+    match best {
+        Some((q, cost)) if !worse(cost) => Ok((q, cost, iters)),
+        Some((_, cost)) => Err((
+            format!(
+                "did not converge: its chi-square {:.1} stayed above the {:.1} of the model it extends",
+                chi2_of(cost),
+                parent.unwrap_or(f64::NAN)
+            ),
+            chi2_of(cost),
+            iters,
+        )),
+        None => Err((last_err, f64::NAN, iters)),
+    }
+}
+
+/// `r` marked as a failed fit.
+pub(super) fn failed_row(mut r: ModelRow, why: String) -> ModelRow {
+    r.failed = Some(why);
+    r.mu_kinetic = f64::NAN;
+    r.bic = f64::NAN;
+    r
+}

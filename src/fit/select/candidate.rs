@@ -1,0 +1,128 @@
+//! What the forward selection needs of a model ([`Candidate`]), written once so that one
+//! recording's problem and several recordings fitted jointly share the selection; here also
+//! its implementation for one recording ([`TrajectoryProblem`]).
+
+use super::score::score_drops;
+use super::Nuisance;
+use crate::fit::lm::LeastSquares;
+use crate::fit::problem::{Param, TrajectoryProblem};
+use crate::model::State;
+use nalgebra::DVector;
+
+/// What the forward selection needs of a model: one recording's problem
+/// ([`TrajectoryProblem`]) or several recordings fitted jointly (`fit::joint`). The selection
+/// ([`forward`]) is written once against this.
+pub trait Candidate: LeastSquares + Clone + Send + Sync + 'static {
+    /// A restart for a misfitting model: the data's own initial state(s) and mu_kinetic.
+    type Start: Clone + Send + Sync;
+    /// Residual rows (the sample size of the criterion).
+    fn n_rows(&self) -> usize;
+    /// Free parameters in all.
+    fn n_free(&self) -> usize;
+    /// Free parameters of the widest single simulation (the dual numbers' width, at most
+    /// [`MAX_FREE`]).
+    fn width(&self) -> usize;
+    /// Whether `q` is free.
+    fn frees(&self, q: Param) -> bool;
+    /// Names of the free parameters, for the model table.
+    fn free_names(&self) -> Vec<&'static str>;
+    /// Current values of the free parameters.
+    fn values(&self) -> DVector<f64>;
+    /// Store a parameter vector.
+    fn set_values(&mut self, v: &DVector<f64>);
+    /// Current mu_kinetic.
+    fn mu_kinetic(&self) -> f64;
+    /// Current mu_static.
+    fn mu_static(&self) -> f64;
+    /// Whether the rig file gives the pendulum's build (then it is not a candidate).
+    fn pendulum_given(&self) -> bool;
+    /// The model with `nu` added at its neutral value (mu_static from `mu_static`).
+    fn with_nuisance(&self, nu: Nuisance, mu_static: f64) -> Self;
+    /// The model restarted from `start` (parameters the start does not name keep their
+    /// values).
+    fn restarted(&self, start: &Self::Start) -> Self;
+    /// The model with mu_static no longer free, tied to mu_kinetic.
+    fn static_tied(&self) -> Self;
+    /// The model with mu_static just above mu_kinetic, where the static coefficient (and
+    /// Stribeck's law) does what Coulomb's law with one coefficient does.
+    fn static_near_tie(&self) -> Self;
+    /// Predicted chi-square drop of each screened candidate at `p` (the score test).
+    fn score_drops(&self, p: &DVector<f64>, candidates: &[Nuisance]) -> Vec<(Nuisance, f64)>;
+}
+
+impl Candidate for TrajectoryProblem {
+    type Start = (State<f64>, f64);
+    fn n_rows(&self) -> usize {
+        TrajectoryProblem::n_rows(self)
+    }
+    fn n_free(&self) -> usize {
+        self.free.len()
+    }
+    fn width(&self) -> usize {
+        self.free.len()
+    }
+    fn frees(&self, q: Param) -> bool {
+        self.free.contains(&q)
+    }
+    fn free_names(&self) -> Vec<&'static str> {
+        self.free.iter().map(|q| q.name()).collect()
+    }
+    fn values(&self) -> DVector<f64> {
+        TrajectoryProblem::values(self)
+    }
+    fn set_values(&mut self, v: &DVector<f64>) {
+        TrajectoryProblem::set_values(self, v)
+    }
+    fn mu_kinetic(&self) -> f64 {
+        self.rig.mu_kinetic
+    }
+    fn mu_static(&self) -> f64 {
+        self.rig.mu_static
+    }
+    fn pendulum_given(&self) -> bool {
+        self.rig.pendulum.is_some()
+    }
+    fn with_nuisance(&self, nu: Nuisance, mu_static: f64) -> Self {
+        nu.add_to(self, mu_static)
+    }
+    fn restarted(&self, start: &Self::Start) -> Self {
+        restarted(self, *start)
+    }
+    fn static_tied(&self) -> Self {
+        let mut tied = self.clone();
+        tied.free.retain(|&q| q != Param::MuStatic);
+        tied.tie_static = true;
+        tied.rig.mu_static = tied.rig.mu_kinetic;
+        tied
+    }
+    fn static_near_tie(&self) -> Self {
+        let mut tied = self.clone();
+        tied.rig.mu_static = tied.rig.mu_kinetic * (1.0 + 1e-9);
+        tied
+    }
+    fn score_drops(&self, p: &DVector<f64>, candidates: &[Nuisance]) -> Vec<(Nuisance, f64)> {
+        score_drops(self, p, candidates)
+    }
+}
+
+/// `m` restarted from the data's initial state and mu_kinetic (parameters the start does
+/// not name keep their values).
+fn restarted(m: &TrajectoryProblem, (y0, mu0): (State<f64>, f64)) -> TrajectoryProblem {
+    let mut f = m.clone();
+    let keep_x_dot = !f.free.contains(&Param::XDot);
+    for (i, (v, &guess)) in f.initial.iter_mut().zip(&y0).enumerate() {
+        // A release from rest keeps x'(0) = 0.
+        if !(i == 2 && keep_x_dot) {
+            *v = guess;
+        }
+    }
+    f.rig.mu_kinetic = mu0;
+    if f.free.contains(&Param::MuStatic) {
+        // Just above the tie: a mu_static chosen while the model misfitted is part of the
+        // compromise this start leaves (the current start keeps it).
+        f.rig.mu_static = mu0 * 1.02;
+    } else if f.tie_static {
+        f.rig.mu_static = mu0;
+    }
+    f
+}

@@ -1,0 +1,151 @@
+//! The candidate nuisances as data ([`Nuisance`]): what each frees, which ones exclude each
+//! other, and how one is added to a model at its neutral value.
+
+use crate::fit::problem::{Param, TrajectoryProblem};
+use crate::model::FrictionLaw;
+
+use super::Candidate;
+
+/// A departure from the ideal rig or camera that a candidate model adds (PHYSICS.md, "Real
+/// rigs" and "What a camera adds").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Nuisance {
+    /// mu_static free above mu_kinetic (Coulomb friction with two coefficients).
+    StaticFriction,
+    /// Stribeck friction: mu_static and the Stribeck speed free.
+    Stribeck,
+    /// Rail tilt.
+    RailTilt,
+    /// Viscous damping at the pivot.
+    PivotDamping,
+    /// Viscous rail friction.
+    ViscousFriction,
+    /// Camera scale error (the bob marker at the rod's end).
+    CameraScale,
+    /// Bob marker off the rod's end: along and across the rod.
+    BobOffset,
+    /// Bob marker off the rod's line only (across it): unlike the full offset it can join a
+    /// camera scale error, which acts through the marker's distance along the rod.
+    BobAcross,
+    /// Slider marker off the pivot.
+    SliderOffset,
+    /// A time lag between the two markers' tracks.
+    Lag,
+    /// A rigid pendulum (a rod with mass, a bob with size) whose build the rig file does not
+    /// give: its equivalent length and mass ratio free (PHYSICS.md, "Rigid pendulum").
+    RigidPendulum,
+}
+
+impl Nuisance {
+    /// Every candidate, in the order ties are broken.
+    pub const ALL: [Nuisance; 11] = [
+        Nuisance::RigidPendulum,
+        Nuisance::StaticFriction,
+        Nuisance::Stribeck,
+        Nuisance::RailTilt,
+        Nuisance::PivotDamping,
+        Nuisance::ViscousFriction,
+        Nuisance::CameraScale,
+        Nuisance::BobOffset,
+        Nuisance::BobAcross,
+        Nuisance::SliderOffset,
+        Nuisance::Lag,
+    ];
+
+    /// Name in reports and JSON.
+    pub fn name(self) -> &'static str {
+        match self {
+            Nuisance::StaticFriction => "mu_static",
+            Nuisance::Stribeck => "stribeck",
+            Nuisance::RailTilt => "rail_tilt",
+            Nuisance::PivotDamping => "pivot_damping",
+            Nuisance::ViscousFriction => "viscous_friction",
+            Nuisance::CameraScale => "camera_scale",
+            Nuisance::BobOffset => "bob_marker_offset",
+            Nuisance::BobAcross => "bob_marker_across",
+            Nuisance::SliderOffset => "slider_marker_offset",
+            Nuisance::Lag => "marker_lag",
+            Nuisance::RigidPendulum => "rigid_pendulum",
+        }
+    }
+
+    /// The parameters it frees.
+    pub fn params(self) -> &'static [Param] {
+        match self {
+            Nuisance::StaticFriction => &[Param::MuStatic],
+            Nuisance::Stribeck => &[Param::MuStatic, Param::StribeckVelocity],
+            Nuisance::RailTilt => &[Param::RailTilt],
+            Nuisance::PivotDamping => &[Param::PivotDamping],
+            Nuisance::ViscousFriction => &[Param::ViscousFriction],
+            Nuisance::CameraScale => &[Param::ScaleError],
+            Nuisance::BobOffset => &[Param::BobAlong, Param::BobAcross],
+            Nuisance::BobAcross => &[Param::BobAcross],
+            Nuisance::SliderOffset => &[Param::SliderDx, Param::SliderDy],
+            Nuisance::Lag => &[Param::Lag],
+            Nuisance::RigidPendulum => &[Param::PendulumLength, Param::MassRatio],
+        }
+    }
+
+    /// Whether a score test can screen it: a parameter whose neutral value is an interior
+    /// point. mu_static at mu_static = mu_kinetic has a vanishing first-order effect (the slip
+    /// then starts with x'' = 0), and Stribeck changes the law: both are fitted outright.
+    pub(super) fn screened(self) -> bool {
+        !matches!(self, Nuisance::StaticFriction | Nuisance::Stribeck)
+    }
+
+    /// Whether a model holding `self` cannot take `other`: camera scale and the bob marker's
+    /// distance along the rod act through their product; Stribeck contains mu_static, so
+    /// mu_static is not offered on top of it (Stribeck on top of mu_static replaces it:
+    /// [`Nuisance::supersedes`]); the full bob offset contains the offset across the rod.
+    pub(super) fn conflicts(self, other: Nuisance) -> bool {
+        use Nuisance::*;
+        matches!(
+            (self, other),
+            (CameraScale, BobOffset)
+                | (BobOffset, CameraScale)
+                | (Stribeck, StaticFriction)
+                | (BobOffset, BobAcross)
+                | (BobAcross, BobOffset)
+        )
+    }
+
+    /// The nuisance this one replaces when added: Stribeck friction generalises mu_static.
+    pub(super) fn supersedes(self) -> Option<Nuisance> {
+        (self == Nuisance::Stribeck).then_some(Nuisance::StaticFriction)
+    }
+
+    /// Parameters it adds to each simulation of `m` (those not free already).
+    pub(super) fn new_params<M: Candidate>(self, m: &M) -> usize {
+        self.params().iter().filter(|&&q| !m.frees(q)).count()
+    }
+
+    /// `chosen` with this nuisance added (and what it supersedes removed).
+    pub(super) fn join(self, chosen: &[Nuisance]) -> Vec<Nuisance> {
+        let mut out: Vec<Nuisance> = chosen
+            .iter()
+            .copied()
+            .filter(|&c| Some(c) != self.supersedes())
+            .collect();
+        out.push(self);
+        out
+    }
+
+    /// `problem` with this nuisance added at its neutral value (mu_static from `mu_static`).
+    pub(super) fn add_to(self, problem: &TrajectoryProblem, mu_static: f64) -> TrajectoryProblem {
+        let mut m = problem.clone();
+        if self == Nuisance::Stribeck {
+            m.rig.friction_law = FrictionLaw::Stribeck;
+            m.rig.stribeck_velocity = 0.05;
+        }
+        for &q in self.params() {
+            if !m.free.contains(&q) {
+                m.free.push(q);
+            }
+        }
+        if self.params().contains(&Param::MuStatic) && !problem.free.contains(&Param::MuStatic) {
+            m.tie_static = false;
+            m.rig.mu_static = mu_static.max(m.rig.mu_kinetic * 1.02);
+        }
+        m
+    }
+}

@@ -1,0 +1,105 @@
+//! The models' weights by the Bayesian information criterion and the spread of mu_kinetic
+//! across the models they leave in play (the interval's share of model uncertainty).
+
+use super::ModelRow;
+
+/// Each converged model's weight w_i = exp(-dBIC_i / (2 c)) / sum, the Bayesian information
+/// criterion's approximation to the posterior probability of the model (Burnham and Anderson,
+/// "Model selection and multimodel inference", 6.4), with the chi-squares divided by the
+/// chosen model's reduced chi-square `c` (at least 1: their quasi-likelihood correction for
+/// overdispersion). A model that misfits overstates every chi-square difference by that
+/// factor, which would make one model look certain. A model fitted twice (the same
+/// nuisances) counts once.
+pub fn model_weights(rows: &mut [ModelRow], c: f64) {
+    let mut seen = std::collections::HashSet::new();
+    let mut total = 0.0;
+    for r in rows.iter_mut() {
+        r.weight = 0.0;
+        let mut set: Vec<&str> = r.name.split('+').collect();
+        set.sort_unstable();
+        if r.failed.is_some() || !r.delta_bic.is_finite() || !seen.insert(set.join("+")) {
+            continue;
+        }
+        r.weight = (-0.5 * r.delta_bic / c).exp();
+        total += r.weight;
+    }
+    if total > 0.0 {
+        rows.iter_mut().for_each(|r| r.weight /= total);
+    }
+}
+
+/// The spread of mu_kinetic across the models the weights leave in play: sum w_i (mu_i -
+/// mu)^2 around the chosen model's `mu`, and the models that carry it (the chosen one, and
+/// each that gives a tenth of the sum or more).
+/// Added in quadrature to the chosen model's variance it gives the unconditional standard
+/// error (Burnham and Anderson, eq. 4.9, with the chosen model's value for the average).
+pub fn model_spread(rows: &[ModelRow], mu: f64) -> (f64, Vec<String>) {
+    let var = rows
+        .iter()
+        .filter(|r| r.weight > 0.0 && r.mu_kinetic.is_finite())
+        .map(|r| r.weight * (r.mu_kinetic - mu).powi(2))
+        .sum();
+    let names = rows
+        .iter()
+        .filter(|r| r.weight > 0.0 && r.mu_kinetic.is_finite())
+        .filter(|r| r.chosen || r.weight * (r.mu_kinetic - mu).powi(2) >= 0.1 * var)
+        .map(|r| {
+            format!(
+                "{} (weight {:.2e}, mu_kinetic {:.6})",
+                r.name, r.weight, r.mu_kinetic
+            )
+        })
+        .collect();
+    (var, names)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::{model_spread, model_weights, ModelRow};
+
+    fn row(name: &str, delta_bic: f64, mu: f64, chosen: bool) -> ModelRow {
+        ModelRow {
+            name: name.to_owned(),
+            free: Vec::new(),
+            chi2: 0.0,
+            bic: delta_bic,
+            delta_bic,
+            chosen,
+            mu_kinetic: mu,
+            failed: None,
+            weight: 0.0,
+            path: false,
+        }
+    }
+
+    /// Weights exp(-dBIC / 2c): equal criteria share, a model 10 units worse gets e^-5 of the
+    /// best's weight (e^-2.5 under an overdispersion c = 2), a failed model and a second fit of
+    /// the same nuisances get none; the spread is the weighted variance about the chosen mu.
+    #[test]
+    fn model_weights_follow_the_criterion() {
+        let mut rows = vec![
+            row("base", 10.0, 0.20, false),
+            row("rail_tilt", 0.0, 0.25, true),
+            row("rail_tilt+marker_lag", 0.0, 0.27, false),
+            row("marker_lag+rail_tilt", 0.0, 0.27, false),
+            ModelRow {
+                failed: Some("did not converge".into()),
+                ..row("pivot_damping", -50.0, 0.9, false)
+            },
+        ];
+        model_weights(&mut rows, 1.0);
+        let total = 2.0 + (-5.0f64).exp();
+        assert!((rows[1].weight - 1.0 / total).abs() < 1e-12);
+        assert!((rows[2].weight - rows[1].weight).abs() < 1e-12);
+        assert!((rows[0].weight / rows[1].weight - (-5.0f64).exp()).abs() < 1e-12);
+        assert_eq!(rows[3].weight, 0.0);
+        assert_eq!(rows[4].weight, 0.0);
+        let (var, names) = model_spread(&rows, 0.25);
+        let want = rows[0].weight * 0.05f64.powi(2) + rows[2].weight * 0.02f64.powi(2);
+        assert!((var - want).abs() < 1e-15);
+        assert!(names.iter().any(|n| n.starts_with("rail_tilt+marker_lag")));
+        assert!(names.iter().any(|n| n.starts_with("rail_tilt ")));
+        model_weights(&mut rows, 2.0);
+        assert!((rows[0].weight / rows[1].weight - (-2.5f64).exp()).abs() < 1e-12);
+    }
+}
