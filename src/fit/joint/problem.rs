@@ -1,0 +1,267 @@
+//! The joint problem ([`JointProblem`]): the releases' problems with the rig's parameters tied,
+//! its normal equations summed from theirs (in parallel), and its part in the forward
+//! selection ([`Candidate`]).
+
+use crate::fit::lm::{LeastSquares, Normal};
+use crate::fit::problem::{Param, TrajectoryProblem};
+use crate::fit::select::{self, Candidate, Nuisance};
+use crate::model::State;
+use argmin::core::Error;
+use nalgebra::{DMatrix, DVector};
+use rayon::prelude::*;
+
+/// Whether a parameter is the rig's (one value for every release) rather than the release's.
+/// The camera's parameters are the release's unless the camera is the same in all.
+fn is_shared(q: Param, same_camera: bool) -> bool {
+    q.is_rig() || (same_camera && q.is_camera() && q != Param::Lag)
+}
+
+/// Several releases' problems with their shared parameters tied: the parameter vector is the
+/// shared parameters, then each release's own, release by release. Each release's problem
+/// frees the shared parameters first, then its own.
+#[derive(Debug, Clone)]
+pub struct JointProblem {
+    /// The releases' problems (their values are the current ones).
+    pub parts: Vec<TrajectoryProblem>,
+    /// The shared free parameters, in the order of the vector.
+    pub shared: Vec<Param>,
+    /// Camera and marker parameters shared by every release.
+    pub same_camera: bool,
+}
+
+impl JointProblem {
+    /// The releases' problems tied: each one's free parameters split into shared and own.
+    pub fn new(mut parts: Vec<TrajectoryProblem>, same_camera: bool) -> Self {
+        let mut shared: Vec<Param> = Vec::new();
+        for part in &parts {
+            for &q in &part.free {
+                if is_shared(q, same_camera) && !shared.contains(&q) {
+                    shared.push(q);
+                }
+            }
+        }
+        for part in &mut parts {
+            let own: Vec<Param> = part
+                .free
+                .iter()
+                .copied()
+                .filter(|&q| !is_shared(q, same_camera))
+                .collect();
+            part.free = shared.iter().copied().chain(own).collect();
+        }
+        JointProblem {
+            parts,
+            shared,
+            same_camera,
+        }
+    }
+
+    /// Where each release's own parameters start in the vector.
+    fn offsets(&self) -> Vec<usize> {
+        let mut at = self.shared.len();
+        self.parts
+            .iter()
+            .map(|p| {
+                let o = at;
+                at += p.free.len() - self.shared.len();
+                o
+            })
+            .collect()
+    }
+
+    /// Indices in the joint vector of release `k`'s parameters, in its own order.
+    fn index(&self, k: usize, offset: usize) -> Vec<usize> {
+        let s = self.shared.len();
+        (0..self.parts[k].free.len())
+            .map(|j| if j < s { j } else { offset + j - s })
+            .collect()
+    }
+
+    /// Every entry of the vector as (release, parameter); the release is `None` when shared.
+    fn labels(&self) -> Vec<(Option<usize>, Param)> {
+        let s = self.shared.len();
+        let mut out: Vec<_> = self.shared.iter().map(|&q| (None, q)).collect();
+        for (k, part) in self.parts.iter().enumerate() {
+            out.extend(part.free[s..].iter().map(|&q| (Some(k), q)));
+        }
+        out
+    }
+
+    /// Release `k`'s part of the joint vector `p`.
+    fn sub(&self, p: &DVector<f64>, idx: &[usize]) -> DVector<f64> {
+        DVector::from_iterator(idx.len(), idx.iter().map(|&i| p[i]))
+    }
+
+    /// Each release's normal equations at `p` (in parallel), with their block sums when
+    /// `block` gives each release's frames per block.
+    fn part_normals(
+        &self,
+        p: &DVector<f64>,
+        block: Option<&[usize]>,
+    ) -> Result<Vec<(Vec<usize>, Normal)>, Error> {
+        let offsets = self.offsets();
+        (0..self.parts.len())
+            .into_par_iter()
+            .with_max_len(1)
+            .map(|k| {
+                let idx = self.index(k, offsets[k]);
+                let q = self.sub(p, &idx);
+                let n = self.parts[k].normal_equations_blocked(&q, block.map(|b| b[k]))?;
+                Ok((idx, n))
+            })
+            .collect()
+    }
+
+    /// The releases' normal equations summed into the joint ones.
+    fn assemble(&self, n: usize, parts: Vec<(Vec<usize>, Normal)>) -> Normal {
+        let mut out = Normal {
+            cost: 0.0,
+            jtj: DMatrix::zeros(n, n),
+            jtr: DVector::zeros(n),
+            meat: None,
+        };
+        let mut meat: Option<DMatrix<f64>> = None;
+        for (idx, part) in parts {
+            out.cost += part.cost;
+            for (a, &i) in idx.iter().enumerate() {
+                out.jtr[i] += part.jtr[a];
+                for (b, &j) in idx.iter().enumerate() {
+                    out.jtj[(i, j)] += part.jtj[(a, b)];
+                }
+            }
+            if let Some(m) = part.meat {
+                let acc = meat.get_or_insert_with(|| DMatrix::zeros(n, n));
+                for (a, &i) in idx.iter().enumerate() {
+                    for (b, &j) in idx.iter().enumerate() {
+                        acc[(i, j)] += m[(a, b)];
+                    }
+                }
+            }
+        }
+        out.meat = meat;
+        out
+    }
+
+    /// The joint normal equations with the block sums of each release's residuals (frames per
+    /// block per release).
+    pub fn normal_equations_blocked(
+        &self,
+        p: &DVector<f64>,
+        block: Option<&[usize]>,
+    ) -> Result<Normal, Error> {
+        let parts = self.part_normals(p, block)?;
+        Ok(self.assemble(p.len(), parts))
+    }
+}
+
+impl LeastSquares for JointProblem {
+    fn normal_equations(&self, p: &DVector<f64>) -> Result<Normal, Error> {
+        self.normal_equations_blocked(p, None)
+    }
+
+    fn project(&self, p: &mut DVector<f64>) {
+        // Each release's bounds on its own slice; the shared entries come out the same from
+        // every release (their bounds depend on shared values only).
+        let offsets = self.offsets();
+        for (k, part) in self.parts.iter().enumerate() {
+            let idx = self.index(k, offsets[k]);
+            let mut q = self.sub(p, &idx);
+            part.project(&mut q);
+            for (a, &i) in idx.iter().enumerate() {
+                p[i] = q[a];
+            }
+        }
+    }
+}
+
+impl Candidate for JointProblem {
+    type Start = Vec<(State<f64>, f64)>;
+    fn n_rows(&self) -> usize {
+        self.parts.iter().map(|p| p.n_rows()).sum()
+    }
+    fn n_free(&self) -> usize {
+        self.labels().len()
+    }
+    fn width(&self) -> usize {
+        self.parts.iter().map(|p| p.free.len()).max().unwrap_or(0)
+    }
+    fn frees(&self, q: Param) -> bool {
+        self.parts.iter().any(|p| p.free.contains(&q))
+    }
+    fn free_names(&self) -> Vec<&'static str> {
+        let mut names: Vec<&'static str> = Vec::new();
+        for (_, q) in self.labels() {
+            if !names.contains(&q.name()) {
+                names.push(q.name());
+            }
+        }
+        names
+    }
+    fn values(&self) -> DVector<f64> {
+        let s = self.shared.len();
+        let mut v: Vec<f64> = self.shared.iter().map(|&q| self.parts[0].get(q)).collect();
+        for part in &self.parts {
+            v.extend(part.free[s..].iter().map(|&q| part.get(q)));
+        }
+        DVector::from_vec(v)
+    }
+    fn set_values(&mut self, v: &DVector<f64>) {
+        let offsets = self.offsets();
+        let idx: Vec<Vec<usize>> = (0..self.parts.len())
+            .map(|k| self.index(k, offsets[k]))
+            .collect();
+        for (part, idx) in self.parts.iter_mut().zip(idx) {
+            part.set_values(&DVector::from_iterator(
+                idx.len(),
+                idx.iter().map(|&i| v[i]),
+            ));
+        }
+    }
+    fn mu_kinetic(&self) -> f64 {
+        self.parts[0].rig.mu_kinetic
+    }
+    fn mu_static(&self) -> f64 {
+        self.parts[0].rig.mu_static
+    }
+    fn pendulum_given(&self) -> bool {
+        self.parts[0].rig.pendulum.is_some()
+    }
+    fn with_nuisance(&self, nu: Nuisance, mu_static: f64) -> Self {
+        let parts = self
+            .parts
+            .iter()
+            .map(|p| p.with_nuisance(nu, mu_static))
+            .collect();
+        JointProblem::new(parts, self.same_camera)
+    }
+    fn restarted(&self, start: &Self::Start) -> Self {
+        let mut out = self.clone();
+        for (part, s) in out.parts.iter_mut().zip(start) {
+            *part = part.restarted(s);
+        }
+        out
+    }
+    fn static_tied(&self) -> Self {
+        let parts = self.parts.iter().map(|p| p.static_tied()).collect();
+        JointProblem::new(parts, self.same_camera)
+    }
+    fn static_near_tie(&self) -> Self {
+        let mut out = self.clone();
+        out.parts = out.parts.iter().map(|p| p.static_near_tie()).collect();
+        out
+    }
+    fn score_drops(&self, p: &DVector<f64>, candidates: &[Nuisance]) -> Vec<(Nuisance, f64)> {
+        let mut at = self.clone();
+        at.set_values(p);
+        let labels = at.labels();
+        select::score_drops_by(&at, candidates, |nu| {
+            let aug = at.with_nuisance(nu, at.mu_static());
+            let new = aug.labels();
+            let cols = labels
+                .iter()
+                .filter_map(|l| new.iter().position(|n| n == l))
+                .collect();
+            (aug, cols)
+        })
+    }
+}
