@@ -1,0 +1,227 @@
+//! The readable report of `appell fit`: lmfit's fit report with the model comparison, the
+//! noise, the windows, the fitted timeline and the adequacy verdict.
+
+use super::correlated_pairs;
+use crate::fit::{FitReport, Param, StaticResult};
+use std::fmt::Write as _;
+
+/// The rigid pendulum the data found, in a lab's words.
+fn pendulum_text(s: &mut String, p: &crate::fit::PendulumFound) {
+    let _ = writeln!(
+        s,
+        "[[Rigid pendulum]] its equivalent length and mass ratio, found by the data"
+    );
+    let row = |s: &mut String, name: &str, v: &crate::fit::ValueSe, unit: &str| {
+        let _ = writeln!(
+            s,
+            "    {name:<24} {:>12.6e} +- {:.2e} {unit}",
+            v.value, v.stderr
+        );
+    };
+    row(s, "equivalent length L", &p.equivalent_length, "m");
+    row(s, "equivalent mass ratio r'", &p.mass_ratio, "");
+    row(s, "equivalent bob mass m_e", &p.equivalent_bob_mass, "kg");
+    row(s, "inertia about pivot J", &p.inertia, "kg m^2");
+    row(s, "radius of gyration", &p.radius_of_gyration, "m");
+    row(s, "centre of mass d", &p.com, "m");
+    let _ = writeln!(
+        s,
+        "    (m_e and J from the total mass {} kg = slider_mass + bob_mass; the radius of gyration and d with everything that swings taken as bob_mass = {} kg: a rod's mass missing from the rig file scales them)",
+        p.total_mass, p.swinging_mass
+    );
+}
+
+/// The readable report of `appell fit`: what lmfit's fit_report gives, and the model
+/// comparison, the noise, the windows and the adequacy verdict.
+pub fn fit_text(rep: &FitReport) -> String {
+    let mut s = String::new();
+    let a = &rep.adequacy;
+    if let Some(sentence) = &a.limited_by_model {
+        let _ = writeln!(s, "{sentence}\n");
+    }
+    let _ = writeln!(s, "[[Fit statistics]]");
+    let _ = writeln!(
+        s,
+        "    method             Levenberg-Marquardt, exact dual-number Jacobian"
+    );
+    let _ = writeln!(
+        s,
+        "    evaluations        {} iterations, {} residual and {} Jacobian evaluations; stopped: {}",
+        rep.work.iterations, rep.work.residual_evals, rep.work.jacobian_evals, rep.stop_reason
+    );
+    let _ = writeln!(
+        s,
+        "    data points        {} residuals from {} frames ({} slider and {} bob positions left out as mis-tracked)",
+        rep.n_residuals, rep.n_frames, rep.outliers[0], rep.outliers[1]
+    );
+    let _ = writeln!(
+        s,
+        "    variables          {} (degrees of freedom {:.0})",
+        rep.params.len(),
+        a.dof
+    );
+    let src = |m: usize| rep.noise[m].map_or("fallback", |n| n.source);
+    let _ = writeln!(
+        s,
+        "    noise              slider {:.3e} m ({}), bob {:.3e} m ({})",
+        rep.noise_m[0],
+        src(0),
+        rep.noise_m[1],
+        src(1)
+    );
+    let _ = writeln!(
+        s,
+        "    chi-square         {:.1}; reduced {:.4}; p = {:.3} (against the noise above)",
+        a.chi2, a.reduced_chi2, a.p_value
+    );
+    let _ = writeln!(s, "    AIC, BIC           {:.1}, {:.1}", a.aic, a.bic);
+    let _ = writeln!(
+        s,
+        "    residual RMS       {:.3e} m (slider {:.3e}, bob {:.3e}); lag-1 autocorrelation {:.3}",
+        rep.rms_residual_m, rep.rms_per_marker_m[0], rep.rms_per_marker_m[1], a.lag1
+    );
+    let _ = writeln!(
+        s,
+        "[[Variables]] value +- standard error (%), 95% interval [method], start"
+    );
+    for (p, e) in &rep.params {
+        let start = rep
+            .start_values
+            .iter()
+            .find(|(q, _)| q == p)
+            .map_or(f64::NAN, |(_, v)| *v);
+        let _ = writeln!(
+            s,
+            "    {:<20} {:>14.8} +- {:<10.3e} ({:>6.2}%) [{:.8}, {:.8}] [{}] start {:.6} {}",
+            p.name(),
+            e.value,
+            e.stderr,
+            100.0 * e.stderr / e.value.abs(),
+            e.ci95[0],
+            e.ci95[1],
+            e.interval,
+            start,
+            p.unit()
+        );
+    }
+    for (p, v) in &rep.fixed {
+        let _ = writeln!(s, "    {:<20} {v:>14.8} (fixed) {}", p.name(), p.unit());
+    }
+    match (&rep.mu_kinetic, &rep.mu_static) {
+        (None, StaticResult::LowerBound(b)) => {
+            let _ = writeln!(
+                s,
+                "    mu_kinetic           not identifiable (the slider never slides)"
+            );
+            let _ = writeln!(
+                s,
+                "    mu_static            >= {b:.5} (largest |F|/|N| the stuck slider needed)"
+            );
+        }
+        (_, StaticResult::NotIdentifiable) => {
+            let _ = writeln!(
+                s,
+                "    mu_static            not identifiable (tied to mu_kinetic for the fit)"
+            );
+        }
+        (_, StaticResult::Estimated(e))
+            if !rep.params.iter().any(|(p, _)| *p == Param::MuStatic) =>
+        {
+            let _ = writeln!(
+                s,
+                "    mu_static            at its bound mu_kinetic; 95% [{:.6}, {:.6}] [{}]",
+                e.ci95[0], e.ci95[1], e.interval
+            );
+        }
+        _ => {}
+    }
+    if let Some([lo, hi]) = rep.sliding_speed_range {
+        let _ = writeln!(
+            s,
+            "    sliding speeds     {lo:.4} to {hi:.4} m/s behind mu_kinetic"
+        );
+    }
+    if let Some(p) = &rep.pendulum {
+        pendulum_text(&mut s, p);
+    }
+    let pairs = correlated_pairs(rep);
+    if !pairs.is_empty() {
+        let _ = writeln!(s, "[[Correlations]] (|r| > 0.1)");
+        for (p, q, r) in pairs {
+            let _ = writeln!(s, "    C({}, {}) = {r:+.3}", p.name(), q.name());
+        }
+    }
+    if !rep.models.is_empty() {
+        let _ = writeln!(
+            s,
+            "[[Models compared]] by BIC = chi2 + k ln(n), forward selection"
+        );
+        for m in rep.models.iter().filter(|m| m.failed.is_none()) {
+            let _ = writeln!(
+                s,
+                "  {} {:<36} k {:>2}  chi2 {:>12.1}  BIC {:>12.1}  dBIC {:>+10.1}  weight {:.3}  mu_kinetic {:.5}",
+                if m.chosen { "*" } else { " " },
+                m.name,
+                m.free.len(),
+                m.chi2,
+                m.bic,
+                m.delta_bic,
+                m.weight,
+                m.mu_kinetic
+            );
+        }
+        for m in rep.models.iter().filter(|m| m.failed.is_some()) {
+            let _ = writeln!(
+                s,
+                "  failed {:<36} k {:>2}  {}",
+                m.name,
+                m.free.len(),
+                m.failed.as_deref().unwrap_or("")
+            );
+        }
+    }
+    if !rep.windows.is_empty() {
+        let _ = writeln!(
+            s,
+            "[[Windows]] mu_kinetic per slide (cut at sticks and reversals; agreement p = {})",
+            a.windows_p_value
+                .map_or("-".to_owned(), |p| format!("{p:.3}"))
+        );
+        for w in &rep.windows {
+            let _ = writeln!(
+                s,
+                "    {:>7.3} - {:>7.3} s   {:.6} +- {:.2e}",
+                w.t_start, w.t_end, w.mu_kinetic, w.stderr
+            );
+        }
+    }
+    if rep.events.is_empty() {
+        let _ = writeln!(s, "[[Fitted timeline]] no mode changes");
+    } else {
+        let _ = writeln!(s, "[[Fitted timeline]]");
+        // A long stick-slip recording has hundreds of events: the first and the last ones
+        // here, every one in the JSON.
+        let n = rep.events.len();
+        let (head, tail) = if n > 40 { (30, 5) } else { (n, 0) };
+        let line = |s: &mut String, e: &crate::sim::Event| {
+            let _ = writeln!(s, "  {:>12.6} s  {:<7} -> {}", e.t, e.from.name(), e.to);
+        };
+        for e in &rep.events[..head] {
+            line(&mut s, e);
+        }
+        if tail > 0 {
+            let _ = writeln!(
+                s,
+                "  ... {} more events (every one in --json) ...",
+                n - head - tail
+            );
+            for e in &rep.events[n - tail..] {
+                line(&mut s, e);
+            }
+        }
+    }
+    for w in &rep.warnings {
+        let _ = writeln!(s, "warning: {w}");
+    }
+    s
+}
