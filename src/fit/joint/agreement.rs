@@ -1,7 +1,10 @@
 //! Whether the releases agree on mu_kinetic: each release's own mu with the shared nuisances
-//! held, tested as the single fit tests its windows, and each one's leave-one-out z.
+//! held, tested as the single fit tests its windows, and each one's leave-one-out z; when
+//! they disagree, the interval widened by their spread and the sentence that says so.
 
-use super::JointProblem;
+use super::set_aside::mark_disagreeing;
+use super::{JointProblem, ReleaseRow};
+use crate::fit::intervals::widen;
 use crate::fit::problem::{Param, TrajectoryProblem};
 use crate::fit::solve::solve_loose;
 use crate::fit::uncertainty::{self, WindowFit};
@@ -9,7 +12,7 @@ use crate::fit::{Estimate, FitSettings};
 use rayon::prelude::*;
 
 /// A p-value for a sentence: below double precision's resolution as a bound.
-pub(super) fn p_text(p: f64) -> String {
+fn p_text(p: f64) -> String {
     if p < 1e-16 {
         "< 1e-16".to_owned()
     } else {
@@ -41,7 +44,7 @@ pub(super) fn consistency(pairs: &[(f64, f64)]) -> Option<f64> {
 }
 
 /// The releases' precision-weighted spread about `mu` ([`uncertainty::window_spread`]).
-pub(super) fn window_spread_of(pairs: &[(f64, f64)], mu: f64) -> f64 {
+fn window_spread_of(pairs: &[(f64, f64)], mu: f64) -> f64 {
     uncertainty::window_spread(&as_windows(pairs), mu)
 }
 
@@ -96,6 +99,78 @@ pub(super) fn own_mu(
         ci95: [p[i] - 1.96 * se, p[i] + 1.96 * se],
         interval: "wald",
     })
+}
+
+/// What the releases' agreement test found.
+pub(super) struct Agreement {
+    /// p-value of the releases' own mu agreeing (`None` with fewer than two usable).
+    pub(super) consistency_p: Option<f64>,
+    /// The releases whose own mu disagrees with the others'.
+    pub(super) disagreeing: Vec<String>,
+    /// mu_kinetic of the other releases fitted jointly without those.
+    pub(super) others: Option<Estimate>,
+    /// One plain sentence on what the interval holds.
+    pub(super) sentence: String,
+}
+
+/// The releases' agreement: the same test and widening as the single fit's windows. Each row
+/// gets its z; when the releases disagree, the releases that do are set aside one at a time
+/// ([`super::set_aside::set_aside`]), their rows marked, and `mu` widened by the releases'
+/// spread.
+pub(super) fn agreement(
+    jp: &JointProblem,
+    rows: &mut [ReleaseRow],
+    mu: &mut Estimate,
+    settings: &FitSettings,
+) -> Agreement {
+    let pairs: Vec<(f64, f64)> = rows
+        .iter()
+        .map(|r| r.own_mu.map_or((f64::NAN, 0.0), |e| (e.value, e.stderr)))
+        .collect();
+    let consistency_p = consistency(&pairs);
+    let z = leave_one_out(&pairs);
+    rows.iter_mut().zip(&z).for_each(|(r, z)| r.z = *z);
+    if !consistency_p.is_some_and(|pv| pv < AGREE_P) {
+        return Agreement {
+            consistency_p,
+            disagreeing: Vec::new(),
+            others: None,
+            sentence: format!(
+                "The {} releases agree (p = {:.2}); the interval is what they support together.",
+                rows.len(),
+                consistency_p.unwrap_or(f64::NAN)
+            ),
+        };
+    }
+    // Which releases: the worst one set aside at a time and the rest refitted (an odd
+    // release pulls the shared tilt and so every release's own mu), until the rest agree.
+    let (disagreeing, others) = mark_disagreeing(jp, &z, rows, settings);
+    let spread = window_spread_of(&pairs, mu.value);
+    widen(mu, spread, "releases");
+    let sentence = disagree_sentence(consistency_p, &disagreeing, others);
+    Agreement {
+        consistency_p,
+        disagreeing,
+        others,
+        sentence,
+    }
+}
+
+/// The sentence when the releases disagree (p-value `p`): which lie off the others, mu of the
+/// others, and that the widened interval is the rail's only if every release ran on one rail.
+fn disagree_sentence(p: Option<f64>, disagreeing: &[String], others: Option<Estimate>) -> String {
+    format!(
+        "The releases disagree (p = {}): {} {} off the others{}; the interval is widened by the releases' spread, and is the rail's only if every release ran on one rail.",
+        p_text(p.unwrap_or(f64::NAN)),
+        disagreeing.join(", "),
+        if disagreeing.len() == 1 { "lies" } else { "lie" },
+        others.map_or(String::new(), |e: Estimate| format!(
+            " (without {}, mu_kinetic {:.5} +- {:.1e})",
+            if disagreeing.len() == 1 { "it" } else { "them" },
+            e.value,
+            e.stderr
+        ))
+    )
 }
 
 #[cfg(test)]

@@ -3,7 +3,7 @@
 //! values.
 
 use super::agreement::{consistency, leave_one_out, own_mu, own_mus, AGREE_P};
-use super::JointProblem;
+use super::{JointProblem, ReleaseRow};
 use crate::fit::lm::LeastSquares;
 use crate::fit::problem::{Param, TrajectoryProblem};
 use crate::fit::select::Candidate;
@@ -13,7 +13,7 @@ use crate::fit::{Estimate, FitSettings};
 use nalgebra::DVector;
 
 /// Each release's own (mu, se) and z, keyed by release index.
-pub(super) type Zs = Vec<(usize, (f64, f64), f64)>;
+type Zs = Vec<(usize, (f64, f64), f64)>;
 
 /// The releases other than `out` refitted jointly (same model): their mu, each release's own
 /// mu and z (the rest's leave-one-out z; those in `out` against the rest's mu, their own mu
@@ -59,7 +59,7 @@ fn fit_rest(
 /// a release set aside whose own mu lies within 3 standard errors of the rest's is taken
 /// back (an odd release pulls the shared tilt, and with it the first |z|s). The releases
 /// that disagree, and the others' fit ([`fit_rest`]).
-pub(super) fn set_aside(
+fn set_aside(
     jp: &JointProblem,
     z: &[f64],
     settings: &FitSettings,
@@ -119,4 +119,37 @@ fn wald_mu(jp: &JointProblem, p: &DVector<f64>) -> Option<Estimate> {
         ci95: [p[i] - 1.96 * se, p[i] + 1.96 * se],
         interval: "wald",
     })
+}
+
+/// The releases that disagree ([`set_aside`]) marked in `rows`, and each release's own mu and
+/// z under the agreeing releases' shared values. Their names, and mu of the others.
+pub(super) fn mark_disagreeing(
+    jp: &JointProblem,
+    z: &[f64],
+    rows: &mut [ReleaseRow],
+    settings: &FitSettings,
+) -> (Vec<String>, Option<Estimate>) {
+    let mut disagreeing = Vec::new();
+    let mut others = None;
+    let (out, rest) = set_aside(jp, z, settings);
+    for &i in &out {
+        rows[i].agrees = false;
+        disagreeing.push(rows[i].name.clone());
+    }
+    if let Some((rest_mu, rest_z)) = rest {
+        // Each release's own mu and z under the agreeing releases' shared values.
+        for (i, (v, se), zi) in rest_z {
+            rows[i].z = zi;
+            if let Some(e) = rows[i].own_mu.as_mut() {
+                *e = Estimate {
+                    value: v,
+                    stderr: se,
+                    ci95: [v - 1.96 * se, v + 1.96 * se],
+                    interval: "wald",
+                };
+            }
+        }
+        others = Some(rest_mu);
+    }
+    (disagreeing, others)
 }

@@ -1,0 +1,172 @@
+//! The joint fit's first stages: the releases checked (two or more, of one rig), each fitted
+//! alone (its state, noise, outliers and nuisances), and the joint problem's start built from
+//! those single fits.
+
+use super::rigs::other_rigs;
+use super::{JointError, JointProblem, JointSettings, Release};
+use crate::fit::problem::{Param, TrajectoryProblem};
+use crate::fit::{fit, FitError, FitReport, FitSettings};
+use crate::model::{Rig, State};
+use rayon::prelude::*;
+
+/// Two or more releases, all of one rig (their marker distances agree, [`other_rigs`]).
+pub(super) fn check_releases(releases: &[Release]) -> Result<(), JointError> {
+    if releases.len() < 2 {
+        return Err(JointError::TooFew(releases.len()));
+    }
+    let odd = other_rigs(releases);
+    if !odd.is_empty() {
+        let list: Vec<String> = odd
+            .iter()
+            .map(|(n, d, m)| {
+                format!("{n} (marker distance {d:.4} m, the releases' median {m:.4} m)")
+            })
+            .collect();
+        return Err(JointError::OtherRig(format!(
+            "the recordings are not of one rig: {}; a joint fit shares the rig, so fit them apart",
+            list.join("; ")
+        )));
+    }
+    Ok(())
+}
+
+/// The releases' single fits the joint fit builds on, and those left out.
+pub(super) struct Singles<'a> {
+    /// Each release kept, with its single fit (mu_kinetic identified, not failed).
+    pub(super) kept: Vec<(&'a Release, FitReport)>,
+    /// Releases left out (name, why), with `keep_going`.
+    pub(super) left_out: Vec<(String, String)>,
+    /// One warning per release left out.
+    pub(super) warnings: Vec<String>,
+}
+
+/// Each release fitted alone (in parallel). A release whose fit fails, or does not identify
+/// mu_kinetic, ends the joint fit unless `keep_going`, when it is left out and named; two
+/// releases must remain.
+pub(super) fn fit_singles<'a>(
+    releases: &'a [Release],
+    rig_guess: &Rig<f64>,
+    settings: &FitSettings,
+    joint: &JointSettings,
+) -> Result<Singles<'a>, JointError> {
+    let singles: Vec<Result<FitReport, FitError>> = releases
+        .par_iter()
+        .with_max_len(1)
+        .map(|r| fit(r.obs.clone(), rig_guess, settings))
+        .collect();
+    let mut warnings = Vec::new();
+    let mut left_out = Vec::new();
+    let mut kept: Vec<(&Release, FitReport)> = Vec::new();
+    for (r, s) in releases.iter().zip(singles) {
+        match s {
+            Ok(rep) if rep.failed.is_none() && rep.mu_kinetic.is_some() => kept.push((r, rep)),
+            Ok(rep) => {
+                let why = rep
+                    .failed
+                    .clone()
+                    .unwrap_or_else(|| "its motion does not identify mu_kinetic".into());
+                if !joint.keep_going {
+                    return Err(JointError::Release {
+                        name: r.name.clone(),
+                        error: FitError::Settings(format!(
+                            "{why} (--keep-going fits the others without it)"
+                        )),
+                    });
+                }
+                left_out.push((r.name.clone(), why));
+            }
+            Err(e) if joint.keep_going => left_out.push((r.name.clone(), e.to_string())),
+            Err(e) => {
+                return Err(JointError::Release {
+                    name: r.name.clone(),
+                    error: e,
+                })
+            }
+        }
+    }
+    if kept.len() < 2 {
+        return Err(JointError::TooFew(kept.len()));
+    }
+    for (name, why) in &left_out {
+        warnings.push(format!("{name} was left out: {why}"));
+    }
+    Ok(Singles {
+        kept,
+        left_out,
+        warnings,
+    })
+}
+
+/// The joint problem at its start, and each release's restart for the selection.
+pub(super) struct Start {
+    /// The releases' problems tied: mu the single fits' precision-weighted mean, each
+    /// release's state and noise from its single fit, the rig's nuisances at their neutral
+    /// values.
+    pub(super) problem: JointProblem,
+    /// Each release's initial state from its single fit, with the start's mu.
+    pub(super) restarts: Vec<(State<f64>, f64)>,
+    /// The start's mu_kinetic.
+    pub(super) mu0: f64,
+}
+
+/// The start: mu the precision-weighted mean of the single fits', each release's state and
+/// noise from its single fit, the rig's nuisances at their neutral values.
+pub(super) fn start(
+    kept: &[(&Release, FitReport)],
+    rig_guess: &Rig<f64>,
+    settings: &FitSettings,
+    joint: &JointSettings,
+) -> Start {
+    let (mut num, mut den) = (0.0, 0.0);
+    for (_, rep) in kept {
+        let e = rep.mu_kinetic.expect("kept fits have mu");
+        let w = 1.0 / e.stderr.max(1e-12).powi(2);
+        num += w * e.value;
+        den += w;
+    }
+    let mu0 = num / den;
+    let parts: Vec<TrajectoryProblem> = kept
+        .iter()
+        .map(|(_, rep)| start_part(&rep.problem, rig_guess, mu0, settings))
+        .collect();
+    let restarts: Vec<(State<f64>, f64)> = kept
+        .iter()
+        .map(|(_, rep)| (rep.problem.initial, mu0))
+        .collect();
+    Start {
+        problem: JointProblem::new(parts, joint.same_camera),
+        restarts,
+        mu0,
+    }
+}
+
+/// A release's part of the start: its single fit's problem (state, noise, row weights) on the
+/// guessed rig with mu at `mu0`, the ideal camera, and only the state, mu and (when fitted)
+/// the rod length free.
+fn start_part(
+    single: &TrajectoryProblem,
+    rig_guess: &Rig<f64>,
+    mu0: f64,
+    settings: &FitSettings,
+) -> TrajectoryProblem {
+    let mut rig = *rig_guess;
+    rig.mu_kinetic = mu0;
+    rig.mu_static = mu0;
+    rig.marker_length = single.rig.marker_length;
+    let free: Vec<Param> = single
+        .free
+        .iter()
+        .copied()
+        .filter(|q| {
+            q.is_state()
+                || *q == Param::MuKinetic
+                || (*q == Param::RodLength && settings.fit_rod_length)
+        })
+        .collect();
+    let mut part = single.clone();
+    part.rig = rig;
+    part.camera = Default::default();
+    part.free = free;
+    part.tie_static = true;
+    part
+}
