@@ -41,7 +41,7 @@ fn nested_slack(parent_chi2: f64) -> f64 {
 }
 
 /// A failed candidate: why, the chi-square it reached (NaN when none) and the iterations.
-type Failure = (String, f64, u64);
+pub(super) type Failure = (String, f64, u64);
 
 /// Fit candidate `m` from its own start (and `fresh` when given). A candidate that nests the
 /// current model (`parent`: that model's chi-square) yet ends worse than it has not converged:

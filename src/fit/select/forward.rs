@@ -1,8 +1,10 @@
 //! Forward selection: nuisances added one at a time while the data support them (a BIC lower
 //! by more than 2), the candidates screened by the score test and the promising ones fitted in
-//! parallel.
+//! parallel. [`forward`] reads as its steps: the nuisances the user forces, then rounds (the
+//! open candidates, those worth fitting, their fits in two batches, the best taken or the
+//! selection ended), then the table completed with the models' weights.
 
-use super::attempt::{failed_row, fit_candidate};
+use super::attempt::{failed_row, fit_candidate, Failure};
 use super::{
     chi2_of, misfits, model_weights, Candidate, ModelRow, Nuisance, SelectOptions, Selection,
 };
@@ -17,6 +19,64 @@ const LEADING_SHARE: f64 = 0.1;
 /// The round's best candidate: its nuisances, problem, optimum, chi-square and row.
 type Best<M> = (Vec<Nuisance>, M, DVector<f64>, f64, usize);
 
+/// A candidate to fit: its nuisances, its problem, and the chi-square of the model it nests
+/// (`None` when it nests none).
+type Job<M> = (Vec<Nuisance>, M, Option<f64>);
+
+/// A candidate fitted: its nuisances, its problem, and its optimum, cost and iterations, or
+/// why it failed.
+type Fitted<M> = (Vec<Nuisance>, M, Result<(DVector<f64>, f64, u64), Failure>);
+
+/// The criterion over a sample of `n` residual rows, and the rows of the model table it scores.
+struct Criterion {
+    /// Residual rows (the sample size).
+    n: f64,
+}
+
+impl Criterion {
+    /// BIC = chi2 + k ln(n).
+    fn bic(&self, k: usize, chi2: f64) -> f64 {
+        chi2 + k as f64 * self.n.ln()
+    }
+
+    /// The table's row of model `m`, holding the nuisances `ns`, at chi-square `chi2`.
+    fn row<M: Candidate>(&self, ns: &[Nuisance], m: &M, chi2: f64) -> ModelRow {
+        ModelRow {
+            name: name_of(ns),
+            free: m.free_names(),
+            chi2,
+            bic: self.bic(m.n_free(), chi2),
+            delta_bic: 0.0,
+            chosen: false,
+            mu_kinetic: m.mu_kinetic(),
+            failed: None,
+            weight: 0.0,
+            path: false,
+        }
+    }
+}
+
+/// A model's name in the table: its nuisances joined by `+`, `base` for none.
+fn name_of(ns: &[Nuisance]) -> String {
+    if ns.is_empty() {
+        "base".to_owned()
+    } else {
+        ns.iter().map(|n| n.name()).collect::<Vec<_>>().join("+")
+    }
+}
+
+/// The selection as it goes: the model it stands on and everything compared so far.
+struct Search<M> {
+    /// Nuisances in the current model.
+    chosen: Vec<Nuisance>,
+    /// The current model, its optimum and its chi-square.
+    current: (M, DVector<f64>, f64),
+    /// Every model fitted.
+    rows: Vec<ModelRow>,
+    /// Levenberg-Marquardt iterations spent.
+    iterations: u64,
+}
+
 /// Forward selection from the base model `problem` at its optimum `p` (chi-square `chi2`).
 pub fn forward<M: Candidate>(
     problem: M,
@@ -24,203 +84,281 @@ pub fn forward<M: Candidate>(
     chi2: f64,
     opts: &SelectOptions<M::Start>,
 ) -> Selection<M> {
-    let n = problem.n_rows() as f64;
-    let bic = |k: usize, chi2: f64| chi2 + k as f64 * n.ln();
-    let name_of = |ns: &[Nuisance]| {
-        if ns.is_empty() {
-            "base".to_owned()
-        } else {
-            ns.iter().map(|n| n.name()).collect::<Vec<_>>().join("+")
-        }
+    let crit = Criterion {
+        n: problem.n_rows() as f64,
     };
-    let row = |ns: &[Nuisance], m: &M, chi2: f64| ModelRow {
-        name: name_of(ns),
-        free: m.free_names(),
-        chi2,
-        bic: bic(m.n_free(), chi2),
-        delta_bic: 0.0,
-        chosen: false,
-        mu_kinetic: m.mu_kinetic(),
-        failed: None,
-        weight: 0.0,
-        path: false,
-    };
-    let mut chosen: Vec<Nuisance> = opts.already.clone();
-    let mut current = (problem, p, chi2);
-    let mut rows = vec![ModelRow {
+    let chosen: Vec<Nuisance> = opts.already.clone();
+    let rows = vec![ModelRow {
         path: true,
-        ..row(&chosen, &current.0, chi2)
+        ..crit.row(&chosen, &problem, chi2)
     }];
-    let mut iterations = 0;
+    let mut search = Search {
+        chosen,
+        current: (problem, p, chi2),
+        rows,
+        iterations: 0,
+    };
+    add_forced(&mut search, opts, &crit);
+    for _ in 0..opts.max_added {
+        if !round(&mut search, opts, &crit) {
+            break;
+        }
+    }
+    finish(search, &crit)
+}
+
+/// The nuisances the user put in the model (`--with`), added first whatever they cost: one
+/// held already or in conflict with one held is passed over, one whose fit fails is a failed
+/// row of the table.
+fn add_forced<M: Candidate>(s: &mut Search<M>, opts: &SelectOptions<M::Start>, crit: &Criterion) {
     for &nu in &opts.forced {
-        if chosen.contains(&nu) || chosen.iter().any(|c| c.conflicts(nu)) {
+        if s.chosen.contains(&nu) || s.chosen.iter().any(|c| c.conflicts(nu)) {
             continue;
         }
-        let m = current.0.with_nuisance(nu, opts.mu_static_start);
-        match fit_candidate(&m, opts.fresh_start.as_ref(), opts, Some(current.2)) {
+        let m = s.current.0.with_nuisance(nu, opts.mu_static_start);
+        match fit_candidate(&m, opts.fresh_start.as_ref(), opts, Some(s.current.2)) {
             Ok((q, cost, iters)) => {
-                iterations += iters;
+                s.iterations += iters;
                 let mut m = m;
                 m.set_values(&q);
-                chosen = nu.join(&chosen);
-                rows.push(ModelRow {
+                s.chosen = nu.join(&s.chosen);
+                s.rows.push(ModelRow {
                     path: true,
-                    ..row(&chosen, &m, chi2_of(cost))
+                    ..crit.row(&s.chosen, &m, chi2_of(cost))
                 });
-                current = (m, q, chi2_of(cost));
+                s.current = (m, q, chi2_of(cost));
             }
             Err((why, chi2, iters)) => {
-                iterations += iters;
-                rows.push(failed_row(row(&nu.join(&chosen), &m, chi2), why));
+                s.iterations += iters;
+                s.rows
+                    .push(failed_row(crit.row(&nu.join(&s.chosen), &m, chi2), why));
             }
         }
     }
-    for _ in 0..opts.max_added {
-        let (cur_problem, cur_p, cur_chi2) = &current;
-        // The friction laws are fitted outright (no score test screens them), so only when
-        // the onsets ask for them or this round's model misfits: a model that describes the
-        // recording does not pay for two more fits.
-        let friction =
-            opts.friction_candidates && (opts.static_evidence || misfits(cur_problem, *cur_chi2));
-        let open: Vec<Nuisance> = Nuisance::ALL
-            .into_iter()
-            .filter(|n| !chosen.contains(n) && !chosen.iter().any(|c| c.conflicts(*n)))
-            .filter(|n| cur_problem.width() + n.new_params(cur_problem) <= MAX_FREE)
-            .filter(|n| n.screened() || friction)
-            // A pendulum the rig file gives is used as given (`--with` may still free it).
-            .filter(|n| *n != Nuisance::RigidPendulum || !cur_problem.pendulum_given())
-            .collect();
-        if open.is_empty() {
-            break;
-        }
-        let screened: Vec<Nuisance> = open.iter().copied().filter(|n| n.screened()).collect();
-        let mut drops = cur_problem.score_drops(cur_p, &screened);
-        drops.sort_by(|a, b| b.1.total_cmp(&a.1));
-        // Fit the two most promising screened candidates whose predicted drop pays their BIC
-        // penalty, and the friction candidates outright. A misfitting model's linearisation
-        // ranks poorly: then every screened candidate is fitted, from two starts.
-        let misfit = misfits(cur_problem, *cur_chi2);
-        let fresh = opts.fresh_start.as_ref().filter(|_| misfit);
-        let mut to_fit: Vec<Nuisance> = drops
-            .iter()
-            .filter(|(nu, d)| misfit || *d > nu.params().len() as f64 * n.ln())
-            .take(if misfit { usize::MAX } else { 2 })
-            .map(|(n, _)| *n)
-            .collect();
-        to_fit.extend(open.iter().copied().filter(|n| !n.screened()));
-        if to_fit.is_empty() {
-            break;
-        }
-        // Each candidate as a nuisance set and its problem. A mu_static chosen while the model
-        // misfitted may be part of the compromise (a late slip fitted by static friction while
-        // the pendulum's period is wrong): under misfit each candidate is also fitted without it.
-        let drop_static = misfit && chosen.contains(&Nuisance::StaticFriction);
-        // Under misfit the score test only orders the candidates: the first two (and their
-        // variants) are fitted first, and the rest only when neither of those earns its place
-        // (lowers the criterion by more than 2). The selection is greedy: one that does is
-        // taken, and the next round screens the others again from the better model; fitting
-        // every candidate in every round of a misfitting model cost seconds. A candidate whose
-        // predicted drop is a tenth of the leader's or more is among the first too: two
-        // nuisances that explain the same misfit (a marker off the rod's line and a rail
-        // tilt both shift where the pendulum hangs) must both be fitted, or the one left out
-        // gets no weight and mu's interval holds only the other's value.
-        let top = drops.first().map_or(0.0, |d| d.1);
-        let strong = drops
-            .iter()
-            .filter(|(_, d)| *d >= LEADING_SHARE * top)
-            .count();
-        let leading = if misfit { strong.max(2) } else { to_fit.len() };
-        let (mut first, mut rest) = (Vec::new(), Vec::new());
-        for (i, &nu) in to_fit.iter().enumerate() {
-            // The friction laws, which no score test ranks, are among the first when the
-            // onsets show mu_static above mu_kinetic.
-            let jobs = if i < leading || (!nu.screened() && opts.static_evidence) {
-                &mut first
-            } else {
-                &mut rest
-            };
-            // Nested: the current model is the candidate at its neutral values, so its fit
-            // can be no worse than the current one's.
-            jobs.push((
-                nu.join(&chosen),
-                cur_problem.with_nuisance(nu, opts.mu_static_start),
-                Some(*cur_chi2),
-            ));
-            if drop_static && nu.supersedes() != Some(Nuisance::StaticFriction) {
-                let tied = cur_problem.static_tied();
-                let without: Vec<Nuisance> = chosen
-                    .iter()
-                    .copied()
-                    .filter(|&c| c != Nuisance::StaticFriction)
-                    .collect();
-                jobs.push((
-                    nu.join(&without),
-                    tied.with_nuisance(nu, opts.mu_static_start),
-                    None,
-                ));
-            }
-        }
-        let run = |jobs: Vec<(Vec<Nuisance>, M, Option<f64>)>| {
-            jobs.into_par_iter()
-                .with_max_len(1)
-                .map(|(set, m, parent)| {
-                    let solved = fit_candidate(&m, fresh, opts, parent);
-                    (set, m, solved)
-                })
-                .collect::<Vec<_>>()
-        };
-        let mut fits = run(first);
-        let cur_bic = bic(cur_problem.n_free(), *cur_chi2);
-        let earns = fits.iter().any(|(_, m, s)| {
-            s.as_ref()
-                .is_ok_and(|(_, cost, _)| bic(m.n_free(), chi2_of(*cost)) < cur_bic - 2.0)
-        });
-        if !earns {
-            fits.extend(run(rest));
-        }
-        let mut best: Option<Best<M>> = None;
-        for (set, m, solved) in fits {
-            let (q, cost, iters) = match solved {
-                Ok(s) => s,
-                Err((why, chi2, iters)) => {
-                    iterations += iters;
-                    rows.push(failed_row(row(&set, &m, chi2), why));
-                    continue;
-                }
-            };
-            iterations += iters;
-            let c2 = chi2_of(cost);
-            let mut fitted = m.clone();
-            fitted.set_values(&q);
-            rows.push(row(&set, &fitted, c2));
-            let at = rows.len() - 1;
-            if best
-                .as_ref()
-                .is_none_or(|b| bic(m.n_free(), c2) < bic(b.1.n_free(), b.3))
-            {
-                best = Some((set, m, q, c2, at));
-            }
-        }
-        let Some((set, mut m, q, c2, at)) = best else {
-            break;
-        };
-        // Positive evidence (Kass and Raftery): a BIC lower by more than 2.
-        if bic(m.n_free(), c2) < bic(cur_problem.n_free(), *cur_chi2) - 2.0 {
-            m.set_values(&q);
-            chosen = set;
-            rows[at].path = true;
-            current = (m, q, c2);
+}
+
+/// One round: the open candidates screened, those worth it fitted, and the best taken when it
+/// lowers the criterion by more than 2. Whether the selection goes on.
+fn round<M: Candidate>(
+    s: &mut Search<M>,
+    opts: &SelectOptions<M::Start>,
+    crit: &Criterion,
+) -> bool {
+    let (cur_problem, cur_p, cur_chi2) = &s.current;
+    let open = open_candidates(&s.chosen, cur_problem, *cur_chi2, opts);
+    if open.is_empty() {
+        return false;
+    }
+    let screened: Vec<Nuisance> = open.iter().copied().filter(|n| n.screened()).collect();
+    let mut drops = cur_problem.score_drops(cur_p, &screened);
+    drops.sort_by(|a, b| b.1.total_cmp(&a.1));
+    let misfit = misfits(cur_problem, *cur_chi2);
+    let fresh = opts.fresh_start.as_ref().filter(|_| misfit);
+    let to_fit = worth_fitting(&open, &drops, misfit, crit);
+    if to_fit.is_empty() {
+        return false;
+    }
+    let (first, rest) = jobs(s, &to_fit, &drops, misfit, opts);
+    let fits = fit_jobs(first, rest, s, fresh, opts, crit);
+    let Some((set, mut m, q, c2, at)) = record(s, fits, crit) else {
+        return false;
+    };
+    // Positive evidence (Kass and Raftery): a BIC lower by more than 2.
+    if crit.bic(m.n_free(), c2) < crit.bic(s.current.0.n_free(), s.current.2) - 2.0 {
+        m.set_values(&q);
+        s.chosen = set;
+        s.rows[at].path = true;
+        s.current = (m, q, c2);
+        true
+    } else {
+        false
+    }
+}
+
+/// The candidates open to the current model (`chi2` its chi-square): not held, not in
+/// conflict with one held, within the dual numbers' width. The friction laws are fitted
+/// outright (no score test screens them), so only when the onsets ask for them or the model
+/// misfits: a model that describes the recording does not pay for two more fits.
+fn open_candidates<M: Candidate>(
+    chosen: &[Nuisance],
+    cur_problem: &M,
+    chi2: f64,
+    opts: &SelectOptions<M::Start>,
+) -> Vec<Nuisance> {
+    let friction = opts.friction_candidates && (opts.static_evidence || misfits(cur_problem, chi2));
+    Nuisance::ALL
+        .into_iter()
+        .filter(|n| !chosen.contains(n) && !chosen.iter().any(|c| c.conflicts(*n)))
+        .filter(|n| cur_problem.width() + n.new_params(cur_problem) <= MAX_FREE)
+        .filter(|n| n.screened() || friction)
+        // A pendulum the rig file gives is used as given (`--with` may still free it).
+        .filter(|n| *n != Nuisance::RigidPendulum || !cur_problem.pendulum_given())
+        .collect()
+}
+
+/// The candidates worth fitting: the two most promising screened candidates (`drops`, best
+/// first) whose predicted drop pays their BIC penalty, and the friction candidates outright.
+/// A misfitting model's linearisation ranks poorly: then every screened candidate is fitted,
+/// from two starts.
+fn worth_fitting(
+    open: &[Nuisance],
+    drops: &[(Nuisance, f64)],
+    misfit: bool,
+    crit: &Criterion,
+) -> Vec<Nuisance> {
+    let mut to_fit: Vec<Nuisance> = drops
+        .iter()
+        .filter(|(nu, d)| misfit || *d > nu.params().len() as f64 * crit.n.ln())
+        .take(if misfit { usize::MAX } else { 2 })
+        .map(|(n, _)| *n)
+        .collect();
+    to_fit.extend(open.iter().copied().filter(|n| !n.screened()));
+    to_fit
+}
+
+/// Each candidate as a job (its nuisance set and problem), in the first batch or the rest. A
+/// mu_static chosen while the model misfitted may be part of the compromise (a late slip
+/// fitted by static friction while the pendulum's period is wrong): under misfit each
+/// candidate is also fitted without it.
+fn jobs<M: Candidate>(
+    s: &Search<M>,
+    to_fit: &[Nuisance],
+    drops: &[(Nuisance, f64)],
+    misfit: bool,
+    opts: &SelectOptions<M::Start>,
+) -> (Vec<Job<M>>, Vec<Job<M>>) {
+    let (cur_problem, _, cur_chi2) = &s.current;
+    let chosen = &s.chosen;
+    let drop_static = misfit && chosen.contains(&Nuisance::StaticFriction);
+    // Under misfit the score test only orders the candidates: the first two (and their
+    // variants) are fitted first, and the rest only when neither of those earns its place
+    // (lowers the criterion by more than 2). The selection is greedy: one that does is
+    // taken, and the next round screens the others again from the better model; fitting
+    // every candidate in every round of a misfitting model cost seconds. A candidate whose
+    // predicted drop is a tenth of the leader's or more is among the first too: two
+    // nuisances that explain the same misfit (a marker off the rod's line and a rail
+    // tilt both shift where the pendulum hangs) must both be fitted, or the one left out
+    // gets no weight and mu's interval holds only the other's value.
+    let top = drops.first().map_or(0.0, |d| d.1);
+    let strong = drops
+        .iter()
+        .filter(|(_, d)| *d >= LEADING_SHARE * top)
+        .count();
+    let leading = if misfit { strong.max(2) } else { to_fit.len() };
+    let (mut first, mut rest) = (Vec::new(), Vec::new());
+    for (i, &nu) in to_fit.iter().enumerate() {
+        // The friction laws, which no score test ranks, are among the first when the
+        // onsets show mu_static above mu_kinetic.
+        let jobs = if i < leading || (!nu.screened() && opts.static_evidence) {
+            &mut first
         } else {
-            break;
+            &mut rest
+        };
+        // Nested: the current model is the candidate at its neutral values, so its fit
+        // can be no worse than the current one's.
+        jobs.push((
+            nu.join(chosen),
+            cur_problem.with_nuisance(nu, opts.mu_static_start),
+            Some(*cur_chi2),
+        ));
+        if drop_static && nu.supersedes() != Some(Nuisance::StaticFriction) {
+            let tied = cur_problem.static_tied();
+            let without: Vec<Nuisance> = chosen
+                .iter()
+                .copied()
+                .filter(|&c| c != Nuisance::StaticFriction)
+                .collect();
+            jobs.push((
+                nu.join(&without),
+                tied.with_nuisance(nu, opts.mu_static_start),
+                None,
+            ));
         }
     }
+    (first, rest)
+}
+
+/// The first batch fitted in parallel (from `fresh` too when given), and the rest only when
+/// none of the first lowers the current model's criterion by more than 2.
+fn fit_jobs<M: Candidate>(
+    first: Vec<Job<M>>,
+    rest: Vec<Job<M>>,
+    s: &Search<M>,
+    fresh: Option<&M::Start>,
+    opts: &SelectOptions<M::Start>,
+    crit: &Criterion,
+) -> Vec<Fitted<M>> {
+    let (cur_problem, _, cur_chi2) = &s.current;
+    let run = |jobs: Vec<Job<M>>| {
+        jobs.into_par_iter()
+            .with_max_len(1)
+            .map(|(set, m, parent)| {
+                let solved = fit_candidate(&m, fresh, opts, parent);
+                (set, m, solved)
+            })
+            .collect::<Vec<_>>()
+    };
+    let mut fits = run(first);
+    let cur_bic = crit.bic(cur_problem.n_free(), *cur_chi2);
+    let earns = fits.iter().any(|(_, m, s)| {
+        s.as_ref()
+            .is_ok_and(|(_, cost, _)| crit.bic(m.n_free(), chi2_of(*cost)) < cur_bic - 2.0)
+    });
+    if !earns {
+        fits.extend(run(rest));
+    }
+    fits
+}
+
+/// The round's fits put in the table (a failed one marked as such) and their iterations
+/// counted; the best by the criterion, with its row.
+fn record<M: Candidate>(
+    s: &mut Search<M>,
+    fits: Vec<Fitted<M>>,
+    crit: &Criterion,
+) -> Option<Best<M>> {
+    let mut best: Option<Best<M>> = None;
+    for (set, m, solved) in fits {
+        let (q, cost, iters) = match solved {
+            Ok(s) => s,
+            Err((why, chi2, iters)) => {
+                s.iterations += iters;
+                s.rows.push(failed_row(crit.row(&set, &m, chi2), why));
+                continue;
+            }
+        };
+        s.iterations += iters;
+        let c2 = chi2_of(cost);
+        let mut fitted = m.clone();
+        fitted.set_values(&q);
+        s.rows.push(crit.row(&set, &fitted, c2));
+        let at = s.rows.len() - 1;
+        if best
+            .as_ref()
+            .is_none_or(|b| crit.bic(m.n_free(), c2) < crit.bic(b.1.n_free(), b.3))
+        {
+            best = Some((set, m, q, c2, at));
+        }
+    }
+    best
+}
+
+/// The table completed: each row's BIC against the chosen model's, the chosen row marked and
+/// every model's weight.
+fn finish<M: Candidate>(s: Search<M>, crit: &Criterion) -> Selection<M> {
+    let Search {
+        chosen,
+        current,
+        mut rows,
+        iterations,
+    } = s;
     let chosen_name = name_of(&chosen);
-    let best_bic = bic(current.0.n_free(), current.2);
+    let best_bic = crit.bic(current.0.n_free(), current.2);
     for r in &mut rows {
         r.delta_bic = r.bic - best_bic;
         r.chosen = r.failed.is_none() && r.name == chosen_name && (r.bic - best_bic).abs() < 1e-9;
     }
-    let dof = (n - current.0.n_free() as f64).max(1.0);
+    let dof = (crit.n - current.0.n_free() as f64).max(1.0);
     model_weights(&mut rows, (current.2 / dof).max(1.0));
     let (problem, p, _) = current;
     Selection {
