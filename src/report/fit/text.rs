@@ -35,10 +35,27 @@ fn pendulum_text(s: &mut String, p: &crate::fit::PendulumFound) {
 /// comparison, the noise, the windows and the adequacy verdict.
 pub fn fit_text(rep: &FitReport) -> String {
     let mut s = String::new();
-    let a = &rep.adequacy;
-    if let Some(sentence) = &a.limited_by_model {
+    if let Some(sentence) = &rep.adequacy.limited_by_model {
         let _ = writeln!(s, "{sentence}\n");
     }
+    statistics(&mut s, rep);
+    variables(&mut s, rep);
+    if let Some(p) = &rep.pendulum {
+        pendulum_text(&mut s, p);
+    }
+    correlations(&mut s, rep);
+    models(&mut s, rep);
+    windows(&mut s, rep);
+    timeline(&mut s, rep);
+    for w in &rep.warnings {
+        let _ = writeln!(s, "warning: {w}");
+    }
+    s
+}
+
+/// [[Fit statistics]]: the method and its work, the data, the noise and the chi-square.
+fn statistics(s: &mut String, rep: &FitReport) {
+    let a = &rep.adequacy;
     let _ = writeln!(s, "[[Fit statistics]]");
     let _ = writeln!(
         s,
@@ -80,6 +97,11 @@ pub fn fit_text(rep: &FitReport) -> String {
         "    residual RMS       {:.3e} m (slider {:.3e}, bob {:.3e}); lag-1 autocorrelation {:.3}",
         rep.rms_residual_m, rep.rms_per_marker_m[0], rep.rms_per_marker_m[1], a.lag1
     );
+}
+
+/// [[Variables]]: each free parameter with its error, interval and start, the fixed ones,
+/// what is said of mu_static when it is not free, and the sliding speeds behind mu_kinetic.
+fn variables(s: &mut String, rep: &FitReport) {
     let _ = writeln!(
         s,
         "[[Variables]] value +- standard error (%), 95% interval [method], start"
@@ -141,9 +163,10 @@ pub fn fit_text(rep: &FitReport) -> String {
             "    sliding speeds     {lo:.4} to {hi:.4} m/s behind mu_kinetic"
         );
     }
-    if let Some(p) = &rep.pendulum {
-        pendulum_text(&mut s, p);
-    }
+}
+
+/// [[Correlations]]: the pairs of free parameters with |r| above 0.1, when there are any.
+fn correlations(s: &mut String, rep: &FitReport) {
     let pairs = correlated_pairs(rep);
     if !pairs.is_empty() {
         let _ = writeln!(s, "[[Correlations]] (|r| > 0.1)");
@@ -151,6 +174,10 @@ pub fn fit_text(rep: &FitReport) -> String {
             let _ = writeln!(s, "    C({}, {}) = {r:+.3}", p.name(), q.name());
         }
     }
+}
+
+/// [[Models compared]]: the converged models by BIC, then the failed ones.
+fn models(s: &mut String, rep: &FitReport) {
     if !rep.models.is_empty() {
         let _ = writeln!(
             s,
@@ -180,6 +207,11 @@ pub fn fit_text(rep: &FitReport) -> String {
             );
         }
     }
+}
+
+/// [[Windows]]: mu_kinetic per slide with the windows' agreement.
+fn windows(s: &mut String, rep: &FitReport) {
+    let a = &rep.adequacy;
     if !rep.windows.is_empty() {
         let _ = writeln!(
             s,
@@ -195,6 +227,11 @@ pub fn fit_text(rep: &FitReport) -> String {
             );
         }
     }
+}
+
+/// [[Fitted timeline]]: the mode changes of the fitted motion (the first and last ones of a
+/// long recording).
+fn timeline(s: &mut String, rep: &FitReport) {
     if rep.events.is_empty() {
         let _ = writeln!(s, "[[Fitted timeline]] no mode changes");
     } else {
@@ -207,7 +244,7 @@ pub fn fit_text(rep: &FitReport) -> String {
             let _ = writeln!(s, "  {:>12.6} s  {:<7} -> {}", e.t, e.from.name(), e.to);
         };
         for e in &rep.events[..head] {
-            line(&mut s, e);
+            line(s, e);
         }
         if tail > 0 {
             let _ = writeln!(
@@ -216,12 +253,8 @@ pub fn fit_text(rep: &FitReport) -> String {
                 n - head - tail
             );
             for e in &rep.events[n - tail..] {
-                line(&mut s, e);
+                line(s, e);
             }
         }
     }
-    for w in &rep.warnings {
-        let _ = writeln!(s, "warning: {w}");
-    }
-    s
 }
