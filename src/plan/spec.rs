@@ -462,9 +462,33 @@ impl PlanSpec {
 }
 
 impl PlanFile {
-    /// Check every value, naming the first bad key.
+    /// Check every value, naming the first bad key: the sections in the file's order, each
+    /// by its own check.
     pub fn validate(&self, path: &Path) -> Result<PlanSpec, SceneError> {
-        let f = &self.friction;
+        let (mu_kinetic, mu_static) = self.friction.uncertainties(path)?;
+        let rig = self.rig.rig(path, &self.friction)?;
+        let camera = self.camera.validate(path)?;
+        let release = self.release.validate(path)?;
+        let goal = self.goal.validate(path, &camera)?;
+        self.search.check_work(path, &release)?;
+        Ok(PlanSpec {
+            rig,
+            mu_kinetic,
+            mu_static,
+            camera,
+            release,
+            goal,
+            search: self.search,
+            prior: None,
+        })
+    }
+}
+
+impl FrictionSpec {
+    /// mu_kinetic and mu_static (when given) with their uncertainties; mu_static's
+    /// uncertainty without mu_static is an error.
+    fn uncertainties(&self, path: &Path) -> Result<(Uncertain, Option<Uncertain>), SceneError> {
+        let f = self;
         let mu_kinetic = uncertain(
             path,
             "mu_kinetic",
@@ -488,7 +512,15 @@ impl PlanFile {
             }
             None => None,
         };
-        let r = &self.rig;
+        Ok((mu_kinetic, mu_static))
+    }
+}
+
+impl PlanRigSpec {
+    /// The rig with the friction's central values, checked as a rig file's (its errors name
+    /// the plan's friction keys).
+    fn rig(&self, path: &Path, f: &FrictionSpec) -> Result<Rig<f64>, SceneError> {
+        let r = self;
         let keys = PendulumKeys {
             bob_mass: r.bob_mass,
             rod_mass: r.rod_mass,
@@ -497,19 +529,25 @@ impl PlanFile {
             pendulum_com: r.pendulum_com,
             pendulum_inertia: r.pendulum_inertia,
         };
-        let rig: Rig<f64> = keys
-            .rig(
-                r.slider_mass,
-                r.rod_length,
-                r.gravity,
-                f.mu_kinetic,
-                f.mu_static,
-            )
-            .map_err(|e| SceneError::Invalid {
-                path: path.to_owned(),
-                message: e.to_string().replace("rig.mu_", "friction.mu_"),
-            })?;
-        let c = &self.camera;
+        keys.rig(
+            r.slider_mass,
+            r.rod_length,
+            r.gravity,
+            f.mu_kinetic,
+            f.mu_static,
+        )
+        .map_err(|e| SceneError::Invalid {
+            path: path.to_owned(),
+            message: e.to_string().replace("rig.mu_", "friction.mu_"),
+        })
+    }
+}
+
+impl CameraSpec {
+    /// The camera: positive rate, scale, noise and duration, a field of view, and a recording
+    /// of 2 to 10^6 frames.
+    fn validate(&self, path: &Path) -> Result<Camera, SceneError> {
+        let c = self;
         let camera = Camera {
             frame_rate: positive(path, "camera.frame_rate", c.frame_rate)?,
             metres_per_pixel: positive(path, "camera.metres_per_pixel", c.metres_per_pixel)?,
@@ -536,7 +574,15 @@ impl PlanFile {
                 c.duration,
             ));
         }
-        let rl = &self.release;
+        Ok(camera)
+    }
+}
+
+impl ReleaseSpec {
+    /// The release ranges: theta within -360..360 degrees (converted to radians), x on the
+    /// rail, the speeds' ranges and the non-negative errors.
+    fn validate(&self, path: &Path) -> Result<Release, SceneError> {
+        let rl = self;
         let theta = range(path, "release.theta_deg", rl.theta_deg)?;
         if theta[0] < -360.0 || theta[1] > 360.0 {
             return Err(invalid(
@@ -567,7 +613,15 @@ impl PlanFile {
                 non_negative(path, "release.x_dot_error", rl.x_dot_error)?,
             ],
         };
-        let g = &self.goal;
+        Ok(release)
+    }
+}
+
+impl GoalSpec {
+    /// The goal: some targets (a number of stick-slip cycles at least 1), non-negative
+    /// margins, a robustness in [0, 1], and edges shorter than half the `camera`'s recording.
+    fn validate(&self, path: &Path, camera: &Camera) -> Result<Goal, SceneError> {
+        let g = self;
         if g.targets.is_empty() {
             return Err(invalid(path, "goal.targets", "a non-empty list", "[]"));
         }
@@ -603,7 +657,15 @@ impl PlanFile {
                 goal.edge_frames,
             ));
         }
-        let s = &self.search;
+        Ok(goal)
+    }
+}
+
+impl SearchSpec {
+    /// Each count within its range, and the work the search will do over `release`'s grid
+    /// bounded before it starts.
+    fn check_work(&self, path: &Path, release: &Release) -> Result<(), SceneError> {
+        let s = self;
         for (key, v, lo) in [
             ("search.draws", s.draws, 1),
             ("search.verify_draws", s.verify_draws, 1),
@@ -634,16 +696,7 @@ impl PlanFile {
                 runs,
             ));
         }
-        Ok(PlanSpec {
-            rig,
-            mu_kinetic,
-            mu_static,
-            camera,
-            release,
-            goal,
-            search: self.search,
-            prior: None,
-        })
+        Ok(())
     }
 }
 
