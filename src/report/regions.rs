@@ -8,6 +8,7 @@ use crate::model::regions::{
 };
 use crate::model::{Direction, Mode, Rig, State, THETA, THETA_DOT};
 use crate::sim::{simulate, Options, Request, Sample};
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 use serde_json::{json, Value};
@@ -190,6 +191,15 @@ pub fn regions_summary(rig: &Rig<f64>, map: &RegionMap, trajectories: &[Trajecto
             );
         }
     }
+    paradox_lines(&mut out, rig, map);
+    trajectory_lines(&mut out, trajectories);
+    out
+}
+
+/// The critical friction, the paradox band (and each slide's solution counts at rest inside
+/// it), the largest mass ratio with a band, and the curves of the map.
+fn paradox_lines(out: &mut String, rig: &Rig<f64>, map: &RegionMap) {
+    let s = &map.summary;
     let point = match (rig.pendulum, s.point_rig_mu_critical) {
         (Some(p), Some(m)) => format!(
             " (rigid pendulum, r' = {:.4}; the point rig with the same masses, r = m1/m_p = {:.4}, has mu* = {m:.4})",
@@ -253,6 +263,11 @@ pub fn regions_summary(rig: &Rig<f64>, map: &RegionMap, trajectories: &[Trajecto
         map.window.theta_max.to_degrees(),
         map.window.w_max
     );
+}
+
+/// One line per trajectory: its release, its modes in turn (the first eight of a long
+/// timeline) and how it ended.
+fn trajectory_lines(out: &mut String, trajectories: &[Trajectory]) {
     if !trajectories.is_empty() {
         let _ = writeln!(out, "trajectories:");
         for t in trajectories {
@@ -287,7 +302,6 @@ pub fn regions_summary(rig: &Rig<f64>, map: &RegionMap, trajectories: &[Trajecto
             );
         }
     }
-    out
 }
 
 /// Colour of a mode in the phase portraits.
@@ -501,6 +515,9 @@ impl<'a> RegionFigure<'a> {
     }
 }
 
+/// The (theta in degrees, theta') plane of a panel.
+type Plane<'a, DB> = ChartContext<'a, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
 /// A trajectory cut for drawing: pieces of one mode, and the jumps of impulsive stops.
 struct Pieces {
     /// Points in degrees and rad/s with their mode; consecutive pieces share their switching
@@ -569,9 +586,36 @@ impl RegionFigure<'_> {
             .x_label_area_size(45)
             .y_label_area_size(60)
             .build_cartesian_2d(t0..t1, -w..w)?;
-        // Shaded regions, one column per degree, exact in theta' within each column; the
-        // paradox regions of this direction are drawn over the stick region, whose outline
-        // stays visible on top.
+        self.shade_regions(&mut chart, s)?;
+        chart
+            .configure_mesh()
+            .x_desc("theta [deg]   (90 = hanging, 0 and 180 = rod along the rail, 270 = bob above the slider)")
+            .y_desc("theta' [rad/s]")
+            .label_style(("sans-serif", 14))
+            .axis_desc_style(("sans-serif", 15))
+            .x_labels(13)
+            .y_labels(9)
+            .x_label_formatter(&|v| format!("{v:.0}"))
+            .y_label_formatter(&|v| format!("{v:.0}"))
+            .light_line_style(TRANSPARENT)
+            .bold_line_style(BLACK.mix(0.12))
+            .draw()?;
+        self.draw_curves(&mut chart, s)?;
+        self.draw_trajectories(&mut chart, s)?;
+        self.draw_releases(&mut chart)
+    }
+
+    /// The shaded regions, one column per degree, exact in theta' within each column; the
+    /// paradox regions of slide direction `s` are drawn over the stick region, whose outline
+    /// stays visible on top.
+    fn shade_regions<DB: DrawingBackend>(
+        &self,
+        chart: &mut Plane<'_, DB>,
+        s: Option<f64>,
+    ) -> Result<(), PlotError> {
+        let win = &self.map.window;
+        let (t0, t1) = (win.theta_min.to_degrees(), win.theta_max.to_degrees());
+        let w = win.w_max;
         let columns = (t1 - t0).round().max(1.0) as usize;
         let mut stick_rects = Vec::new();
         let mut none_rects = Vec::new();
@@ -604,19 +648,17 @@ impl RegionFigure<'_> {
         ] {
             chart.draw_series(rects.into_iter().map(|r| Rectangle::new(r, color.filled())))?;
         }
-        chart
-            .configure_mesh()
-            .x_desc("theta [deg]   (90 = hanging, 0 and 180 = rod along the rail, 270 = bob above the slider)")
-            .y_desc("theta' [rad/s]")
-            .label_style(("sans-serif", 14))
-            .axis_desc_style(("sans-serif", 15))
-            .x_labels(13)
-            .y_labels(9)
-            .x_label_formatter(&|v| format!("{v:.0}"))
-            .y_label_formatter(&|v| format!("{v:.0}"))
-            .light_line_style(TRANSPARENT)
-            .bold_line_style(BLACK.mix(0.12))
-            .draw()?;
+        Ok(())
+    }
+
+    /// The band edges (with a slide direction `s`), the curves where Q = 0 and the stick
+    /// boundary.
+    fn draw_curves<DB: DrawingBackend>(
+        &self,
+        chart: &mut Plane<'_, DB>,
+        s: Option<f64>,
+    ) -> Result<(), PlotError> {
+        let w = self.map.window.w_max;
         let to_deg = |c: &Curve| -> Vec<(f64, f64)> {
             c.points.iter().map(|p| (p[0].to_degrees(), p[1])).collect()
         };
@@ -637,6 +679,16 @@ impl RegionFigure<'_> {
         for c in &self.map.stick_boundary {
             chart.draw_series(LineSeries::new(to_deg(c), BOUNDARY.stroke_width(2)))?;
         }
+        Ok(())
+    }
+
+    /// The trajectories, piece by piece in their modes' colours (a slide against direction `s`
+    /// in grey), with the jumps of impulsive stops dashed.
+    fn draw_trajectories<DB: DrawingBackend>(
+        &self,
+        chart: &mut Plane<'_, DB>,
+        s: Option<f64>,
+    ) -> Result<(), PlotError> {
         for (k, t) in self.trajectories.iter().enumerate() {
             let width = if self.emphasise_first && k > 0 { 1 } else { 2 };
             let pieces = trajectory_pieces(self.map, t);
@@ -656,10 +708,19 @@ impl RegionFigure<'_> {
                 ))?;
             }
         }
-        // Release dots and labels last, so no curve hides them. Labels are stacked in rank
-        // order in a column left of the leftmost labelled release (right of the rightmost
-        // when there is no room), each joined to its dot by a thin leader line, so releases a
-        // few pixels apart keep readable labels.
+        Ok(())
+    }
+
+    /// Release dots and labels last, so no curve hides them. Labels are stacked in rank order
+    /// in a column left of the leftmost labelled release (right of the rightmost when there is
+    /// no room), each joined to its dot by a thin leader line, so releases a few pixels apart
+    /// keep readable labels.
+    fn draw_releases<DB: DrawingBackend>(
+        &self,
+        chart: &mut Plane<'_, DB>,
+    ) -> Result<(), PlotError> {
+        let win = &self.map.window;
+        let w = win.w_max;
         let mut labelled: Vec<(&str, (i32, i32))> = Vec::new();
         for (k, t) in self.trajectories.iter().enumerate() {
             let Some(first) = t.samples.first() else {
