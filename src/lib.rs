@@ -9,6 +9,7 @@ pub mod bench;
 pub mod data;
 pub mod fit;
 pub mod model;
+pub mod output;
 pub mod plan;
 pub mod report;
 pub mod scene;

@@ -27,14 +27,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         .resolve()
         .map_err(|e| Failure::Input(anyhow!(e)))?;
     let (output, inputs) = (&args.output, &args.inputs);
-    let out = appell::report::canonical(output);
-    if let Some(input) = inputs.iter().find(|i| appell::report::canonical(i) == out) {
-        return Err(Failure::Input(anyhow!(
-            "the output {} is the input {}: refusing to overwrite an input",
-            output.display(),
-            input.display()
-        )));
-    }
+    super::refuse_input(Some(output), inputs)?;
     let rec = read_recording(inputs, &opts).map_err(|e| Failure::Input(e.into()))?;
     out!("{}", rec.summary());
     synth::write(output, &rec, &Default::default()).map_err(|e| Failure::Run(e.into()))?;

@@ -231,7 +231,25 @@ fn fit_one(
     Ok((kept, report))
 }
 
+/// Every file the fit reads: the rig, the recordings (a directory's entries), the releases.
+fn fit_inputs(args: &Args) -> Vec<PathBuf> {
+    let mut files = vec![args.rig.clone()];
+    for input in &args.inputs {
+        match std::fs::read_dir(input) {
+            Ok(dir) => files.extend(dir.filter_map(|e| e.ok()).map(|e| e.path())),
+            Err(_) => files.push(input.clone()),
+        }
+    }
+    files.extend(
+        args.release
+            .iter()
+            .flat_map(|r| r.split(',').map(PathBuf::from)),
+    );
+    files
+}
+
 pub fn run(args: Args) -> Result<(), Failure> {
+    super::refuse_input(args.plot.as_deref(), &fit_inputs(&args))?;
     let opts = args
         .recording
         .resolve()

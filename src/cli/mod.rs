@@ -81,9 +81,22 @@ impl Failure {
     }
 }
 
+/// Refuse, as bad input (exit 2), an output path that names one of the command's inputs.
+fn refuse_input<P: AsRef<std::path::Path>>(
+    output: Option<&std::path::Path>,
+    inputs: &[P],
+) -> Result<(), Failure> {
+    match output {
+        Some(out) => appell::output::refuse_input(out, inputs)
+            .map_err(|e| Failure::Input(anyhow::anyhow!(e))),
+        None => Ok(()),
+    }
+}
+
 /// Parse arguments, run the command, print errors with their causes.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
+    appell::output::remove_temporaries_on_signal();
     let result = match cli.command {
         Command::Fit(args) => fit::run(args),
         Command::Simulate(args) => simulate::run(args),

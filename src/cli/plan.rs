@@ -30,6 +30,10 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), Failure> {
+    let inputs: Vec<&std::path::Path> = std::iter::once(args.plan.as_path())
+        .chain(args.after.as_deref())
+        .collect();
+    super::refuse_input(args.plot.as_deref(), &inputs)?;
     if let Some(path) = &args.plot {
         ImageFormat::from_path(path).map_err(|e| Failure::Input(e.into()))?;
     }

@@ -34,6 +34,7 @@ const MAX_TRAJECTORIES: usize = 1000;
 
 pub fn run(args: Args) -> Result<(), Failure> {
     // Validate every value before any work.
+    super::refuse_input(args.plot.as_deref(), &[&args.rig])?;
     if let Some(path) = &args.plot {
         ImageFormat::from_path(path).map_err(|e| Failure::Input(e.into()))?;
     }

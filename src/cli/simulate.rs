@@ -22,6 +22,7 @@ pub struct Args {
 }
 
 pub fn run(args: Args) -> Result<(), Failure> {
+    super::refuse_input(args.out.as_deref(), &[&args.scene])?;
     let mut scene = Scene::from_path(&args.scene).map_err(|e| Failure::Input(e.into()))?;
     if args.out.is_some() && scene.output.frame_rate.is_none() {
         // A trajectory was asked for on the command line: sample at a sensible default.
@@ -40,7 +41,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         Failure::Run(anyhow!(e).context(format!("simulating {}", args.scene.display())))
     })?;
     if let Some(path) = &args.out {
-        report::write_atomic(path, |w| {
+        appell::output::write_atomic(path, |w| {
             report::write_trajectory_csv(w, &scene.rig, &scene, &sol)
         })
         .map_err(|e| Failure::Run(anyhow!(e).context(format!("writing {}", path.display()))))?;

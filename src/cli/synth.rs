@@ -48,12 +48,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         seed: args.seed,
     };
     opts.validate().map_err(|e| Failure::Input(anyhow!(e)))?;
-    if appell::report::canonical(&args.output) == appell::report::canonical(&args.scene) {
-        return Err(Failure::Input(anyhow!(
-            "the output {} is the scene file: refusing to overwrite an input",
-            args.output.display()
-        )));
-    }
+    super::refuse_input(Some(&args.output), &[&args.scene])?;
     let scene = Scene::from_path(&args.scene).map_err(|e| Failure::Input(e.into()))?;
     appell::scene::check_frames(
         &args.scene,

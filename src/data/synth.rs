@@ -213,14 +213,14 @@ pub fn write(
     let result = match output_format(path) {
         Format::Mcap => {
             let meta = BTreeMap::from([("truth".to_string(), truth.clone())]);
-            crate::report::write_atomic(path, |w| {
+            crate::output::write_atomic(path, |w| {
                 super::mcap::write_json(w, rec, START_NS, &meta).map_err(|e| match e {
                     ::mcap::McapError::Io(io) => io,
                     other => std::io::Error::other(other),
                 })
             })
         }
-        _ => crate::report::write_atomic(path, |w| rec.write_csv(w)),
+        _ => crate::output::write_atomic(path, |w| rec.write_csv(w)),
     };
     result.map_err(|source| DataError::Write {
         path: path.to_owned(),

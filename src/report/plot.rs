@@ -4,7 +4,7 @@
 //! A figure implements [`Figure`] (draw on any plotters backend) and [`render`] writes it;
 //! [`LinePlot`] is a ready-made figure of labelled line series for simple charts.
 
-use super::write_atomic;
+use crate::output::write_atomic;
 use plotters::coord::Shift;
 use plotters::drawing::DrawingAreaErrorKind;
 use plotters::prelude::*;

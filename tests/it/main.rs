@@ -10,6 +10,7 @@ mod hardening;
 mod helpers;
 mod joint;
 mod misspec;
+mod outputs;
 mod paradox;
 mod plan;
 mod real_files;

@@ -1,0 +1,239 @@
+//! Writing files whole, and never over an input.
+//!
+//! Every command that writes a file (`convert`, `synth`, `simulate --out`, every `--plot`) goes
+//! through this module, which sits below `data` and `report` so that both can use it:
+//! - [`write_atomic`] writes through a temporary sibling and a rename, so a failure never leaves
+//!   half a file; the temporary is registered so that [`remove_temporaries_on_signal`] can
+//!   delete it when the process is interrupted (SIGINT, SIGTERM, SIGHUP).
+//! - [`refuse_input`] is the one check that an output names none of the command's inputs: the
+//!   same file through a symbolic link, `..`, a hard link or another letter case on a
+//!   case-insensitive file system counts as the same file.
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+use std::sync::Mutex;
+
+/// Temporary files being written now, removed by the signal handler.
+static TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
+
+/// An output that would replace one of the command's inputs.
+#[derive(Debug, thiserror::Error)]
+#[error("the output {} is the input {}: refusing to overwrite an input", output.display(), input.display())]
+pub struct OutputIsInput {
+    /// The output path as given.
+    pub output: PathBuf,
+    /// The input path as given, which names the same file.
+    pub input: PathBuf,
+}
+
+/// Refuse an output path that names the same file as any of `inputs`. Called by every command
+/// before it reads or computes anything, for every path it will write.
+pub fn refuse_input<P: AsRef<Path>>(output: &Path, inputs: &[P]) -> Result<(), OutputIsInput> {
+    for input in inputs {
+        if same_file(output, input.as_ref()) {
+            return Err(OutputIsInput {
+                output: output.to_owned(),
+                input: input.as_ref().to_owned(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Whether two paths name one file. When both exist, their device and inode decide (links of
+/// either kind, `..`, letter case); otherwise the canonical paths do (an output that does not
+/// exist yet cannot be an existing input, except through a dangling link into it).
+fn same_file(a: &Path, b: &Path) -> bool {
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let (Ok(ma), Ok(mb)) = (std::fs::metadata(a), std::fs::metadata(b)) {
+            return ma.dev() == mb.dev() && ma.ino() == mb.ino();
+        }
+    }
+    canonical(a) == canonical(b)
+}
+
+/// Install, once, a handler that removes the temporary files being written when the process
+/// receives SIGINT, SIGTERM or SIGHUP, then exits with code 130. Without it an interrupted
+/// `synth` of a large recording would leave its hidden temporary file behind.
+pub fn remove_temporaries_on_signal() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        // An error here means another handler is installed (a library user's): keep theirs.
+        let _ = ctrlc::set_handler(|| {
+            let list = TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
+            for path in list.iter() {
+                let _ = std::fs::remove_file(path);
+            }
+            std::process::exit(130);
+        });
+    });
+}
+
+/// Write a file through a temporary sibling and a rename, so a failure never leaves half a
+/// file behind. A symbolic link is followed (the file it points to is replaced, the link
+/// stays); a special file (a named pipe, a device such as `/dev/stdout` or `/dev/full`) is
+/// written directly, once the whole content is ready, never replaced by a plain file.
+pub fn write_atomic(
+    path: &Path,
+    fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
+) -> std::io::Result<()> {
+    let target = output_target(path)?;
+    if let Ok(meta) = std::fs::metadata(&target) {
+        if meta.is_dir() {
+            return Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "the output is a directory",
+            ));
+        }
+        if !meta.is_file() {
+            let mut buf = Vec::new();
+            fill(&mut buf)?;
+            let mut f = std::fs::OpenOptions::new().write(true).open(&target)?;
+            f.write_all(&buf)?;
+            return f.flush();
+        }
+    }
+    let name = target.file_name().ok_or_else(|| {
+        std::io::Error::new(
+            std::io::ErrorKind::InvalidInput,
+            "output path has no file name",
+        )
+    })?;
+    let mut tmp_name = std::ffi::OsString::from(".");
+    tmp_name.push(name);
+    tmp_name.push(format!(".{}.tmp", std::process::id()));
+    let tmp = target.with_file_name(tmp_name);
+    // Registered before it exists, so no moment passes in which a signal would leave it.
+    register(&tmp, true);
+    let result = (|| {
+        let mut file = std::io::BufWriter::new(
+            std::fs::OpenOptions::new()
+                .write(true)
+                .create_new(true)
+                .open(&tmp)?,
+        );
+        fill(&mut file)?;
+        file.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+        // Checked again just before the rename: never rename onto something that became a
+        // special file or a link in the meantime.
+        match std::fs::symlink_metadata(&target) {
+            Ok(m) if !m.is_file() => Err(std::io::Error::new(
+                std::io::ErrorKind::InvalidInput,
+                "the output changed into a link or special file while it was written",
+            )),
+            _ => std::fs::rename(&tmp, &target),
+        }
+    })();
+    if result.is_err() {
+        let _ = std::fs::remove_file(&tmp);
+    }
+    register(&tmp, false);
+    result
+}
+
+/// Add or remove a temporary file in the list the signal handler cleans up.
+fn register(tmp: &Path, add: bool) {
+    let mut list = TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
+    if add {
+        list.push(tmp.to_owned());
+    } else if let Some(k) = list.iter().position(|p| p == tmp) {
+        list.swap_remove(k);
+    }
+}
+
+/// The file an output path really names: a symbolic link resolved to the file it points to
+/// (which need not exist yet), anything else as given.
+pub fn output_target(path: &Path) -> std::io::Result<PathBuf> {
+    let mut target = path.to_path_buf();
+    for _ in 0..40 {
+        match std::fs::symlink_metadata(&target) {
+            Ok(m) if m.file_type().is_symlink() => {
+                let link = std::fs::read_link(&target)?;
+                target = match target.parent() {
+                    Some(dir) => dir.join(link),
+                    None => link,
+                };
+            }
+            _ => return Ok(target),
+        }
+    }
+    Err(std::io::Error::new(
+        std::io::ErrorKind::InvalidInput,
+        "too many levels of symbolic links",
+    ))
+}
+
+/// The canonical form of a path that may not exist yet (its directory canonicalised, links
+/// followed), to tell whether two paths name the same file.
+pub fn canonical(path: &Path) -> PathBuf {
+    let target = output_target(path).unwrap_or_else(|_| path.to_path_buf());
+    if let Ok(c) = std::fs::canonicalize(&target) {
+        return c;
+    }
+    let dir = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    match (std::fs::canonicalize(&dir), target.file_name()) {
+        (Ok(d), Some(n)) => d.join(n),
+        _ => target,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn scratch(name: &str) -> PathBuf {
+        let dir = std::env::temp_dir().join(format!("appell-output-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        std::fs::create_dir_all(dir.join("sub")).unwrap();
+        std::fs::write(dir.join("scene.toml"), "x").unwrap();
+        dir
+    }
+
+    #[test]
+    fn every_spelling_of_an_input_is_refused() {
+        let dir = scratch("spell");
+        let input = dir.join("scene.toml");
+        std::os::unix::fs::symlink(&input, dir.join("link.toml")).unwrap();
+        std::fs::hard_link(&input, dir.join("hard.toml")).unwrap();
+        for out in [
+            dir.join("scene.toml"),
+            dir.join("sub/../scene.toml"),
+            dir.join("./scene.toml"),
+            dir.join("link.toml"),
+            dir.join("hard.toml"),
+        ] {
+            assert!(refuse_input(&out, &[&input]).is_err(), "{}", out.display());
+        }
+        // A new file, or another existing one, is fine.
+        assert!(refuse_input(&dir.join("new.csv"), &[&input]).is_ok());
+        std::fs::write(dir.join("other.csv"), "y").unwrap();
+        assert!(refuse_input(&dir.join("other.csv"), &[&input]).is_ok());
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_written_file_leaves_no_temporary_registered() {
+        let dir = scratch("tmp");
+        let out = dir.join("out.csv");
+        write_atomic(&out, |w| w.write_all(b"a")).unwrap();
+        let failed = write_atomic(&dir.join("bad.csv"), |_| Err(std::io::Error::other("no")));
+        assert!(failed.is_err());
+        assert_eq!(std::fs::read(&out).unwrap(), b"a");
+        assert!(!dir.join("bad.csv").exists());
+        let left: Vec<_> = std::fs::read_dir(&dir)
+            .unwrap()
+            .filter_map(|e| e.ok())
+            .filter(|e| e.file_name().to_string_lossy().ends_with(".tmp"))
+            .collect();
+        assert!(left.is_empty());
+        let list = TEMPORARIES.lock().unwrap();
+        assert!(!list.iter().any(|p| p.starts_with(&dir)));
+        drop(list);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
