@@ -6,7 +6,7 @@
 //! the fit never sees a format.
 
 pub mod calibrate;
-mod csv_formats;
+mod table;
 mod dlc;
 mod dlc_h5;
 mod error;
@@ -190,7 +190,7 @@ pub fn read_recording(paths: &[PathBuf], opts: &ReadOptions) -> Result<Recording
                 }
                 mcap::read(path, opts)?
             }
-            _ => csv_formats::read(path, f, opts)?,
+            _ => table::read(path, f, opts)?,
         };
         per_file.push((path.clone(), p.series.len()));
         parsed = Some(match parsed {
@@ -518,7 +518,7 @@ fn read_sized(
     };
     if detected && head.starts_with(sleap_h5::MAGIC) {
         // Which HDF5 layout it is takes the whole file to tell.
-        let bytes = csv_formats::read_h5_bytes(head.as_slice().chain(input), label)?;
+        let bytes = table::read_h5_bytes(head.as_slice().chain(input), label)?;
         format = sleap_h5::detect_bytes(&bytes);
         let parsed = sleap_h5::read(bytes, label, opts)?;
         return assemble(&[label.to_owned()], format, detected, parsed, opts);
@@ -526,7 +526,7 @@ fn read_sized(
     let chained = head.as_slice().chain(input);
     let parsed = match format {
         Format::Mcap => mcap::read_from(chained, label, opts, size)?,
-        f => csv_formats::read_from(chained, label, f, opts)?,
+        f => table::read_from(chained, label, f, opts)?,
     };
     assemble(&[label.to_owned()], format, detected, parsed, opts)
 }
@@ -630,20 +630,20 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     {
         return Ok(Format::Vicon);
     }
-    if csv_formats::long_columns(&c0).is_some() {
+    if table::long_columns(&c0).is_some() {
         return Ok(Format::Long);
     }
     // Tracker: `#multi:`, or a lone track name then `t x y`, or `t x y` itself.
     if first.eq_ignore_ascii_case("#multi:")
-        || csv_formats::tracker_header_delimiter(first).is_some()
+        || table::tracker_header_delimiter(first).is_some()
         || (lines.len() >= 2
             && c0.len() == 1
             && !first.contains(' ')
-            && csv_formats::tracker_header_delimiter(lines[1]).is_some())
+            && table::tracker_header_delimiter(lines[1]).is_some())
     {
         return Ok(Format::Tracker);
     }
-    if !csv_formats::wide_markers(&c0).is_empty() {
+    if !table::wide_markers(&c0).is_empty() {
         return Ok(Format::Wide);
     }
     Err(unknown())
