@@ -6,7 +6,6 @@
 //! the fit never sees a format.
 
 pub mod calibrate;
-mod table;
 mod dlc;
 mod dlc_h5;
 mod error;
@@ -16,6 +15,7 @@ mod recording;
 mod ros_cdr;
 mod sleap_h5;
 pub mod synth;
+mod table;
 mod tracker_project;
 
 pub use error::DataError;
