@@ -7,13 +7,12 @@
 
 pub mod calibrate;
 mod dlc;
-mod dlc_h5;
 mod error;
+mod hdf5;
 mod kinovea_xml;
 pub mod mcap;
 mod recording;
 mod ros_cdr;
-mod sleap_h5;
 pub mod synth;
 mod table;
 mod tracker_project;
@@ -516,11 +515,11 @@ fn read_sized(
         Some(f) => f,
         None => detect_head(&head, label)?,
     };
-    if detected && head.starts_with(sleap_h5::MAGIC) {
+    if detected && head.starts_with(hdf5::MAGIC) {
         // Which HDF5 layout it is takes the whole file to tell.
         let bytes = table::read_h5_bytes(head.as_slice().chain(input), label)?;
-        format = sleap_h5::detect_bytes(&bytes);
-        let parsed = sleap_h5::read(bytes, label, opts)?;
+        format = hdf5::detect_bytes(&bytes);
+        let parsed = hdf5::read(bytes, label, opts)?;
         return assemble(&[label.to_owned()], format, detected, parsed, opts);
     }
     let chained = head.as_slice().chain(input);
@@ -541,8 +540,8 @@ pub fn detect(path: &Path) -> Result<Format, DataError> {
             path: path.to_owned(),
             source,
         })?;
-    if head.starts_with(sleap_h5::MAGIC) {
-        return Ok(sleap_h5::detect_file(path));
+    if head.starts_with(hdf5::MAGIC) {
+        return Ok(hdf5::detect_file(path));
     }
     detect_head(&head, path)
 }
@@ -553,7 +552,7 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     if head.starts_with(::mcap::MAGIC) {
         return Ok(Format::Mcap);
     }
-    if head.starts_with(sleap_h5::MAGIC) {
+    if head.starts_with(hdf5::MAGIC) {
         return Ok(Format::Sleap);
     }
     if head.is_empty() {

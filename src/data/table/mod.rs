@@ -98,10 +98,10 @@ fn read_h5_or<R: Read>(
     if input
         .fill_buf()
         .map_err(io)?
-        .starts_with(super::sleap_h5::MAGIC)
+        .starts_with(super::hdf5::MAGIC)
     {
         let bytes = read_h5_bytes(input, path)?;
-        return super::sleap_h5::read(bytes, path, opts);
+        return super::hdf5::read(bytes, path, opts);
     }
     csv(input)
 }
@@ -120,15 +120,15 @@ fn read_at_most(input: impl Read, path: &Path, max: usize) -> Result<Vec<u8>, Da
     Ok(bytes)
 }
 
-/// An HDF5 file's bytes, refused past [`super::sleap_h5::MAX_H5_BYTES`].
+/// An HDF5 file's bytes, refused past [`super::hdf5::MAX_H5_BYTES`].
 pub(crate) fn read_h5_bytes(input: impl Read, path: &Path) -> Result<Vec<u8>, DataError> {
-    let bytes = read_at_most(input, path, super::sleap_h5::MAX_H5_BYTES)?;
-    if bytes.len() > super::sleap_h5::MAX_H5_BYTES {
+    let bytes = read_at_most(input, path, super::hdf5::MAX_H5_BYTES)?;
+    if bytes.len() > super::hdf5::MAX_H5_BYTES {
         return Err(DataError::parse(
             path,
             "the HDF5 file",
             "file",
-            format!("at most {} bytes", super::sleap_h5::MAX_H5_BYTES),
+            format!("at most {} bytes", super::hdf5::MAX_H5_BYTES),
             "more",
         ));
     }
