@@ -33,6 +33,44 @@ pub(crate) fn tracker_header_delimiter(line: &str) -> Option<u8> {
 /// Read a Tracker text export: one series per track (per x column with its t and y).
 pub(super) fn read_tracker(input: impl Read, path: &Path) -> Result<Parsed, DataError> {
     let mut input = BufReader::new(input);
+    let head = read_head(&mut input, path)?;
+    let header_line = head.lines.len() as u64;
+    let groups = track_columns(&head, path, header_line)?;
+    let decimal_comma = head.delim != b',';
+    let rows = Rows::new(input, path, head.delim);
+    let series = read_tracks(rows, &groups, path, header_line, decimal_comma)?;
+    let notes = vec![note(path, &head, &series, decimal_comma)];
+    Ok(Parsed {
+        series,
+        scale: Some((
+            1.0,
+            "metres assumed: Tracker writes no units (use --scale if calibrated otherwise)".into(),
+        )),
+        notes,
+        ..Parsed::default()
+    })
+}
+
+/// The lines of a Tracker export before its data.
+struct Head {
+    /// The lines read, up to three (`#multi:`, a name row, the column names), the column names
+    /// last.
+    lines: Vec<String>,
+    /// The delimiter of the column names (and of the rows).
+    delim: u8,
+    /// The nearest line above the column names that is neither blank nor `#multi:`: the track's
+    /// name, or the tracks' names in a multi-track export.
+    names_row: Option<String>,
+    /// Whether the export holds several tracks (its first line is `#multi:`).
+    multi: bool,
+}
+
+/// One track's columns: its name and the cells of its t, x and y.
+type Group = (String, usize, usize, usize);
+
+/// Read the lines up to the column names (`t x y` in some delimiter): at most three, else an
+/// error that says what was found.
+fn read_head(input: &mut impl BufRead, path: &Path) -> Result<Head, DataError> {
     let io = |source| DataError::Io {
         path: path.to_owned(),
         source,
@@ -70,39 +108,52 @@ pub(super) fn read_tracker(input: impl Read, path: &Path) -> Result<Parsed, Data
         }
         head.push(line);
     };
-    let header_line = head.len() as u64;
-    let clean = |l: &str| {
-        l.trim_start_matches('\u{feff}')
-            .trim_end_matches(['\r', '\n'])
-            .to_string()
-    };
-    let cols: Vec<String> = clean(&head[head.len() - 1])
-        .split(delim as char)
-        .map(tracker_column)
-        .collect();
     let multi = head.first().is_some_and(|l| {
         l.trim_start_matches('\u{feff}')
             .trim()
             .eq_ignore_ascii_case("#multi:")
     });
+    Ok(Head {
+        lines: head,
+        delim,
+        names_row,
+        multi,
+    })
+}
+
+/// A head line without its byte-order mark and line end.
+fn clean(l: &str) -> String {
+    l.trim_start_matches('\u{feff}')
+        .trim_end_matches(['\r', '\n'])
+        .to_string()
+}
+
+/// The tracks' columns, named from the name row (or the file's name); an error when no x
+/// column has a t before it and a y after it (`header_line` is the column names' line).
+fn track_columns(head: &Head, path: &Path, header_line: u64) -> Result<Vec<Group>, DataError> {
+    let (delim, multi, names_row) = (head.delim, head.multi, &head.names_row);
+    let cols: Vec<String> = clean(&head.lines[head.lines.len() - 1])
+        .split(delim as char)
+        .map(tracker_column)
+        .collect();
     let stem = path
         .file_stem()
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_else(|| "track".into());
     // One group per x column: its y is the next y, its t the nearest t before it, its name the
     // nearest name above it or before it in a multi-track name row.
-    let name_cells: Vec<String> = match &names_row {
+    let name_cells: Vec<String> = match names_row {
         Some(l) if multi => clean(l)
             .split(delim as char)
             .map(|c| c.trim().trim_matches('"').to_string())
             .collect(),
         _ => Vec::new(),
     };
-    let single_name = match &names_row {
+    let single_name = match names_row {
         Some(l) if !multi => clean(l).trim().trim_matches('"').to_string(),
         _ => stem.clone(),
     };
-    let mut groups: Vec<(String, usize, usize, usize)> = Vec::new();
+    let mut groups: Vec<Group> = Vec::new();
     for (xc, c) in cols.iter().enumerate() {
         if c != "x" {
             continue;
@@ -135,8 +186,19 @@ pub(super) fn read_tracker(input: impl Read, path: &Path) -> Result<Parsed, Data
             format!("{:?}", cols.join(" ")),
         ));
     }
-    let decimal_comma = delim != b',';
-    let mut rows = Rows::new(input, path, delim);
+    Ok(groups)
+}
+
+/// Read the data rows into one series per group (line numbers counted after the head's
+/// `header_line` lines); a track's row without a point or a time is skipped, and tracks
+/// without a row are dropped.
+fn read_tracks<R: Read>(
+    mut rows: Rows<R>,
+    groups: &[Group],
+    path: &Path,
+    header_line: u64,
+    decimal_comma: bool,
+) -> Result<Vec<Series>, DataError> {
     let mut series: Vec<Series> = groups
         .iter()
         .map(|(name, ..)| Series {
@@ -169,7 +231,13 @@ pub(super) fn read_tracker(input: impl Read, path: &Path) -> Result<Parsed, Data
         });
     }
     series.retain(|s| !s.times.is_empty());
-    let notes = vec![format!(
+    Ok(series)
+}
+
+/// The note on what was read: the tracks, the delimiter, and how they were named.
+fn note(path: &Path, head: &Head, series: &[Series], decimal_comma: bool) -> String {
+    let multi = head.multi;
+    format!(
         "Tracker file {}: {} {}, delimiter {:?}{}",
         path.display(),
         if multi {
@@ -182,20 +250,11 @@ pub(super) fn read_tracker(input: impl Read, path: &Path) -> Result<Parsed, Data
             .map(|s| format!("{:?}", s.name))
             .collect::<Vec<_>>()
             .join(", "),
-        delim as char,
-        match (&names_row, multi) {
+        head.delim as char,
+        match (&head.names_row, multi) {
             (None, _) => ", no name row (named after the file)",
             _ if decimal_comma => ", decimal comma accepted",
             _ => "",
         }
-    )];
-    Ok(Parsed {
-        series,
-        scale: Some((
-            1.0,
-            "metres assumed: Tracker writes no units (use --scale if calibrated otherwise)".into(),
-        )),
-        notes,
-        ..Parsed::default()
-    })
+    )
 }
