@@ -17,81 +17,9 @@ pub(super) fn read_motive(
 ) -> Result<Parsed, DataError> {
     let mut rows = Rows::new(input, path, b',');
     let meta = rows.header("a Motive export (Format Version, ...)")?;
-    let mut units = None;
-    let mut rate = None;
-    for kv in meta.chunks(2) {
-        if let [k, v] = kv {
-            match k.as_str() {
-                "Length Units" => units = Some(v.clone()),
-                "Export Frame Rate" => rate = Some(v.clone()),
-                _ => {}
-            }
-        }
-    }
-    // Header rows between the metadata and `Frame,Time`: labelled `,Type`, `,Name`, `,ID`,
-    // `,Parent` (1.23 on), or unlabelled in that order (1.21); the row of `Position` and
-    // `Rotation` comes last.
-    let mut labelled: HashMap<String, Vec<String>> = HashMap::new();
-    let mut unlabelled: Vec<Vec<String>> = Vec::new();
-    let mut kinds: Vec<String> = Vec::new();
-    let header = loop {
-        if !rows.next()? {
-            return Err(DataError::NoFrames {
-                path: path.to_owned(),
-                what: "no Frame,Time header row and".into(),
-            });
-        }
-        let row: Vec<String> = rows.rec.iter().map(|c| c.trim().to_string()).collect();
-        if row.first().is_some_and(|c| c.eq_ignore_ascii_case("frame")) {
-            break row;
-        }
-        if rows.is_blank() {
-            continue;
-        }
-        let label = row.get(1).map(|c| c.to_lowercase()).unwrap_or_default();
-        if ["type", "name", "id", "parent"].contains(&label.as_str()) {
-            labelled.insert(label, row);
-        } else if row
-            .iter()
-            .skip(2)
-            .any(|c| c.eq_ignore_ascii_case("position") || c.eq_ignore_ascii_case("rotation"))
-        {
-            kinds = row;
-        } else {
-            unlabelled.push(row);
-        }
-    };
-    let names = labelled
-        .remove("name")
-        .or_else(|| unlabelled.get(1).cloned())
-        .or_else(|| unlabelled.first().cloned());
-    if header.len() <= 2
-        || names
-            .as_ref()
-            .is_none_or(|n| n.iter().skip(2).all(|c| c.is_empty()))
-    {
-        return Err(rows.err(
-            "header",
-            "marker position columns X, Y, Z after Frame and Time",
-            format!(
-                "{:?}: this export holds no marker data (export again with markers or rigid bodies ticked)",
-                header.join(",")
-            ),
-        ));
-    }
-    let names = names.expect("checked above");
-    let groups = group_xyz(
-        (2..header.len()).filter_map(|j| {
-            let kind = kinds.get(j).map(String::as_str).unwrap_or("");
-            (kind.eq_ignore_ascii_case("position") && !names.get(j)?.is_empty())
-                .then(|| (j, names[j].clone()))
-        }),
-        &header,
-    );
-    let markers = complete(
-        |e| rows.err("header", e, format!("{:?}", header.join(","))),
-        groups,
-    )?;
+    let (units, rate) = units_and_rate(&meta);
+    let head = header_rows(&mut rows, path)?;
+    let markers = position_markers(&rows, head)?;
     let plane = opts.plane.unwrap_or(Plane::Xy);
     let scale = units.as_deref().and_then(unit_scale);
     // Time from the frame number and the export rate: the Time column is rounded (to the
@@ -148,6 +76,118 @@ pub(super) fn read_motive(
         joined,
         ..Parsed::default()
     })
+}
+
+/// The length units and the export frame rate the metadata row names, as written.
+fn units_and_rate(meta: &[String]) -> (Option<String>, Option<String>) {
+    let mut units = None;
+    let mut rate = None;
+    for kv in meta.chunks(2) {
+        if let [k, v] = kv {
+            match k.as_str() {
+                "Length Units" => units = Some(v.clone()),
+                "Export Frame Rate" => rate = Some(v.clone()),
+                _ => {}
+            }
+        }
+    }
+    (units, rate)
+}
+
+/// The header rows after the metadata.
+struct HeaderRows {
+    /// The `Frame,Time,X,Y,Z,...` row.
+    header: Vec<String>,
+    /// The marker names per column: the `,Name` row, else the second (or only) unlabelled row.
+    names: Option<Vec<String>>,
+    /// The `Position`/`Rotation` row (empty when there is none).
+    kinds: Vec<String>,
+}
+
+/// Read the header rows up to `Frame,Time`, told apart by their label or their order.
+fn header_rows<R: Read>(rows: &mut Rows<R>, path: &Path) -> Result<HeaderRows, DataError> {
+    // Header rows between the metadata and `Frame,Time`: labelled `,Type`, `,Name`, `,ID`,
+    // `,Parent` (1.23 on), or unlabelled in that order (1.21); the row of `Position` and
+    // `Rotation` comes last.
+    let mut labelled: HashMap<String, Vec<String>> = HashMap::new();
+    let mut unlabelled: Vec<Vec<String>> = Vec::new();
+    let mut kinds: Vec<String> = Vec::new();
+    let header = loop {
+        if !rows.next()? {
+            return Err(DataError::NoFrames {
+                path: path.to_owned(),
+                what: "no Frame,Time header row and".into(),
+            });
+        }
+        let row: Vec<String> = rows.rec.iter().map(|c| c.trim().to_string()).collect();
+        if row.first().is_some_and(|c| c.eq_ignore_ascii_case("frame")) {
+            break row;
+        }
+        if rows.is_blank() {
+            continue;
+        }
+        let label = row.get(1).map(|c| c.to_lowercase()).unwrap_or_default();
+        if ["type", "name", "id", "parent"].contains(&label.as_str()) {
+            labelled.insert(label, row);
+        } else if row
+            .iter()
+            .skip(2)
+            .any(|c| c.eq_ignore_ascii_case("position") || c.eq_ignore_ascii_case("rotation"))
+        {
+            kinds = row;
+        } else {
+            unlabelled.push(row);
+        }
+    };
+    let names = labelled
+        .remove("name")
+        .or_else(|| unlabelled.get(1).cloned())
+        .or_else(|| unlabelled.first().cloned());
+    Ok(HeaderRows {
+        header,
+        names,
+        kinds,
+    })
+}
+
+/// The markers' X, Y, Z columns (positions only, named columns only); an error that says the
+/// export holds no marker data when there are none.
+fn position_markers<R: Read>(
+    rows: &Rows<R>,
+    head: HeaderRows,
+) -> Result<Vec<(String, [usize; 3])>, DataError> {
+    let HeaderRows {
+        header,
+        names,
+        kinds,
+    } = head;
+    if header.len() <= 2
+        || names
+            .as_ref()
+            .is_none_or(|n| n.iter().skip(2).all(|c| c.is_empty()))
+    {
+        return Err(rows.err(
+            "header",
+            "marker position columns X, Y, Z after Frame and Time",
+            format!(
+                "{:?}: this export holds no marker data (export again with markers or rigid bodies ticked)",
+                header.join(",")
+            ),
+        ));
+    }
+    let names = names.expect("checked above");
+    let groups = group_xyz(
+        (2..header.len()).filter_map(|j| {
+            let kind = kinds.get(j).map(String::as_str).unwrap_or("");
+            (kind.eq_ignore_ascii_case("position") && !names.get(j)?.is_empty())
+                .then(|| (j, names[j].clone()))
+        }),
+        &header,
+    );
+    complete(
+        |e| rows.err("header", e, format!("{:?}", header.join(","))),
+        groups,
+    )
 }
 
 /// A marker hidden longer than this (seconds) is taken for a new marker when it reappears,
