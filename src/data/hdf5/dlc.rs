@@ -25,7 +25,7 @@ use super::pickle::unpickle_labels;
 use crate::data::dlc::{Builder, Cells};
 use crate::data::{DataError, Parsed, ReadOptions};
 use hdf5_reader::group::Group;
-use hdf5_reader::{Datatype, Hdf5File};
+use hdf5_reader::{Dataset, Datatype, Hdf5File};
 use std::path::Path;
 
 /// The key DeepLabCut writes its DataFrame under.
@@ -297,7 +297,29 @@ fn read_fixed(group: &Group, at: &str, src: &Src) -> Result<Frame, DataError> {
     let block = dataset("block0_values")?;
     // Column labels: one name per level, indexed by one code per column.
     let nlevels = int_attr("block0_items_nlevels").unwrap_or(1.0);
-    let labels: Vec<Vec<String>> = if nlevels > 1.0 {
+    let labels = fixed_labels(nlevels, at, src, &bad, &dataset)?;
+    let (values, rows) = fixed_values(&block, labels.len(), at, src, &bad)?;
+    let frames = fixed_frames(group, rows, at, src, &bad)?;
+    Ok(Frame {
+        labels,
+        values,
+        frames,
+        labels_at: format!("{at}/block0_items_level*"),
+        at: format!("{at}/block0_values"),
+    })
+}
+
+/// The fixed format's column labels: per level (`nlevels` of them, at most 8) the names
+/// `block0_items_level{i}` indexed by one code per column `block0_items_label{i}`; one level
+/// is the names `block0_items`. `dataset(name)` opens a dataset of the group.
+fn fixed_labels(
+    nlevels: f64,
+    at: &str,
+    src: &Src,
+    bad: &impl Fn(&str, &str, String) -> DataError,
+    dataset: &impl Fn(&str) -> Result<Dataset, DataError>,
+) -> Result<Vec<Vec<String>>, DataError> {
+    if nlevels > 1.0 {
         let mut levels = Vec::new();
         for i in 0..(nlevels as usize).min(8) {
             let names = dataset(&format!("block0_items_level{i}"))?
@@ -331,16 +353,26 @@ fn read_fixed(group: &Group, at: &str, src: &Src) -> Result<Frame, DataError> {
                 format!("{:?}", levels.iter().map(Vec::len).collect::<Vec<_>>()),
             ));
         }
-        (0..n)
+        Ok((0..n)
             .map(|j| levels.iter().map(|l| l[j].clone()).collect())
-            .collect()
+            .collect())
     } else {
         let names = dataset("block0_items")?
             .read_strings()
             .map_err(|e| bad("block0_items", "strings", e.to_string()))?;
-        names.into_iter().map(|n| vec![n]).collect()
-    };
-    let width = labels.len();
+        Ok(names.into_iter().map(|n| vec![n]).collect())
+    }
+}
+
+/// The fixed format's values `block0_values`, row by row (`width` columns), and the number of
+/// rows.
+fn fixed_values(
+    block: &Dataset,
+    width: usize,
+    at: &str,
+    src: &Src,
+    bad: &impl Fn(&str, &str, String) -> DataError,
+) -> Result<(Vec<f64>, usize), DataError> {
     // pandas writes the block transposed, rows x columns, and says so; older files did not.
     let transposed = block
         .attribute("transposed")
@@ -367,7 +399,7 @@ fn read_fixed(group: &Group, at: &str, src: &Src) -> Result<Frame, DataError> {
         ));
     }
     let cell = block.raw_element_size().unwrap_or(8).max(1);
-    let bytes = raw(&block, at, src)?;
+    let bytes = raw(block, at, src)?;
     let want = rows.checked_mul(width).and_then(|n| n.checked_mul(cell));
     if want != Some(bytes.len()) {
         return Err(bad(
@@ -388,8 +420,19 @@ fn read_fixed(group: &Group, at: &str, src: &Src) -> Result<Frame, DataError> {
         .flat_map(|r| (0..width).map(move |c| (r, c)))
         .map(|(r, c)| value(r, c))
         .collect();
+    Ok((values, rows))
+}
+
+/// The fixed format's frame numbers (`rows` of them): the row index `axis1` when it is numeric.
+fn fixed_frames(
+    group: &Group,
+    rows: usize,
+    at: &str,
+    src: &Src,
+    bad: &impl Fn(&str, &str, String) -> DataError,
+) -> Result<Option<Vec<f64>>, DataError> {
     // A numeric row index holds frame numbers; image paths (strings, or levels) do not.
-    let frames = match group.dataset("axis1") {
+    Ok(match group.dataset("axis1") {
         Ok(axis) if numeric(axis.dtype()) => {
             let step = axis.raw_element_size().unwrap_or(8).max(1);
             let ix = raw(&axis, at, src)?;
@@ -407,12 +450,5 @@ fn read_fixed(group: &Group, at: &str, src: &Src) -> Result<Frame, DataError> {
             Some(frames)
         }
         _ => None,
-    };
-    Ok(Frame {
-        labels,
-        values,
-        frames,
-        labels_at: format!("{at}/block0_items_level*"),
-        at: format!("{at}/block0_values"),
     })
 }
