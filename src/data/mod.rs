@@ -1,9 +1,27 @@
-//! Recordings in and out: readers for the CSV family and MCAP, calibration into the rail frame,
-//! the canonical CSV and synthetic recordings with a known mu.
+//! Recordings in and out: readers for the CSV family, HDF5, XML and MCAP, calibration into the
+//! rail frame, the canonical CSV and synthetic recordings with a known mu.
 //!
 //! Every reader produces marker series in file units; [`read_recording`] picks the slider and
 //! the bob, aligns them on common frame times and calibrates them into one [`Recording`], so
 //! the fit never sees a format.
+//!
+//! The files, in the order a read goes through them:
+//! - `mod.rs`: the read options, what a reader returns (`Series`, `Parsed`), the entry points,
+//!   format detection, and the assembly of the slider and the bob into a calibrated recording.
+//! - `table/`: the CSV-family readers, one file per tool (wide, long, Tracker, DeepLabCut,
+//!   SLEAP, Motive, Vicon, Qualisys, Kinovea, TRex) over shared rows (`table/rows.rs`); its
+//!   `mod.rs` sends a format to its reader, and a format's XML or HDF5 variant to theirs.
+//! - `hdf5/`: HDF5 inputs: which layout a file holds (DeepLabCut's pandas DataFrame or SLEAP's
+//!   analysis file), their readers, and the byte caps they share.
+//! - `dlc.rs`: DeepLabCut's table layout (columns to markers, likelihood, frames to times),
+//!   shared by its CSV reader (`table/dlc.rs`) and its HDF5 reader (`hdf5/dlc.rs`).
+//! - `tracker_project.rs`, `kinovea_xml.rs`: Tracker's projects and Kinovea's spreadsheets (XML).
+//! - `mcap/`: MCAP recordings, read and written; ROS 2 CDR messages in `ros_cdr.rs`.
+//! - `calibrate.rs`: into the rail frame (metres, y up, the rail axis, the origin) and the
+//!   rod-length check that flags outlier frames.
+//! - `recording.rs`: the formats, the calibrated `Recording` with its provenance, and the
+//!   canonical CSV it writes; `error.rs`: the one error type, `DataError`.
+//! - `synth.rs`: synthetic recordings with a known mu.
 
 pub mod calibrate;
 mod dlc;
