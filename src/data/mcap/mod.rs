@@ -10,7 +10,8 @@
 //!   before a record is parsed, and one record read into the state.
 //! - `chunks.rs`: the chunk pipeline: each chunk decompressed, CRC-checked and its JSON frames
 //!   parsed ahead on the thread pool, then its records read in file order.
-//! - `decode/`: which decoder a channel gets and one message to samples; `json.rs` (the serde
+//! - `decode/`: which decoder a channel gets (the Foxglove JSON schemas that are not positions,
+//!   the names given to unnamed points) and one message to samples; `json.rs` (the serde
 //!   types and the canonical frame layout) and `protobuf.rs` (Foxglove messages); ROS 2 CDR
 //!   is read by `data::ros_cdr`.
 //! - `tf.rs`: the samples accumulated while reading, and `/tf` trees composed to their root.
@@ -22,6 +23,7 @@ mod records;
 mod tf;
 mod write;
 
+pub use decode::{NOT_POSITIONS, POINTS_NAMES};
 pub use records::{decompressed_limit, record_limit};
 pub use tf::TF_SAMPLE_LIMIT;
 pub use write::{write_json, FRAME_SCHEMA};
@@ -43,21 +45,6 @@ pub const SUPPORTED: &str = "json (markers array per frame, or one point per top
 cdr with ros2msg schemas geometry_msgs/msg/PointStamped, PoseStamped, TransformStamped, \
 tf2_msgs/msg/TFMessage, protobuf (schema a FileDescriptorSet) foxglove.FrameTransform, \
 foxglove.PointsAnnotation; chunks uncompressed, zstd or lz4";
-
-/// JSON schemas (Foxglove's) whose x, y are not a position: skipped rather than read as
-/// markers.
-pub const NOT_POSITIONS: [&str; 6] = [
-    "foxglove.Vector3",
-    "foxglove.Vector2",
-    "foxglove.Quaternion",
-    "foxglove.LocationFix",
-    "foxglove.Battery",
-    "foxglove.Log",
-];
-
-/// Marker names given to the points of a `foxglove.PointsAnnotation`, which carries no names:
-/// identity is the index (point 0 the slider, point 1 the bob, further points `point2`, ...).
-pub const POINTS_NAMES: [&str; 2] = ["slider", "bob"];
 
 /// Read an MCAP file linearly (summary and index are not needed).
 pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {

@@ -8,12 +8,26 @@ mod protobuf;
 pub(crate) use json::{PreFrame, PreParsed};
 
 use super::tf::Acc;
-use super::{NOT_POSITIONS, POINTS_NAMES};
 use crate::data::{ros_cdr, Plane};
 use json::{canonical_frame, FastMsg, JMsg, JStamp};
 use prost_reflect::{DescriptorPool, MessageDescriptor};
 use protobuf::{pb_decode, pb_f64, pb_field, pb_stamp};
 use std::fmt;
+
+/// JSON schemas (Foxglove's) whose x, y are not a position: skipped rather than read as
+/// markers.
+pub const NOT_POSITIONS: [&str; 6] = [
+    "foxglove.Vector3",
+    "foxglove.Vector2",
+    "foxglove.Quaternion",
+    "foxglove.LocationFix",
+    "foxglove.Battery",
+    "foxglove.Log",
+];
+
+/// Marker names given to the points of a `foxglove.PointsAnnotation`, which carries no names:
+/// identity is the index (point 0 the slider, point 1 the bob, further points `point2`, ...).
+pub const POINTS_NAMES: [&str; 2] = ["slider", "bob"];
 
 /// How a channel's messages are decoded. The protobuf ones carry the message descriptor built
 /// from the channel's schema (the file's own definition, not one compiled in).
