@@ -1,4 +1,5 @@
-//! Kinovea's trajectory text export (its spreadsheet export, XML, is `data::kinovea_xml`'s).
+//! Kinovea's trajectory text export (gnuplot style), read line by line: a `# NAME` line per
+//! trajectory, then its `t x y` rows. Its spreadsheet export (XML) is `data::kinovea_xml`'s.
 
 use super::rows::Clock;
 use crate::data::{DataError, Parsed, Series};

@@ -1,4 +1,5 @@
-//! Qualisys QTM's TSV export.
+//! Qualisys QTM's TSV export: `KEY<tab>value` metadata lines, then the `Frame Time NAME X ...`
+//! header and the rows, read through the 3-D steps of `xyz.rs`; millimetres, z up.
 
 use super::rows::Rows;
 use super::xyz::{complete, group_xyz, read_xyz_rows, unit_scale};

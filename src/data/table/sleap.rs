@@ -1,4 +1,6 @@
-//! SLEAP's analysis CSV (its HDF5 analysis file is `data::hdf5`'s).
+//! SLEAP's analysis CSV: one row per instance per frame with a prediction, markers per node (and
+//! track); pixels, y down, frame numbers timed by `--fps`. Its HDF5 analysis file is
+//! `data::hdf5`'s.
 
 use super::rows::{lower, Clock, Rows};
 use crate::data::{DataError, Parsed, ReadOptions, Series};

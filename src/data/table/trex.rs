@@ -1,4 +1,5 @@
-//! TRex's per-individual CSV.
+//! TRex's per-individual CSV: a row per frame with the centroid, the weighted centroid and the
+//! midline as markers, rows marked missing as lost; centimetres when the columns say so, y down.
 
 use super::rows::{lower, Clock, Rows};
 use crate::data::{DataError, Parsed, Series};
