@@ -3,7 +3,7 @@
 //! frame, pixels with y down. Markers are named `bodypart`, or `individual/bodypart` for
 //! multi-animal files; a point whose likelihood is under `--min-likelihood` counts as missing.
 
-use super::csv_formats::{all_or_none, Clock};
+use super::table::rows::{all_or_none, Clock};
 use super::{DataError, Parsed, Plane, ReadOptions, Series};
 use std::path::Path;
 

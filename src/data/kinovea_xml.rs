@@ -50,18 +50,7 @@ pub(crate) fn read(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Pars
             e.to_string(),
         )
     })?;
-    let rows: Vec<(u32, Vec<String>)> = doc
-        .descendants()
-        .filter(|n| n.tag_name().name() == "Row")
-        .map(|r| {
-            let cells = r
-                .descendants()
-                .filter(|n| n.tag_name().name() == "Data")
-                .map(|d| d.text().unwrap_or("").trim().to_string())
-                .collect();
-            (doc.text_pos_at(r.range().start).row, cells)
-        })
-        .collect();
+    let rows = sheet_rows(&doc);
     let mut series: Vec<Series> = Vec::new();
     let mut unit: Option<String> = None;
     let mut cols: Option<[usize; 3]> = None;
@@ -97,46 +86,8 @@ pub(crate) fn read(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Pars
             };
         } else if cells.iter().all(|c| c.is_empty()) {
             cols = None;
-        } else if let (Some([x, y, t]), Some(s)) = (cols, series.last_mut()) {
-            let num = |i: usize, field: &str| -> Result<f64, DataError> {
-                let raw = cells.get(i).map(String::as_str).unwrap_or("");
-                raw.replace(',', ".")
-                    .parse::<f64>()
-                    .ok()
-                    .filter(|v| v.is_finite())
-                    .ok_or_else(|| bad(at.clone(), field, "a finite number", format!("{raw:?}")))
-            };
-            let raw_t = cells.get(t).map(String::as_str).unwrap_or("");
-            let written = time(raw_t)
-                .ok_or_else(|| bad(at.clone(), "t", "a time h:mm:ss:cc", format!("{raw_t:?}")))?;
-            let tv = match (opts.fps, s.times.first()) {
-                (Some(fps), Some(&t0)) => t0 + s.times.len() as f64 / fps,
-                _ => written,
-            };
-            if clock_prev.is_some_and(|p| tv <= p) {
-                if opts.fps.is_none() {
-                    return Err(bad(
-                        at,
-                        "t",
-                        "increasing times (they are rounded to the hundredth: give the video's frame rate with --fps HZ to number the rows)",
-                        format!("{raw_t:?} again"),
-                    ));
-                }
-                return Err(DataError::Time {
-                    path: path.to_owned(),
-                    at,
-                    time: tv,
-                    previous: clock_prev.unwrap_or_default(),
-                    problem: if clock_prev == Some(tv) {
-                        "is repeated"
-                    } else {
-                        "goes backwards"
-                    },
-                });
-            }
-            clock_prev = Some(tv);
-            s.times.push(tv);
-            s.points.push(Some([num(x, "x")?, num(y, "y")?]));
+        } else if let (Some(cols), Some(s)) = (cols, series.last_mut()) {
+            read_point(cells, cols, s, &mut clock_prev, at, opts, path)?;
         }
     }
     series.retain(|s| !s.times.is_empty());
@@ -146,7 +97,94 @@ pub(crate) fn read(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Pars
             what: "a Kinovea spreadsheet without tracks".into(),
         });
     }
-    let scale = match unit.as_deref() {
+    Ok(Parsed {
+        series,
+        scale: coords_scale(unit.as_deref()),
+        notes: vec![match opts.fps {
+            Some(fps) => format!("Kinovea spreadsheet export: rows numbered at --fps {fps} Hz from each track's first time (the file's times are rounded to the hundredth), y up"),
+            None => "Kinovea spreadsheet export: times h:mm:ss:cc (hundredths, as written), y up".into(),
+        }],
+        ..Parsed::default()
+    })
+}
+
+/// The spreadsheet's rows: each row's line in the file and its cells' text, trimmed.
+fn sheet_rows(doc: &Document) -> Vec<(u32, Vec<String>)> {
+    doc.descendants()
+        .filter(|n| n.tag_name().name() == "Row")
+        .map(|r| {
+            let cells = r
+                .descendants()
+                .filter(|n| n.tag_name().name() == "Data")
+                .map(|d| d.text().unwrap_or("").trim().to_string())
+                .collect();
+            (doc.text_pos_at(r.range().start).row, cells)
+        })
+        .collect()
+}
+
+/// Add a track's row (`cells`, at `at`; its x, y and t in `cols`) to `s`: the time as written,
+/// or with `--fps` the row's number after the track's first time; times must increase
+/// (`clock_prev` is the track's last).
+fn read_point(
+    cells: &[String],
+    [x, y, t]: [usize; 3],
+    s: &mut Series,
+    clock_prev: &mut Option<f64>,
+    at: String,
+    opts: &ReadOptions,
+    path: &Path,
+) -> Result<(), DataError> {
+    let num = |i: usize, field: &str| -> Result<f64, DataError> {
+        let raw = cells.get(i).map(String::as_str).unwrap_or("");
+        raw.replace(',', ".")
+            .parse::<f64>()
+            .ok()
+            .filter(|v| v.is_finite())
+            .ok_or_else(|| {
+                DataError::parse(path, &at, field, "a finite number", format!("{raw:?}"))
+            })
+    };
+    let raw_t = cells.get(t).map(String::as_str).unwrap_or("");
+    let written = time(raw_t).ok_or_else(|| {
+        DataError::parse(path, &at, "t", "a time h:mm:ss:cc", format!("{raw_t:?}"))
+    })?;
+    let tv = match (opts.fps, s.times.first()) {
+        (Some(fps), Some(&t0)) => t0 + s.times.len() as f64 / fps,
+        _ => written,
+    };
+    if (*clock_prev).is_some_and(|p| tv <= p) {
+        if opts.fps.is_none() {
+            return Err(DataError::parse(
+                path,
+                at,
+                "t",
+                "increasing times (they are rounded to the hundredth: give the video's frame rate with --fps HZ to number the rows)",
+                format!("{raw_t:?} again"),
+            ));
+        }
+        return Err(DataError::Time {
+            path: path.to_owned(),
+            at,
+            time: tv,
+            previous: clock_prev.unwrap_or_default(),
+            problem: if *clock_prev == Some(tv) {
+                "is repeated"
+            } else {
+                "goes backwards"
+            },
+        });
+    }
+    *clock_prev = Some(tv);
+    s.times.push(tv);
+    s.points.push(Some([num(x, "x")?, num(y, "y")?]));
+    Ok(())
+}
+
+/// Metres per unit for the export's `Coords` unit (cm, mm, m), with the wording for the
+/// report; `None` for any other unit.
+fn coords_scale(unit: Option<&str>) -> Option<(f64, String)> {
+    match unit {
         Some("cm") => Some((
             0.01,
             "centimetres (the export's Coords (x,y:cm))".to_string(),
@@ -154,14 +192,5 @@ pub(crate) fn read(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Pars
         Some("mm") => Some((0.001, "millimetres (the export's Coords)".to_string())),
         Some("m") => Some((1.0, "metres (the export's Coords)".to_string())),
         _ => None,
-    };
-    Ok(Parsed {
-        series,
-        scale,
-        notes: vec![match opts.fps {
-            Some(fps) => format!("Kinovea spreadsheet export: rows numbered at --fps {fps} Hz from each track's first time (the file's times are rounded to the hundredth), y up"),
-            None => "Kinovea spreadsheet export: times h:mm:ss:cc (hundredths, as written), y up".into(),
-        }],
-        ..Parsed::default()
-    })
+    }
 }

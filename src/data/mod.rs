@@ -1,151 +1,53 @@
-//! Recordings in and out: readers for the CSV family and MCAP, calibration into the rail frame,
-//! the canonical CSV and synthetic recordings with a known mu.
+//! Recordings in and out: readers for the CSV family, HDF5, XML and MCAP, calibration into the
+//! rail frame, the canonical CSV and synthetic recordings with a known mu.
 //!
 //! Every reader produces marker series in file units; [`read_recording`] picks the slider and
 //! the bob, aligns them on common frame times and calibrates them into one [`Recording`], so
 //! the fit never sees a format.
+//!
+//! The files, in the order a read goes through them:
+//! - `mod.rs`: the entry points, format detection, and the assembly of what a reader returns
+//!   into a calibrated recording (the slider and the bob picked, aligned on common times).
+//! - `options.rs`: `ReadOptions` and `Plane`; `parsed.rs`: what a reader returns (`Series`,
+//!   `Parsed`).
+//! - `table/`: the CSV-family readers, one file per tool (wide, long, Tracker, DeepLabCut,
+//!   SLEAP, Motive, Vicon, Qualisys, Kinovea, TRex) over shared rows (`table/rows.rs`); its
+//!   `mod.rs` sends a format to its reader, and a format's XML or HDF5 variant to theirs.
+//! - `hdf5/`: HDF5 inputs: which layout a file holds (DeepLabCut's pandas DataFrame or SLEAP's
+//!   analysis file), their readers, and the byte caps they share.
+//! - `dlc.rs`: DeepLabCut's table layout (columns to markers, likelihood, frames to times),
+//!   shared by its CSV reader (`table/dlc.rs`) and its HDF5 reader (`hdf5/dlc.rs`).
+//! - `tracker_project.rs`, `kinovea_xml.rs`: Tracker's projects and Kinovea's spreadsheets (XML).
+//! - `mcap/`: MCAP recordings, read and written; ROS 2 CDR messages in `ros_cdr.rs`.
+//! - `calibrate.rs`: into the rail frame (metres, y up, the rail axis, the origin) and the
+//!   rod-length check that flags outlier frames.
+//! - `recording.rs`: the formats, the calibrated `Recording` with its provenance, and the
+//!   canonical CSV it writes; `error.rs`: the one error type, `DataError`.
+//! - `synth.rs`: synthetic recordings with a known mu.
 
 pub mod calibrate;
-mod csv_formats;
 mod dlc;
-mod dlc_h5;
 mod error;
+mod hdf5;
 mod kinovea_xml;
 pub mod mcap;
+mod options;
+mod parsed;
 mod recording;
 mod ros_cdr;
-mod sleap_h5;
 pub mod synth;
+mod table;
 mod tracker_project;
 
 pub use error::DataError;
+pub use options::{Plane, ReadOptions};
+pub(crate) use parsed::{Parsed, Series};
 pub use recording::{
     Calibration, Format, Geometry, Provenance, Recording, Track, CANONICAL_HEADER,
 };
 
-use std::collections::BTreeMap;
 use std::io::Read;
 use std::path::{Path, PathBuf};
-
-/// Which two axes of a 3-D recording form the plane of motion: the first becomes x (along the
-/// rail), the second y (up).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Plane {
-    /// x and y.
-    Xy,
-    /// x and z.
-    Xz,
-    /// y and z.
-    Yz,
-}
-
-impl Plane {
-    /// The name used by `--plane`.
-    pub fn name(self) -> &'static str {
-        match self {
-            Plane::Xy => "xy",
-            Plane::Xz => "xz",
-            Plane::Yz => "yz",
-        }
-    }
-
-    /// The plane named `name`.
-    pub fn from_name(name: &str) -> Option<Plane> {
-        [Plane::Xy, Plane::Xz, Plane::Yz]
-            .into_iter()
-            .find(|p| p.name() == name)
-    }
-
-    /// Project a 3-D point onto the plane.
-    pub fn project(self, p: [f64; 3]) -> [f64; 2] {
-        match self {
-            Plane::Xy => [p[0], p[1]],
-            Plane::Xz => [p[0], p[2]],
-            Plane::Yz => [p[1], p[2]],
-        }
-    }
-}
-
-/// How to read a recording: what the file does not say. Built by the CLI's resolve step or by
-/// hand; [`ReadOptions::default`] detects everything.
-#[derive(Debug, Clone, PartialEq)]
-pub struct ReadOptions {
-    /// The format; `None` detects it from the header.
-    pub format: Option<Format>,
-    /// The slider's marker name; `None` takes the one name containing "slider".
-    pub slider: Option<String>,
-    /// The bob's marker name; `None` takes the one name containing "bob".
-    pub bob: Option<String>,
-    /// Metres per file unit; overrides the file's units.
-    pub scale: Option<f64>,
-    /// Frame rate (Hz) for formats that give frame numbers only.
-    pub fps: Option<f64>,
-    /// Plane of motion for 3-D formats (default: xy for Motive and MCAP, xz for Vicon).
-    pub plane: Option<Plane>,
-    /// Override whether the file's y axis points down.
-    pub y_down: Option<bool>,
-    /// Rotate and shift into the rail frame fitted from the slider's track.
-    pub rail_frame: bool,
-    /// Known rod length (m): the reference for the geometry check, and the scale when the file
-    /// has no units and `scale` is not given.
-    pub rod_length: Option<f64>,
-    /// DeepLabCut likelihood under which a point counts as missing.
-    pub min_likelihood: f64,
-    /// Remove outlier frames (set both markers missing) instead of only flagging them.
-    pub drop_outliers: bool,
-    /// Keep only frames with start <= t <= end (seconds from the first frame), re-zeroed to
-    /// start at 0; MCAP files are not decoded past the window.
-    pub time_window: Option<(f64, f64)>,
-    /// MCAP channels (topics) to read; empty reads every channel that carries markers.
-    pub topics: Vec<String>,
-}
-
-impl Default for ReadOptions {
-    fn default() -> Self {
-        ReadOptions {
-            format: None,
-            slider: None,
-            bob: None,
-            scale: None,
-            fps: None,
-            plane: None,
-            y_down: None,
-            rail_frame: false,
-            rod_length: None,
-            min_likelihood: 0.6,
-            drop_outliers: false,
-            time_window: None,
-            topics: Vec::new(),
-        }
-    }
-}
-
-/// One marker's samples as a reader found them: times in seconds (strictly increasing after
-/// [`Series::finish`]) and positions in file units, 2-D.
-#[derive(Debug, Clone, Default, PartialEq)]
-pub(crate) struct Series {
-    pub name: String,
-    pub times: Vec<f64>,
-    pub points: Vec<Option<[f64; 2]>>,
-}
-
-/// What a reader returns: marker series in file units and what the file says about them.
-#[derive(Debug, Clone, Default)]
-pub(crate) struct Parsed {
-    pub series: Vec<Series>,
-    /// Metres per unit when the file says (with the wording for the report).
-    pub scale: Option<(f64, String)>,
-    /// Whether y points down in the file (pixels).
-    pub y_down: bool,
-    /// The file-clock time (seconds) that the series' times are relative to.
-    pub time_base: f64,
-    pub notes: Vec<String>,
-    pub warnings: Vec<String>,
-    pub metadata: BTreeMap<String, String>,
-    /// Names a reader joined into another series (a later name, the name it is kept under):
-    /// asking for the later name selects the joined series.
-    pub joined: Vec<(String, String)>,
-}
 
 /// Read a recording from one file, or from one file per marker (Tracker), and calibrate it
 /// into the rail frame. The format is detected unless `opts.format` is set.
@@ -190,7 +92,7 @@ pub fn read_recording(paths: &[PathBuf], opts: &ReadOptions) -> Result<Recording
                 }
                 mcap::read(path, opts)?
             }
-            _ => csv_formats::read(path, f, opts)?,
+            _ => table::read(path, f, opts)?,
         };
         per_file.push((path.clone(), p.series.len()));
         parsed = Some(match parsed {
@@ -516,17 +418,17 @@ fn read_sized(
         Some(f) => f,
         None => detect_head(&head, label)?,
     };
-    if detected && head.starts_with(sleap_h5::MAGIC) {
+    if detected && head.starts_with(hdf5::MAGIC) {
         // Which HDF5 layout it is takes the whole file to tell.
-        let bytes = csv_formats::read_h5_bytes(head.as_slice().chain(input), label)?;
-        format = sleap_h5::detect_bytes(&bytes);
-        let parsed = sleap_h5::read(bytes, label, opts)?;
+        let bytes = table::read_h5_bytes(head.as_slice().chain(input), label)?;
+        format = hdf5::detect_bytes(&bytes);
+        let parsed = hdf5::read(bytes, label, opts)?;
         return assemble(&[label.to_owned()], format, detected, parsed, opts);
     }
     let chained = head.as_slice().chain(input);
     let parsed = match format {
         Format::Mcap => mcap::read_from(chained, label, opts, size)?,
-        f => csv_formats::read_from(chained, label, f, opts)?,
+        f => table::read_from(chained, label, f, opts)?,
     };
     assemble(&[label.to_owned()], format, detected, parsed, opts)
 }
@@ -541,8 +443,8 @@ pub fn detect(path: &Path) -> Result<Format, DataError> {
             path: path.to_owned(),
             source,
         })?;
-    if head.starts_with(sleap_h5::MAGIC) {
-        return Ok(sleap_h5::detect_file(path));
+    if head.starts_with(hdf5::MAGIC) {
+        return Ok(hdf5::detect_file(path));
     }
     detect_head(&head, path)
 }
@@ -553,7 +455,7 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     if head.starts_with(::mcap::MAGIC) {
         return Ok(Format::Mcap);
     }
-    if head.starts_with(sleap_h5::MAGIC) {
+    if head.starts_with(hdf5::MAGIC) {
         return Ok(Format::Sleap);
     }
     if head.is_empty() {
@@ -630,20 +532,20 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     {
         return Ok(Format::Vicon);
     }
-    if csv_formats::long_columns(&c0).is_some() {
+    if table::long_columns(&c0).is_some() {
         return Ok(Format::Long);
     }
     // Tracker: `#multi:`, or a lone track name then `t x y`, or `t x y` itself.
     if first.eq_ignore_ascii_case("#multi:")
-        || csv_formats::tracker_header_delimiter(first).is_some()
+        || table::tracker_header_delimiter(first).is_some()
         || (lines.len() >= 2
             && c0.len() == 1
             && !first.contains(' ')
-            && csv_formats::tracker_header_delimiter(lines[1]).is_some())
+            && table::tracker_header_delimiter(lines[1]).is_some())
     {
         return Ok(Format::Tracker);
     }
-    if !csv_formats::wide_markers(&c0).is_empty() {
+    if !table::wide_markers(&c0).is_empty() {
         return Ok(Format::Wide);
     }
     Err(unknown())

@@ -108,6 +108,47 @@ pub(crate) fn read(bytes: &[u8], path: &Path) -> Result<Parsed, DataError> {
         .descendants()
         .filter(|n| n.has_tag_name("object"))
         .collect();
+    let (delta_t, start) = clip_timing(&objects);
+    let coords = coord_frames(&objects);
+    let unit = string(root, "length_unit");
+    let (mut series, models) = point_masses(&objects, delta_t, start, &coords, &bad)?;
+    if series.is_empty() {
+        return Err(bad(
+            "tracks",
+            "a point-mass track with marked positions",
+            if models.is_empty() {
+                "no point-mass track".to_string()
+            } else {
+                format!(
+                    "only model track(s) {}: a model stores formulas, not data; export the data from Tracker instead",
+                    models.iter().map(|m| format!("{m:?}")).collect::<Vec<_>>().join(", ")
+                )
+            },
+        ));
+    }
+    // Tracker stores frames in order; keep times strictly increasing regardless.
+    for s in &mut series {
+        sort_frames(s);
+    }
+    Ok(Parsed {
+        series,
+        scale: length_scale(unit.as_deref()),
+        notes: vec![format!(
+            "Tracker project: point-mass positions in world units through the project's coordinate system; t = frame x {} ms{}",
+            delta_t.unwrap_or_default(),
+            if models.is_empty() {
+                String::new()
+            } else {
+                format!("; model track(s) {} skipped (formulas, not data)", models.join(", "))
+            }
+        )],
+        ..Parsed::default()
+    })
+}
+
+/// The clip's frame duration (`delta_t`, ms; `None` when missing or not positive) and its first
+/// frame (`startframe`, 0 when missing).
+fn clip_timing(objects: &[Node]) -> (Option<f64>, f64) {
     let delta_t = objects
         .iter()
         .filter(|o| class(o) == "StepperClipControl" || class(o).ends_with("ClipControl"))
@@ -118,7 +159,13 @@ pub(crate) fn read(bytes: &[u8], path: &Path) -> Result<Parsed, DataError> {
         .find(|o| class(o) == "VideoClip")
         .and_then(|o| number(*o, "startframe"))
         .unwrap_or(0.0);
-    let coords: Vec<(usize, Coords)> = objects
+    (delta_t, start)
+}
+
+/// The coordinate system's frames: from each listed frame on, its image-to-world transform
+/// (frames with a zero or non-finite scale are left out).
+fn coord_frames(objects: &[Node]) -> Vec<(usize, Coords)> {
+    objects
         .iter()
         .find(|o| class(o) == "ImageCoordSystem")
         .and_then(|o| property(*o, "framedata"))
@@ -137,11 +184,22 @@ pub(crate) fn read(bytes: &[u8], path: &Path) -> Result<Parsed, DataError> {
                 .filter(|(_, c)| c.scale.iter().all(|s| s.is_finite() && *s != 0.0))
                 .collect()
         })
-        .unwrap_or_default();
-    let unit = string(root, "length_unit");
+        .unwrap_or_default()
+}
+
+/// The point-mass tracks with marked positions, in world coordinates (through `coords`) and
+/// seconds (frame from `start`, times `delta_t` ms), and the names of the model tracks skipped.
+/// A point mass in a project without a frame duration is an error (`bad` makes it).
+fn point_masses(
+    objects: &[Node],
+    delta_t: Option<f64>,
+    start: f64,
+    coords: &[(usize, Coords)],
+    bad: &impl Fn(&str, &str, String) -> DataError,
+) -> Result<(Vec<Series>, Vec<String>), DataError> {
     let mut series = Vec::new();
     let mut models = Vec::new();
-    for o in &objects {
+    for o in objects {
         let name = string(*o, "name").unwrap_or_else(|| "track".into());
         if MODELS.contains(&class(o)) {
             models.push(name);
@@ -185,51 +243,30 @@ pub(crate) fn read(bytes: &[u8], path: &Path) -> Result<Parsed, DataError> {
             series.push(s);
         }
     }
-    if series.is_empty() {
-        return Err(bad(
-            "tracks",
-            "a point-mass track with marked positions",
-            if models.is_empty() {
-                "no point-mass track".to_string()
-            } else {
-                format!(
-                    "only model track(s) {}: a model stores formulas, not data; export the data from Tracker instead",
-                    models.iter().map(|m| format!("{m:?}")).collect::<Vec<_>>().join(", ")
-                )
-            },
-        ));
-    }
-    // Tracker stores frames in order; keep times strictly increasing regardless.
-    for s in &mut series {
-        let mut pairs: Vec<(f64, Option<[f64; 2]>)> = s
-            .times
-            .iter()
-            .copied()
-            .zip(s.points.iter().copied())
-            .collect();
-        pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
-        pairs.dedup_by(|a, b| a.0 == b.0);
-        s.times = pairs.iter().map(|p| p.0).collect();
-        s.points = pairs.iter().map(|p| p.1).collect();
-    }
-    let scale = match unit.as_deref() {
+    Ok((series, models))
+}
+
+/// Sort a track's frames by time and keep the first of frames at the same time.
+fn sort_frames(s: &mut Series) {
+    let mut pairs: Vec<(f64, Option<[f64; 2]>)> = s
+        .times
+        .iter()
+        .copied()
+        .zip(s.points.iter().copied())
+        .collect();
+    pairs.sort_by(|a, b| a.0.total_cmp(&b.0));
+    pairs.dedup_by(|a, b| a.0 == b.0);
+    s.times = pairs.iter().map(|p| p.0).collect();
+    s.points = pairs.iter().map(|p| p.1).collect();
+}
+
+/// Metres per unit for the project's `length_unit` (m, cm, mm), with the wording for the
+/// report; `None` for any other unit.
+fn length_scale(unit: Option<&str>) -> Option<(f64, String)> {
+    match unit {
         Some("m") => Some((1.0, "metres (the project's length_unit m)".to_string())),
         Some("cm") => Some((0.01, "centimetres (the project's length_unit)".to_string())),
         Some("mm") => Some((0.001, "millimetres (the project's length_unit)".to_string())),
         _ => None,
-    };
-    Ok(Parsed {
-        series,
-        scale,
-        notes: vec![format!(
-            "Tracker project: point-mass positions in world units through the project's coordinate system; t = frame x {} ms{}",
-            delta_t.unwrap_or_default(),
-            if models.is_empty() {
-                String::new()
-            } else {
-                format!("; model track(s) {} skipped (formulas, not data)", models.join(", "))
-            }
-        )],
-        ..Parsed::default()
-    })
+    }
 }

@@ -10,7 +10,8 @@
 //!   before a record is parsed, and one record read into the state.
 //! - `chunks.rs`: the chunk pipeline: each chunk decompressed, CRC-checked and its JSON frames
 //!   parsed ahead on the thread pool, then its records read in file order.
-//! - `decode/`: which decoder a channel gets and one message to samples; `json.rs` (the serde
+//! - `decode/`: which decoder a channel gets (the Foxglove JSON schemas that are not positions,
+//!   the names given to unnamed points) and one message to samples; `json.rs` (the serde
 //!   types and the canonical frame layout) and `protobuf.rs` (Foxglove messages); ROS 2 CDR
 //!   is read by `data::ros_cdr`.
 //! - `tf.rs`: the samples accumulated while reading, and `/tf` trees composed to their root.
@@ -22,6 +23,7 @@ mod records;
 mod tf;
 mod write;
 
+pub use decode::{NOT_POSITIONS, POINTS_NAMES};
 pub use records::{decompressed_limit, record_limit};
 pub use tf::TF_SAMPLE_LIMIT;
 pub use write::{write_json, FRAME_SCHEMA};
@@ -36,28 +38,13 @@ use records::{plain, USED_RECORDS};
 use std::collections::{BTreeMap, HashMap};
 use std::io::Read;
 use std::path::Path;
-use tf::{compose_tf, Acc};
+use tf::{compose_tf, Acc, Stamped};
 
 /// Message encodings the reader decodes (channel encoding / schema).
 pub const SUPPORTED: &str = "json (markers array per frame, or one point per topic), \
 cdr with ros2msg schemas geometry_msgs/msg/PointStamped, PoseStamped, TransformStamped, \
 tf2_msgs/msg/TFMessage, protobuf (schema a FileDescriptorSet) foxglove.FrameTransform, \
 foxglove.PointsAnnotation; chunks uncompressed, zstd or lz4";
-
-/// JSON schemas (Foxglove's) whose x, y are not a position: skipped rather than read as
-/// markers.
-pub const NOT_POSITIONS: [&str; 6] = [
-    "foxglove.Vector3",
-    "foxglove.Vector2",
-    "foxglove.Quaternion",
-    "foxglove.LocationFix",
-    "foxglove.Battery",
-    "foxglove.Log",
-];
-
-/// Marker names given to the points of a `foxglove.PointsAnnotation`, which carries no names:
-/// identity is the index (point 0 the slider, point 1 the bob, further points `point2`, ...).
-pub const POINTS_NAMES: [&str; 2] = ["slider", "bob"];
 
 /// Read an MCAP file linearly (summary and index are not needed).
 pub(crate) fn read(path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {
@@ -120,13 +107,78 @@ struct Reading<'a> {
 /// Read MCAP bytes from any reader, streaming; `path` labels errors; `size` (the file's
 /// length, when known) bounds every length the file declares.
 pub(crate) fn read_from(
-    mut input: impl Read,
+    input: impl Read,
     path: &Path,
     opts: &ReadOptions,
     size: Option<u64>,
 ) -> Result<Parsed, DataError> {
     let limit = record_limit(size);
     let budget = decompressed_limit(size);
+    let mut st = Reading::new(path, opts, limit, budget);
+    let (damage, bytes) = walk(input, &mut st, limit)?;
+    finish(st, damage, bytes)
+}
+
+impl<'a> Reading<'a> {
+    /// The state of a read of `path` before its first record: records up to `limit` bytes,
+    /// `budget` decompressed bytes in all.
+    fn new(path: &'a Path, opts: &'a ReadOptions, limit: usize, budget: u64) -> Self {
+        Reading {
+            path,
+            opts,
+            limit,
+            budget,
+            schemas: HashMap::new(),
+            channels: BTreeMap::new(),
+            acc: Acc::default(),
+            parsed: Parsed::default(),
+            records: 0,
+            messages: 0,
+            record_bytes: 0,
+            unsupported_compression: None,
+            // With a time window, reading stops once marker messages are past its end (by
+            // log_time, with a second of margin for stamps that differ from it): the rest is never
+            // decoded.
+            window_end: opts.time_window.map(|(_, end)| end + 1.0),
+            first_log_time: None,
+            stopped_at: None,
+            bufs: ChunkBuffers::default(),
+            deferred: Default::default(),
+        }
+    }
+}
+
+/// Where reading stopped on damage: why, and the file offset it is reported at when that is not
+/// the bytes read (see `Reading::chunk`).
+#[derive(Default)]
+struct Damage {
+    why: Option<String>,
+    at: Option<u64>,
+}
+
+impl Damage {
+    /// What a step came to: `false` to read on; `true` to stop, keeping the damage (and where it
+    /// is reported).
+    fn settle(&mut self, step: (Step, Option<u64>)) -> bool {
+        match step {
+            (Step::Next, _) => false,
+            (Step::Damage(why), at) => {
+                self.why = Some(why);
+                self.at = at;
+                true
+            }
+            (Step::Stop, _) => true,
+        }
+    }
+}
+
+/// Walk the file's records into `st` (records up to `limit` bytes) until its end, a stop or
+/// damage; returns the damage and the bytes read (or the offset the damage is reported at).
+fn walk(
+    mut input: impl Read,
+    st: &mut Reading,
+    limit: usize,
+) -> Result<(Option<String>, u64), DataError> {
     // Chunks come whole and are read here: decompressed in one call and walked with checked
     // lengths (the crate's record-by-record decompression is slower, and its walk through
     // uncompressed chunks can overflow).
@@ -135,32 +187,8 @@ pub(crate) fn read_from(
             .with_record_length_limit(limit)
             .with_emit_chunks(true),
     );
-    let mut st = Reading {
-        path,
-        opts,
-        limit,
-        budget,
-        schemas: HashMap::new(),
-        channels: BTreeMap::new(),
-        acc: Acc::default(),
-        parsed: Parsed::default(),
-        records: 0,
-        messages: 0,
-        record_bytes: 0,
-        unsupported_compression: None,
-        // With a time window, reading stops once marker messages are past its end (by
-        // log_time, with a second of margin for stamps that differ from it): the rest is never
-        // decoded.
-        window_end: opts.time_window.map(|(_, end)| end + 1.0),
-        first_log_time: None,
-        stopped_at: None,
-        bufs: ChunkBuffers::default(),
-        deferred: Default::default(),
-    };
     let mut bytes = 0u64;
-    let mut damage: Option<String> = None;
-    // Where the damage is reported when not at `bytes` (see `Reading::chunk`).
-    let mut damage_at: Option<u64> = None;
+    let mut damage = Damage::default();
     // The reader asks for exactly the bytes the next record needs, so the bytes read since
     // it last gave a record are the record in progress (after the magic, at first). They are
     // kept while that record is a chunk: when the file ends inside it, its records before the
@@ -168,49 +196,24 @@ pub(crate) fn read_from(
     let mut pending: Vec<u8> = Vec::new();
     let mut skip = ::mcap::MAGIC.len();
     let mut record_start = skip as u64;
-    // What a step came to: read on, or stop with the damage (and where it is reported).
-    let mut settle = |step: (Step, Option<u64>)| match step {
-        (Step::Next, _) => false,
-        (Step::Damage(why), at) => {
-            damage = Some(why);
-            damage_at = at;
-            true
-        }
-        (Step::Stop, _) => true,
-    };
     loop {
         let Some(event) = reader.next_event() else {
             // The end: the chunk taken last is read.
-            settle(st.flush()?);
+            damage.settle(st.flush()?);
             break;
         };
         let event = match event {
             Ok(e) => e,
             Err(e) => {
-                // The chunk taken before comes first.
-                if settle(st.flush()?) {
-                    break;
-                }
                 let in_progress = pending.get(skip..).unwrap_or_default();
-                if let (McapError::UnexpectedEof, Some((&[op::CHUNK], rest))) =
-                    (&e, in_progress.split_first_chunk::<1>())
-                {
-                    if let Some((len, body)) = rest.split_first_chunk::<8>() {
-                        let len = u64::from_le_bytes(*len);
-                        let taken = st.chunk(body, len, record_start, bytes)?;
-                        if settle(taken) || settle(st.flush()?) {
-                            break;
-                        }
-                    }
-                }
-                let why = match e {
-                    McapError::RecordTooLarge { opcode, len } => st.too_large(opcode, len),
-                    McapError::ChunkTooLarge(len) => format!(
-                        "chunk of {len} bytes: more than the {limit}-byte limit for a file of this size"
-                    ),
-                    other => plain(&other),
-                };
-                settle((Step::Damage(why), None));
+                read_error(
+                    st,
+                    e,
+                    in_progress,
+                    (record_start, bytes),
+                    limit,
+                    &mut damage,
+                )?;
                 break;
             }
         };
@@ -218,7 +221,7 @@ pub(crate) fn read_from(
             LinearReadEvent::ReadRequest(need) => {
                 let buf = reader.insert(need);
                 let n = input.read(buf).map_err(|source| DataError::Io {
-                    path: path.to_owned(),
+                    path: st.path.to_owned(),
                     source,
                 })?;
                 if pending.get(skip).is_none_or(|&o| o == op::CHUNK) {
@@ -246,14 +249,59 @@ pub(crate) fn read_from(
                         other => other,
                     }
                 };
-                if settle(step) {
+                if damage.settle(step) {
                     break;
                 }
             }
         }
     }
-    let bytes = damage_at.unwrap_or(bytes);
+    Ok((damage.why, damage.at.unwrap_or(bytes)))
+}
+
+/// The reader's error `e`: the chunk taken before is read first; a chunk the file ends inside
+/// (its bytes so far `in_progress`, from `record_start`; `bytes` read) is read as far as it
+/// goes; then the error is the damage, unless reading stopped before it.
+fn read_error(
+    st: &mut Reading,
+    e: McapError,
+    in_progress: &[u8],
+    (record_start, bytes): (u64, u64),
+    limit: usize,
+    damage: &mut Damage,
+) -> Result<(), DataError> {
+    // The chunk taken before comes first.
+    if damage.settle(st.flush()?) {
+        return Ok(());
+    }
+    if let (McapError::UnexpectedEof, Some((&[op::CHUNK], rest))) =
+        (&e, in_progress.split_first_chunk::<1>())
+    {
+        if let Some((len, body)) = rest.split_first_chunk::<8>() {
+            let len = u64::from_le_bytes(*len);
+            let taken = st.chunk(body, len, record_start, bytes)?;
+            if damage.settle(taken) || damage.settle(st.flush()?) {
+                return Ok(());
+            }
+        }
+    }
+    let why = match e {
+        McapError::RecordTooLarge { opcode, len } => st.too_large(opcode, len),
+        McapError::ChunkTooLarge(len) => format!(
+            "chunk of {len} bytes: more than the {limit}-byte limit for a file of this size"
+        ),
+        other => plain(&other),
+    };
+    damage.settle((Step::Damage(why), None));
+    Ok(())
+}
+
+/// After the walk: the checks on what was read (the topics asked for, the compression, the
+/// damage), `/tf` composed, and the samples turned into series (or the error saying why there
+/// are none).
+fn finish(st: Reading, damage: Option<String>, bytes: u64) -> Result<Parsed, DataError> {
     let Reading {
+        path,
+        opts,
         channels,
         mut acc,
         mut parsed,
@@ -263,26 +311,11 @@ pub(crate) fn read_from(
         stopped_at,
         ..
     } = st;
-    let channel_list = || {
-        let mut v: Vec<String> = channels
-            .values()
-            .map(|c| match &c.state {
-                ChannelState::Markers(d) => format!("{} ({d:?})", c.topic),
-                ChannelState::Ignored(why) => format!("{} ({why})", c.topic),
-            })
-            .collect();
-        v.sort();
-        if v.is_empty() {
-            "the file has no channels".into()
-        } else {
-            format!("channels {}", v.join("; "))
-        }
-    };
     for t in &opts.topics {
         if !channels.values().any(|c| c.topic == *t) && damage.is_none() {
             return Err(DataError::Options {
                 path: path.to_owned(),
-                message: format!("--topic {t}: no such channel; {}", channel_list()),
+                message: format!("--topic {t}: no such channel; {}", channel_list(&channels)),
             });
         }
     }
@@ -317,36 +350,7 @@ pub(crate) fn read_from(
         .map_err(|why| DataError::parse(path, "the /tf messages", "transforms", why, "more"))?;
     parsed.notes.extend(tf_notes);
     if acc.series.is_empty() {
-        // Channels in id order, so the same file gives the same message on every run.
-        let unsupported: Vec<&Channel> = channels
-            .values()
-            .filter(
-                |c| matches!(&c.state, ChannelState::Ignored(w) if w.ends_with("not supported")),
-            )
-            .collect();
-        if unsupported.len() == 1 && channels.len() == 1 {
-            let c = unsupported[0];
-            let ChannelState::Ignored(why) = &c.state else {
-                unreachable!()
-            };
-            return Err(DataError::Unsupported {
-                path: path.to_owned(),
-                what: format!("channel {}", c.topic),
-                found: why.trim_end_matches(" is not supported").to_string(),
-                supported: SUPPORTED.into(),
-            });
-        }
-        if messages == 0 && !channels.is_empty() {
-            return Err(DataError::NoFrames {
-                path: path.to_owned(),
-                what: channel_list(),
-            });
-        }
-        return Err(DataError::NoMarkerChannel {
-            path: path.to_owned(),
-            channels: channel_list(),
-            expected: SUPPORTED.into(),
-        });
+        return Err(no_markers(&channels, messages, path));
     }
     for c in channels.values() {
         if let ChannelState::Ignored(why) = &c.state {
@@ -355,11 +359,78 @@ pub(crate) fn read_from(
                 .push(format!("channel {} skipped: {why}", c.topic));
         }
     }
+    marker_series(std::mem::take(&mut acc.series), &mut parsed, path)?;
+    parsed.scale = Some((1.0, "metres (MCAP marker messages)".into()));
+    parsed.notes.push(format!(
+        "MCAP: {messages} message(s) on {} channel(s), read linearly; in-message stamps used where present",
+        channels.len()
+    ));
+    Ok(parsed)
+}
+
+/// The channels for a message: each with its decoder or why it was skipped, sorted.
+fn channel_list(channels: &BTreeMap<u16, Channel>) -> String {
+    let mut v: Vec<String> = channels
+        .values()
+        .map(|c| match &c.state {
+            ChannelState::Markers(d) => format!("{} ({d:?})", c.topic),
+            ChannelState::Ignored(why) => format!("{} ({why})", c.topic),
+        })
+        .collect();
+    v.sort();
+    if v.is_empty() {
+        "the file has no channels".into()
+    } else {
+        format!("channels {}", v.join("; "))
+    }
+}
+
+/// Why a file gave no marker samples: its one channel's type is not supported, its channels
+/// carry no messages, or none carries markers.
+fn no_markers(channels: &BTreeMap<u16, Channel>, messages: u64, path: &Path) -> DataError {
+    // Channels in id order, so the same file gives the same message on every run.
+    let unsupported: Vec<&Channel> = channels
+        .values()
+        .filter(|c| matches!(&c.state, ChannelState::Ignored(w) if w.ends_with("not supported")))
+        .collect();
+    if unsupported.len() == 1 && channels.len() == 1 {
+        let c = unsupported[0];
+        let ChannelState::Ignored(why) = &c.state else {
+            unreachable!()
+        };
+        return DataError::Unsupported {
+            path: path.to_owned(),
+            what: format!("channel {}", c.topic),
+            found: why.trim_end_matches(" is not supported").to_string(),
+            supported: SUPPORTED.into(),
+        };
+    }
+    if messages == 0 && !channels.is_empty() {
+        return DataError::NoFrames {
+            path: path.to_owned(),
+            what: channel_list(channels),
+        };
+    }
+    DataError::NoMarkerChannel {
+        path: path.to_owned(),
+        channels: channel_list(channels),
+        expected: SUPPORTED.into(),
+    }
+}
+
+/// The samples per (channel, marker) into `parsed`'s series: a marker on several channels is
+/// read from the first, times in seconds from the earliest stamp (also `parsed.time_base`); a
+/// stamp repeated within a marker is an error.
+fn marker_series(
+    samples: Vec<(String, String, Stamped)>,
+    parsed: &mut Parsed,
+    path: &Path,
+) -> Result<(), DataError> {
     // A marker on several channels (the same motion as points and as transforms): the first
     // channel it appeared on is read, the others are named in a note.
     let mut chosen: HashMap<String, String> = HashMap::new();
     let mut series = Vec::new();
-    for (topic, name, s) in std::mem::take(&mut acc.series) {
+    for (topic, name, s) in samples {
         match chosen.get(&name) {
             Some(first) => parsed.notes.push(format!(
                 "marker {name:?} is also on channel {topic}: read from {first} (--topic to choose)"
@@ -397,10 +468,5 @@ pub(crate) fn read_from(
         });
     }
     parsed.time_base = t0 as f64 / 1e9;
-    parsed.scale = Some((1.0, "metres (MCAP marker messages)".into()));
-    parsed.notes.push(format!(
-        "MCAP: {messages} message(s) on {} channel(s), read linearly; in-message stamps used where present",
-        channels.len()
-    ));
-    Ok(parsed)
+    Ok(())
 }

@@ -8,12 +8,26 @@ mod protobuf;
 pub(crate) use json::{PreFrame, PreParsed};
 
 use super::tf::Acc;
-use super::{NOT_POSITIONS, POINTS_NAMES};
 use crate::data::{ros_cdr, Plane};
 use json::{canonical_frame, FastMsg, JMsg, JStamp};
 use prost_reflect::{DescriptorPool, MessageDescriptor};
 use protobuf::{pb_decode, pb_f64, pb_field, pb_stamp};
 use std::fmt;
+
+/// JSON schemas (Foxglove's) whose x, y are not a position: skipped rather than read as
+/// markers.
+pub const NOT_POSITIONS: [&str; 6] = [
+    "foxglove.Vector3",
+    "foxglove.Vector2",
+    "foxglove.Quaternion",
+    "foxglove.LocationFix",
+    "foxglove.Battery",
+    "foxglove.Log",
+];
+
+/// Marker names given to the points of a `foxglove.PointsAnnotation`, which carries no names:
+/// identity is the index (point 0 the slider, point 1 the bob, further points `point2`, ...).
+pub const POINTS_NAMES: [&str; 2] = ["slider", "bob"];
 
 /// How a channel's messages are decoded. The protobuf ones carry the message descriptor built
 /// from the channel's schema (the file's own definition, not one compiled in).
@@ -51,6 +65,13 @@ pub(super) enum Reject {
     Invalid(String),
 }
 
+/// A 3-D point (`p3`) on the plane of motion: see [`xy`].
+fn p3(p: [f64; 3], plane: Option<Plane>) -> Option<[f64; 2]> {
+    xy(Some(p[0]), Some(p[1]), Some(p[2]), plane)
+}
+
+/// A point from its coordinates: x and y, or x, y, z projected onto `plane` when all three
+/// and a plane are given; missing without x or y.
 fn xy(x: Option<f64>, y: Option<f64>, z: Option<f64>, plane: Option<Plane>) -> Option<[f64; 2]> {
     match (x, y, z, plane) {
         (Some(x), Some(y), Some(z), Some(p)) => Some(p.project([x, y, z])),
@@ -124,81 +145,8 @@ pub(super) fn decode(
     acc: &mut Acc,
     pre: Option<PreFrame<'_>>,
 ) -> Result<usize, String> {
-    let p3 = |p: [f64; 3]| xy(Some(p[0]), Some(p[1]), Some(p[2]), plane);
     match dec {
-        Decoder::Json => {
-            if let Some(f) = pre {
-                // Parsed ahead by canonical_frame from these same bytes.
-                let stamp = JStamp::Parts {
-                    sec: f.sec,
-                    nsec: f.nsec,
-                }
-                .ns()?;
-                for (at, x, y) in f.markers {
-                    let id = data
-                        .get(at.clone())
-                        .and_then(|b| std::str::from_utf8(b).ok())
-                        .ok_or("a marker name parsed ahead is not in the message")?;
-                    acc.push(topic, id, stamp, xy(*x, *y, None, plane));
-                }
-                return Ok(f.markers.len());
-            }
-            if let Some(f) = canonical_frame(data) {
-                let stamp = JStamp::Parts {
-                    sec: f.sec,
-                    nsec: f.nsec,
-                }
-                .ns()?;
-                for &(id, x, y) in &f.markers[..f.len] {
-                    acc.push(topic, id, stamp, xy(x, y, None, plane));
-                }
-                return Ok(f.len);
-            }
-            if let Ok(m) = serde_json::from_slice::<FastMsg>(data) {
-                let stamp = match m.timestamp.or(m.header.and_then(|h| h.stamp)) {
-                    Some(s) => JStamp::Parts {
-                        sec: s.sec,
-                        nsec: s.nsec,
-                    }
-                    .ns()?,
-                    None => log_time,
-                };
-                if let Some(markers) = m.markers {
-                    for mk in &markers {
-                        acc.push(topic, &mk.id, stamp, xy(mk.x, mk.y, mk.z, plane));
-                    }
-                    return Ok(markers.len());
-                }
-                if let Some(p) = m.point.or(m.position) {
-                    acc.push(topic, topic, stamp, xy(p.x, p.y, p.z, plane));
-                    return Ok(1);
-                }
-                if m.x.is_some() || m.y.is_some() {
-                    acc.push(topic, topic, stamp, xy(m.x, m.y, m.z, plane));
-                    return Ok(1);
-                }
-            }
-            let m: JMsg = serde_json::from_slice(data).map_err(|e| format!("JSON: {e}"))?;
-            let stamp = match m.timestamp.or(m.header.and_then(|h| h.stamp)) {
-                Some(s) => s.ns()?,
-                None => log_time,
-            };
-            if let Some(markers) = m.markers {
-                let n = markers.len();
-                for mk in markers {
-                    acc.push(topic, &mk.id, stamp, xy(mk.x, mk.y, mk.z, plane));
-                }
-                Ok(n)
-            } else if let Some(p) = m.point.or(m.position) {
-                acc.push(topic, topic, stamp, xy(p.x, p.y, p.z, plane));
-                Ok(1)
-            } else if m.x.is_some() || m.y.is_some() {
-                acc.push(topic, topic, stamp, xy(m.x, m.y, m.z, plane));
-                Ok(1)
-            } else {
-                Err("a JSON object with a \"markers\" array, a \"point\", or x and y".into())
-            }
-        }
+        Decoder::Json => decode_json(topic, data, log_time, plane, acc, pre),
         Decoder::PointStamped | Decoder::PoseStamped => {
             let pose = matches!(dec, Decoder::PoseStamped);
             let (h, p) = ros_cdr::point_stamped(data, pose).map_err(|e| {
@@ -207,7 +155,7 @@ pub(super) fn decode(
                     if pose { "PoseStamped" } else { "PointStamped" }
                 )
             })?;
-            acc.push(topic, topic, h.stamp.ns(), p3(p));
+            acc.push(topic, topic, h.stamp.ns(), p3(p, plane));
             Ok(1)
         }
         Decoder::TransformStamped => {
@@ -224,44 +172,148 @@ pub(super) fn decode(
             }
             Ok(n)
         }
-        Decoder::FrameTransform(desc) => {
-            let m = pb_decode(desc, data)?;
-            let stamp = pb_stamp(&m)?.unwrap_or(log_time);
-            let name = pb_field(&m, "child_frame_id")?;
-            let name = name.as_str().unwrap_or_default();
-            if name.is_empty() {
-                return Err("a FrameTransform whose child_frame_id names the marker".into());
-            }
-            // An unset translation is a marker the tracker lost in this frame, not the origin.
-            let p = if m.has_field_by_name("translation") {
-                let v = pb_field(&m, "translation")?;
-                let t = v.as_message().ok_or("a foxglove.Vector3 in translation")?;
-                p3([pb_f64(t, "x")?, pb_f64(t, "y")?, pb_f64(t, "z")?])
-            } else {
-                None
-            };
-            acc.push(topic, name, stamp, p);
-            Ok(1)
+        Decoder::FrameTransform(desc) => frame_transform(desc, topic, data, log_time, plane, acc),
+        Decoder::PointsAnnotation(desc) => points_annotation(desc, topic, data, log_time, acc),
+    }
+}
+
+/// A JSON message: the canonical frame parsed ahead (`pre`), else parsed here, else any of the
+/// layouts serde reads (a markers array, a point, or x and y; stamped, or at `log_time`).
+fn decode_json(
+    topic: &str,
+    data: &[u8],
+    log_time: i64,
+    plane: Option<Plane>,
+    acc: &mut Acc,
+    pre: Option<PreFrame<'_>>,
+) -> Result<usize, String> {
+    if let Some(f) = pre {
+        // Parsed ahead by canonical_frame from these same bytes.
+        let stamp = JStamp::Parts {
+            sec: f.sec,
+            nsec: f.nsec,
         }
-        Decoder::PointsAnnotation(desc) => {
-            let m = pb_decode(desc, data)?;
-            let stamp = pb_stamp(&m)?.unwrap_or(log_time);
-            let v = pb_field(&m, "points")?;
-            let points = v.as_list().ok_or("a repeated foxglove.Point2 in points")?;
-            let mut xys = Vec::with_capacity(points.len());
-            for p in points {
-                let p = p.as_message().ok_or("foxglove.Point2 messages in points")?;
-                xys.push([pb_f64(p, "x")?, pb_f64(p, "y")?]);
+        .ns()?;
+        for (at, x, y) in f.markers {
+            let id = data
+                .get(at.clone())
+                .and_then(|b| std::str::from_utf8(b).ok())
+                .ok_or("a marker name parsed ahead is not in the message")?;
+            acc.push(topic, id, stamp, xy(*x, *y, None, plane));
+        }
+        return Ok(f.markers.len());
+    }
+    if let Some(f) = canonical_frame(data) {
+        let stamp = JStamp::Parts {
+            sec: f.sec,
+            nsec: f.nsec,
+        }
+        .ns()?;
+        for &(id, x, y) in &f.markers[..f.len] {
+            acc.push(topic, id, stamp, xy(x, y, None, plane));
+        }
+        return Ok(f.len);
+    }
+    if let Ok(m) = serde_json::from_slice::<FastMsg>(data) {
+        let stamp = match m.timestamp.or(m.header.and_then(|h| h.stamp)) {
+            Some(s) => JStamp::Parts {
+                sec: s.sec,
+                nsec: s.nsec,
             }
-            // Identity by index; the two roles get a sample every frame so a short list reads
-            // as missing markers rather than shifting the others.
-            for (k, name) in POINTS_NAMES.iter().enumerate() {
-                acc.push(topic, name, stamp, xys.get(k).copied());
+            .ns()?,
+            None => log_time,
+        };
+        if let Some(markers) = m.markers {
+            for mk in &markers {
+                acc.push(topic, &mk.id, stamp, xy(mk.x, mk.y, mk.z, plane));
             }
-            for (k, p) in xys.iter().enumerate().skip(POINTS_NAMES.len()) {
-                acc.push(topic, &format!("point{k}"), stamp, Some(*p));
-            }
-            Ok(xys.len())
+            return Ok(markers.len());
+        }
+        if let Some(p) = m.point.or(m.position) {
+            acc.push(topic, topic, stamp, xy(p.x, p.y, p.z, plane));
+            return Ok(1);
+        }
+        if m.x.is_some() || m.y.is_some() {
+            acc.push(topic, topic, stamp, xy(m.x, m.y, m.z, plane));
+            return Ok(1);
         }
     }
+    let m: JMsg = serde_json::from_slice(data).map_err(|e| format!("JSON: {e}"))?;
+    let stamp = match m.timestamp.or(m.header.and_then(|h| h.stamp)) {
+        Some(s) => s.ns()?,
+        None => log_time,
+    };
+    if let Some(markers) = m.markers {
+        let n = markers.len();
+        for mk in markers {
+            acc.push(topic, &mk.id, stamp, xy(mk.x, mk.y, mk.z, plane));
+        }
+        Ok(n)
+    } else if let Some(p) = m.point.or(m.position) {
+        acc.push(topic, topic, stamp, xy(p.x, p.y, p.z, plane));
+        Ok(1)
+    } else if m.x.is_some() || m.y.is_some() {
+        acc.push(topic, topic, stamp, xy(m.x, m.y, m.z, plane));
+        Ok(1)
+    } else {
+        Err("a JSON object with a \"markers\" array, a \"point\", or x and y".into())
+    }
+}
+
+/// A protobuf `foxglove.FrameTransform`: the marker `child_frame_id` at its translation
+/// (missing when unset).
+fn frame_transform(
+    desc: &MessageDescriptor,
+    topic: &str,
+    data: &[u8],
+    log_time: i64,
+    plane: Option<Plane>,
+    acc: &mut Acc,
+) -> Result<usize, String> {
+    let m = pb_decode(desc, data)?;
+    let stamp = pb_stamp(&m)?.unwrap_or(log_time);
+    let name = pb_field(&m, "child_frame_id")?;
+    let name = name.as_str().unwrap_or_default();
+    if name.is_empty() {
+        return Err("a FrameTransform whose child_frame_id names the marker".into());
+    }
+    // An unset translation is a marker the tracker lost in this frame, not the origin.
+    let p = if m.has_field_by_name("translation") {
+        let v = pb_field(&m, "translation")?;
+        let t = v.as_message().ok_or("a foxglove.Vector3 in translation")?;
+        p3([pb_f64(t, "x")?, pb_f64(t, "y")?, pb_f64(t, "z")?], plane)
+    } else {
+        None
+    };
+    acc.push(topic, name, stamp, p);
+    Ok(1)
+}
+
+/// A protobuf `foxglove.PointsAnnotation`: its points by index, the first two the slider and
+/// the bob ([`POINTS_NAMES`]).
+fn points_annotation(
+    desc: &MessageDescriptor,
+    topic: &str,
+    data: &[u8],
+    log_time: i64,
+    acc: &mut Acc,
+) -> Result<usize, String> {
+    let m = pb_decode(desc, data)?;
+    let stamp = pb_stamp(&m)?.unwrap_or(log_time);
+    let v = pb_field(&m, "points")?;
+    let points = v.as_list().ok_or("a repeated foxglove.Point2 in points")?;
+    let mut xys = Vec::with_capacity(points.len());
+    for p in points {
+        let p = p.as_message().ok_or("foxglove.Point2 messages in points")?;
+        xys.push([pb_f64(p, "x")?, pb_f64(p, "y")?]);
+    }
+    // Identity by index; the two roles get a sample every frame so a short list reads
+    // as missing markers rather than shifting the others.
+    for (k, name) in POINTS_NAMES.iter().enumerate() {
+        acc.push(topic, name, stamp, xys.get(k).copied());
+    }
+    for (k, p) in xys.iter().enumerate().skip(POINTS_NAMES.len()) {
+        acc.push(topic, &format!("point{k}"), stamp, Some(*p));
+    }
+    Ok(xys.len())
 }

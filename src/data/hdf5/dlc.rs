@@ -10,43 +10,30 @@
 //!   (the frame number, or the image path) and `values_block_0` (the row's values); the column
 //!   labels are that dataset's attribute `values_block_0_kind`, a list of tuples that PyTables
 //!   pickles with protocol 0 (decoded by `serde-pickle`, after a check that the pickle is that
-//!   list and nothing else, so that no attribute expands without bound);
+//!   list and nothing else, so that no attribute expands without bound: `pickle.rs`);
 //! - fixed format (`pandas_type` `frame`): `block0_values` (rows x columns), the column labels
 //!   as per-level names and codes `block0_items_level{i}`/`block0_items_label{i}`, the row index
 //!   in `axis1` (or `axis1_level{i}`/`axis1_label{i}` for image paths split into parts).
 //!
-//! The columns then go through the DeepLabCut CSV reader's own rules ([`super::dlc::Builder`]):
-//! the same marker names, `--min-likelihood`, pixels with y down, t = frame / `--fps`. NaN is
-//! missing; a numeric row index gives the frame numbers, image paths number the rows.
+//! The columns then go through the DeepLabCut CSV reader's own rules
+//! ([`crate::data::dlc::Builder`]): the same marker names, `--min-likelihood`, pixels with y
+//! down, t = frame / `--fps`. NaN is missing; a numeric row index gives the frame numbers, image
+//! paths number the rows.
 
-use super::dlc::{Builder, Cells};
-use super::sleap_h5::MAX_H5_BYTES;
-use super::{DataError, Parsed, ReadOptions};
+use super::io::{number, numeric, raw, Src, MAX_H5_BYTES, MAX_RATIO};
+use super::pickle::unpickle_labels;
+use crate::data::dlc::{Builder, Cells};
+use crate::data::{DataError, Parsed, ReadOptions};
 use hdf5_reader::group::Group;
-use hdf5_reader::{ByteOrder, Dataset, Datatype, Hdf5File};
-use std::collections::HashMap;
+use hdf5_reader::{Dataset, Datatype, Hdf5File};
 use std::path::Path;
 
 /// The key DeepLabCut writes its DataFrame under.
-pub const DLC_KEY: &str = "df_with_missing";
-
-/// How many times its file's size a dataset may decode to: deflate's largest ratio (1032:1), so
-/// that a small file cannot declare a table it does not hold (DeepLabCut writes uncompressed).
-const MAX_RATIO: usize = 1032;
-
-/// The file being read: its name, and the most bytes one dataset may decode to.
-struct Src<'a> {
-    path: &'a Path,
-    limit: usize,
-}
-
-/// The most column-label strings a pickled label list may expand to (a 20-animal, 50-part
-/// DeepLabCut table has 3,000 columns of 4 labels).
-const MAX_LABEL_STRINGS: usize = 1 << 20;
+const DLC_KEY: &str = "df_with_missing";
 
 /// The key of the pandas DataFrame in `f`, if it holds one: `df_with_missing`, else the one
 /// top-level group that pandas marked with a `pandas_type`.
-pub(crate) fn pandas_key(f: &Hdf5File) -> Option<String> {
+pub(super) fn pandas_key(f: &Hdf5File) -> Option<String> {
     let groups = f.root_group().and_then(|r| r.groups()).ok()?;
     let pandas: Vec<String> = groups
         .iter()
@@ -78,7 +65,7 @@ struct Frame {
 }
 
 /// Read the DataFrame DeepLabCut wrote under `key` in `f`, a file of `file_len` bytes.
-pub(crate) fn read(
+pub(super) fn read(
     f: &Hdf5File,
     key: &str,
     file_len: usize,
@@ -171,68 +158,6 @@ impl Cells for Row<'_> {
     fn at(&self) -> String {
         format!("row {} of {}", self.r, self.at)
     }
-}
-
-/// A number stored as an HDF5 integer or float of any size and byte order.
-fn number(bytes: &[u8], dt: &Datatype) -> Option<f64> {
-    let (size, order) = match dt {
-        Datatype::FixedPoint {
-            size, byte_order, ..
-        }
-        | Datatype::FloatingPoint { size, byte_order } => (*size as usize, *byte_order),
-        _ => return None,
-    };
-    let mut b = [0u8; 8];
-    let src = bytes.get(..size)?;
-    if order == ByteOrder::BigEndian {
-        b[8 - size..].copy_from_slice(src);
-        b.reverse();
-    } else {
-        b[..size].copy_from_slice(src);
-    }
-    let u = u64::from_le_bytes(b);
-    Some(match dt {
-        Datatype::FloatingPoint { size: 8, .. } => f64::from_bits(u),
-        Datatype::FloatingPoint { size: 4, .. } => f32::from_bits(u as u32) as f64,
-        Datatype::FixedPoint { signed: true, .. } if size < 8 => {
-            let shift = 64 - 8 * size as u32;
-            ((u << shift) as i64 >> shift) as f64
-        }
-        Datatype::FixedPoint { signed: true, .. } => u as i64 as f64,
-        Datatype::FixedPoint { .. } => u as f64,
-        _ => return None,
-    })
-}
-
-/// Whether `dt` is a number [`number`] reads.
-fn numeric(dt: &Datatype) -> bool {
-    matches!(
-        dt,
-        Datatype::FixedPoint {
-            size: 1 | 2 | 4 | 8,
-            ..
-        } | Datatype::FloatingPoint { size: 4 | 8, .. }
-    )
-}
-
-/// A dataset's raw bytes, refused past the file's limit before reading.
-fn raw(ds: &Dataset, at: &str, src: &Src) -> Result<Vec<u8>, DataError> {
-    let bad =
-        |expected: &str, found: String| DataError::parse(src.path, at, ds.name(), expected, found);
-    let len = ds
-        .raw_byte_len()
-        .map_err(|e| bad("a readable dataset", e.to_string()))?;
-    if len > src.limit {
-        return Err(bad(
-            &format!(
-                "at most {} bytes ({MAX_RATIO} times the file's size, at most {MAX_H5_BYTES})",
-                src.limit
-            ),
-            format!("{len} bytes declared"),
-        ));
-    }
-    ds.read_raw_bytes()
-        .map_err(|e| bad("a readable dataset", e.to_string()))
 }
 
 /// The table format: one compound row per frame.
@@ -372,7 +297,29 @@ fn read_fixed(group: &Group, at: &str, src: &Src) -> Result<Frame, DataError> {
     let block = dataset("block0_values")?;
     // Column labels: one name per level, indexed by one code per column.
     let nlevels = int_attr("block0_items_nlevels").unwrap_or(1.0);
-    let labels: Vec<Vec<String>> = if nlevels > 1.0 {
+    let labels = fixed_labels(nlevels, at, src, &bad, &dataset)?;
+    let (values, rows) = fixed_values(&block, labels.len(), at, src, &bad)?;
+    let frames = fixed_frames(group, rows, at, src, &bad)?;
+    Ok(Frame {
+        labels,
+        values,
+        frames,
+        labels_at: format!("{at}/block0_items_level*"),
+        at: format!("{at}/block0_values"),
+    })
+}
+
+/// The fixed format's column labels: per level (`nlevels` of them, at most 8) the names
+/// `block0_items_level{i}` indexed by one code per column `block0_items_label{i}`; one level
+/// is the names `block0_items`. `dataset(name)` opens a dataset of the group.
+fn fixed_labels(
+    nlevels: f64,
+    at: &str,
+    src: &Src,
+    bad: &impl Fn(&str, &str, String) -> DataError,
+    dataset: &impl Fn(&str) -> Result<Dataset, DataError>,
+) -> Result<Vec<Vec<String>>, DataError> {
+    if nlevels > 1.0 {
         let mut levels = Vec::new();
         for i in 0..(nlevels as usize).min(8) {
             let names = dataset(&format!("block0_items_level{i}"))?
@@ -406,16 +353,26 @@ fn read_fixed(group: &Group, at: &str, src: &Src) -> Result<Frame, DataError> {
                 format!("{:?}", levels.iter().map(Vec::len).collect::<Vec<_>>()),
             ));
         }
-        (0..n)
+        Ok((0..n)
             .map(|j| levels.iter().map(|l| l[j].clone()).collect())
-            .collect()
+            .collect())
     } else {
         let names = dataset("block0_items")?
             .read_strings()
             .map_err(|e| bad("block0_items", "strings", e.to_string()))?;
-        names.into_iter().map(|n| vec![n]).collect()
-    };
-    let width = labels.len();
+        Ok(names.into_iter().map(|n| vec![n]).collect())
+    }
+}
+
+/// The fixed format's values `block0_values`, row by row (`width` columns), and the number of
+/// rows.
+fn fixed_values(
+    block: &Dataset,
+    width: usize,
+    at: &str,
+    src: &Src,
+    bad: &impl Fn(&str, &str, String) -> DataError,
+) -> Result<(Vec<f64>, usize), DataError> {
     // pandas writes the block transposed, rows x columns, and says so; older files did not.
     let transposed = block
         .attribute("transposed")
@@ -442,7 +399,7 @@ fn read_fixed(group: &Group, at: &str, src: &Src) -> Result<Frame, DataError> {
         ));
     }
     let cell = block.raw_element_size().unwrap_or(8).max(1);
-    let bytes = raw(&block, at, src)?;
+    let bytes = raw(block, at, src)?;
     let want = rows.checked_mul(width).and_then(|n| n.checked_mul(cell));
     if want != Some(bytes.len()) {
         return Err(bad(
@@ -463,8 +420,19 @@ fn read_fixed(group: &Group, at: &str, src: &Src) -> Result<Frame, DataError> {
         .flat_map(|r| (0..width).map(move |c| (r, c)))
         .map(|(r, c)| value(r, c))
         .collect();
+    Ok((values, rows))
+}
+
+/// The fixed format's frame numbers (`rows` of them): the row index `axis1` when it is numeric.
+fn fixed_frames(
+    group: &Group,
+    rows: usize,
+    at: &str,
+    src: &Src,
+    bad: &impl Fn(&str, &str, String) -> DataError,
+) -> Result<Option<Vec<f64>>, DataError> {
     // A numeric row index holds frame numbers; image paths (strings, or levels) do not.
-    let frames = match group.dataset("axis1") {
+    Ok(match group.dataset("axis1") {
         Ok(axis) if numeric(axis.dtype()) => {
             let step = axis.raw_element_size().unwrap_or(8).max(1);
             let ix = raw(&axis, at, src)?;
@@ -482,221 +450,5 @@ fn read_fixed(group: &Group, at: &str, src: &Src) -> Result<Frame, DataError> {
             Some(frames)
         }
         _ => None,
-    };
-    Ok(Frame {
-        labels,
-        values,
-        frames,
-        labels_at: format!("{at}/block0_items_level*"),
-        at: format!("{at}/block0_values"),
     })
-}
-
-/// Column labels from the protocol-0 pickle PyTables stores: a list of tuples of strings (or of
-/// strings, for one level). Only that shape is accepted (see [`check_label_pickle`]), then
-/// `serde-pickle` decodes it; `Err` says what was found.
-fn unpickle_labels(raw: &[u8]) -> Result<Vec<Vec<String>>, String> {
-    // A fixed-length HDF5 string: NUL padded.
-    let end = raw.iter().rposition(|&b| b != 0).map_or(0, |i| i + 1);
-    let raw = &raw[..end];
-    check_label_pickle(raw)?;
-    let value =
-        serde_pickle::value_from_slice(raw, serde_pickle::DeOptions::new().decode_strings())
-            .map_err(|e| e.to_string())?;
-    let text = |v: &serde_pickle::Value| match v {
-        serde_pickle::Value::String(s) => Ok(s.clone()),
-        serde_pickle::Value::Bytes(b) => Ok(String::from_utf8_lossy(b).into_owned()),
-        other => Err(format!("the label {other:?}")),
-    };
-    let serde_pickle::Value::List(items) = value else {
-        return Err("not a list".into());
-    };
-    items
-        .iter()
-        .map(|item| match item {
-            serde_pickle::Value::Tuple(parts) => parts.iter().map(text).collect(),
-            other => Ok(vec![text(other)?]),
-        })
-        .collect()
-}
-
-/// Check that `raw` is exactly what `pickle.dumps(labels, 0)` writes for a list of tuples of
-/// strings: `(l` then, per label, a string or a tuple `(` ... `t` (each part a string, number or
-/// memo reference, new objects optionally memoized with `p`) or a memo reference `g`, followed by
-/// `a`; then `.`. This keeps the nesting at two and memo entries from being copied, and counts
-/// the strings the list expands to (references included), refusing more than
-/// [`MAX_LABEL_STRINGS`]: no pickle can then make the decoder allocate without bound.
-fn check_label_pickle<'a>(raw: &'a [u8]) -> Result<(), String> {
-    let mut ops = Ops { raw, at: 0 };
-    // Each memo entry's size in strings: 1 for a scalar, its length for a tuple.
-    let mut memo: HashMap<&'a [u8], usize> = HashMap::new();
-    let put = |ops: &mut Ops<'a>, n: usize, memo: &mut HashMap<&'a [u8], usize>| {
-        if ops.peek() == Some(b'p') {
-            let (_, id) = ops.next()?;
-            memo.insert(id, n);
-        }
-        Ok::<(), String>(())
-    };
-    ops.expect(b'(')?;
-    ops.expect(b'l')?;
-    // The list itself is put in the memo too, but nothing may refer to it.
-    if ops.peek() == Some(b'p') {
-        ops.next()?;
-    }
-    let mut total = 0usize;
-    loop {
-        let n = match ops.next()? {
-            (b'.', _) if ops.at == raw.len() => return Ok(()),
-            (b'(', _) => {
-                let mut n = 0;
-                loop {
-                    match ops.next()? {
-                        (b't', _) => break,
-                        (b'g', id) if memo.get(id) == Some(&1) => n += 1,
-                        (op, _) if SCALARS.contains(&op) => {
-                            n += 1;
-                            put(&mut ops, 1, &mut memo)?;
-                        }
-                        (op, _) => return Err(ops.unexpected(op, "a label part")),
-                    }
-                }
-                put(&mut ops, n, &mut memo)?;
-                n
-            }
-            (b'g', id) => *memo
-                .get(id)
-                .ok_or_else(|| format!("a reference to memo {:?} never put", ascii(id)))?,
-            (op, _) if SCALARS.contains(&op) => {
-                put(&mut ops, 1, &mut memo)?;
-                1
-            }
-            (op, _) => return Err(ops.unexpected(op, "a label")),
-        };
-        ops.expect(b'a')?;
-        total += n;
-        if total > MAX_LABEL_STRINGS {
-            return Err(format!("more than {MAX_LABEL_STRINGS} label strings"));
-        }
-    }
-}
-
-/// Protocol-0 opcodes of one scalar, each with a line argument: unicode, byte string, int,
-/// long, float; and None.
-const SCALARS: [u8; 6] = [b'V', b'S', b'I', b'L', b'F', b'N'];
-
-/// Protocol-0 opcodes, each with its line argument (empty for one-byte opcodes).
-struct Ops<'a> {
-    raw: &'a [u8],
-    at: usize,
-}
-
-impl<'a> Ops<'a> {
-    fn peek(&self) -> Option<u8> {
-        self.raw.get(self.at).copied()
-    }
-
-    fn next(&mut self) -> Result<(u8, &'a [u8]), String> {
-        let op = self.peek().ok_or("a pickle that ends before its stop")?;
-        self.at += 1;
-        if !b"VSILFpg".contains(&op) {
-            return Ok((op, &[]));
-        }
-        let rest = &self.raw[self.at..];
-        let n = rest
-            .iter()
-            .position(|&b| b == b'\n')
-            .ok_or("an opcode argument without its newline")?;
-        self.at += n + 1;
-        Ok((op, &rest[..n]))
-    }
-
-    fn expect(&mut self, want: u8) -> Result<(), String> {
-        match self.next()? {
-            (op, _) if op == want => Ok(()),
-            (op, _) => Err(self.unexpected(op, &format!("{:?}", want as char))),
-        }
-    }
-
-    fn unexpected(&self, op: u8, wanted: &str) -> String {
-        format!(
-            "opcode {:?} at byte {} where {wanted} belongs",
-            op as char,
-            self.at.saturating_sub(1)
-        )
-    }
-}
-
-fn ascii(b: &[u8]) -> String {
-    String::from_utf8_lossy(b).into_owned()
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn pytables_label_pickles_decode_and_others_are_refused() {
-        // As PyTables writes `[("s", "a", "x"), ("s", "a", "y")]` (pickle.dumps(v, 0)).
-        let ok = b"(lp0\n(Vs\np1\nVa\np2\nVx\np3\ntp4\na(g1\ng2\nVy\np5\ntp6\na.";
-        assert_eq!(
-            unpickle_labels(ok).unwrap(),
-            vec![vec!["s", "a", "x"], vec!["s", "a", "y"]]
-        );
-        // Python 2's byte strings, NUL padding, one level.
-        assert_eq!(
-            unpickle_labels(b"(lp0\nS'a b'\np1\naS'c'\np2\na.\0\0").unwrap(),
-            vec![vec!["a b"], vec!["c"]]
-        );
-        // Strings referenced again, as pickle writes a repeated scorer or bodypart.
-        let refs = b"(lp0\n(Vx\np1\ng1\ng1\ntp2\na(g1\nVy\np3\ntp4\na.";
-        assert_eq!(
-            unpickle_labels(refs).unwrap(),
-            vec![vec!["x", "x", "x"], vec!["x", "y"]]
-        );
-        for bad in [
-            &b"\x80\x02]q\x00."[..],            // protocol 2
-            b"(lp0\nVx\np1\np2\na.",            // a memo entry put twice
-            b"(lp0\ng0\na.",                    // the list inside itself
-            b"(lp0\n(lp1\na.",                  // a list in the list
-            b"(lp0\nc__builtin__\nlist\n(tRa.", // a global call
-            b"(lp0\nVx\na",                     // no stop
-            b"(lp0\nVx\na.V",                   // past the stop
-            b"(lp0\nI1\na.",                    // a number for a label
-        ] {
-            assert!(unpickle_labels(bad).is_err(), "{:?}", ascii(bad));
-        }
-        // A tuple of 1,000 strings referenced 2,000 times: 2 million strings, refused.
-        let mut big = b"(lp0\n(".to_vec();
-        for i in 0..1000 {
-            big.extend(format!("Vp{i}\n").bytes());
-        }
-        big.extend(b"tp1\na");
-        for _ in 0..2000 {
-            big.extend(b"g1\na");
-        }
-        big.push(b'.');
-        assert!(unpickle_labels(&big).unwrap_err().contains("more than"));
-    }
-
-    #[test]
-    fn numbers_of_any_width_and_order() {
-        let i8 = Datatype::FixedPoint {
-            size: 1,
-            signed: true,
-            byte_order: ByteOrder::LittleEndian,
-        };
-        assert_eq!(number(&[0xff], &i8), Some(-1.0));
-        let u16be = Datatype::FixedPoint {
-            size: 2,
-            signed: false,
-            byte_order: ByteOrder::BigEndian,
-        };
-        assert_eq!(number(&[1, 2], &u16be), Some(258.0));
-        let f32le = Datatype::FloatingPoint {
-            size: 4,
-            byte_order: ByteOrder::LittleEndian,
-        };
-        assert_eq!(number(&1.5f32.to_le_bytes(), &f32le), Some(1.5));
-        assert_eq!(number(&[1], &f32le), None);
-    }
 }

@@ -1,55 +1,15 @@
-//! HDF5 inputs, read with the pure-Rust `hdf5-reader` crate (no C library): SLEAP analysis files
-//! (`tracks[track][xy][node][frame]`, `node_names`, `track_names`; pixels, y down, NaN where
-//! missing, no frame rate stored) here, and DeepLabCut's pandas DataFrame (told apart by its
-//! content: a top-level group written by pandas) in [`super::dlc_h5`].
+//! SLEAP's analysis HDF5 file: `tracks[track][xy][node][frame]`, `node_names`, `track_names`;
+//! pixels, y down, NaN where missing, no frame rate stored.
 
-use super::{dlc_h5, DataError, Format, Parsed, ReadOptions, Series};
-use hdf5_reader::{Hdf5File, OpenOptions};
+use crate::data::{DataError, Parsed, ReadOptions, Series};
+use hdf5_reader::Hdf5File;
 use std::path::Path;
 
-/// The HDF5 signature.
-pub const MAGIC: &[u8] = b"\x89HDF\r\n\x1a\n";
-
-/// The most bytes an HDF5 input may be, and may decompress to in one read: far beyond an
-/// analysis file of markers (a 2-track, 20-node hour at 100 Hz is under 100 MB).
-pub const MAX_H5_BYTES: usize = 1 << 30;
-
-/// The read limits of every HDF5 input.
-fn limits() -> OpenOptions {
-    OpenOptions::default()
-        .with_max_read_bytes(MAX_H5_BYTES)
-        .with_max_chunk_bytes(64 << 20)
-}
-
-/// Which format an HDF5 file holds: DeepLabCut when it has a pandas DataFrame, else SLEAP
-/// (whose reader then says what is missing). Opens the file without reading it whole.
-pub(crate) fn detect_file(path: &Path) -> Format {
-    match Hdf5File::open_with_options(path, limits()) {
-        Ok(f) if dlc_h5::pandas_key(&f).is_some() => Format::DeepLabCut,
-        _ => Format::Sleap,
-    }
-}
-
-/// [`detect_file`] for a file held in memory.
-pub(crate) fn detect_bytes(bytes: &[u8]) -> Format {
-    match Hdf5File::from_bytes_with_options(bytes, limits()) {
-        Ok(f) if dlc_h5::pandas_key(&f).is_some() => Format::DeepLabCut,
-        _ => Format::Sleap,
-    }
-}
-
-/// Read an HDF5 file held in memory: DeepLabCut's DataFrame when it holds one, else a SLEAP
-/// analysis file.
-pub(crate) fn read(bytes: Vec<u8>, path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {
+/// Read a SLEAP analysis file (`f`, opened from `path`): one series per track and node.
+pub(super) fn read(f: &Hdf5File, path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {
     let bad = |field: &str, expected: &str, found: String| {
         DataError::parse(path, "the HDF5 file", field, expected, found)
     };
-    let file_len = bytes.len();
-    let f = Hdf5File::from_vec_with_options(bytes, limits())
-        .map_err(|e| bad("file", "an HDF5 file", e.to_string()))?;
-    if let Some(key) = dlc_h5::pandas_key(&f) {
-        return dlc_h5::read(&f, &key, file_len, path, opts);
-    }
     let Ok(tracks) = f.dataset("tracks") else {
         let found = match f.root_group().and_then(|g| g.member_names()) {
             Ok((groups, sets)) => format!("members {}", [groups, sets].concat().join(", ")),

@@ -1,0 +1,32 @@
+//! What every reader returns: marker series in file units ([`Series`]) and what the file says
+//! about them ([`Parsed`]), before `data::read_recording` picks the slider and the bob, aligns
+//! them and calibrates them.
+
+use std::collections::BTreeMap;
+
+/// One marker's samples as a reader found them: times in seconds (strictly increasing, as each
+/// reader checks) and positions in file units, 2-D.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub(crate) struct Series {
+    pub name: String,
+    pub times: Vec<f64>,
+    pub points: Vec<Option<[f64; 2]>>,
+}
+
+/// What a reader returns: marker series in file units and what the file says about them.
+#[derive(Debug, Clone, Default)]
+pub(crate) struct Parsed {
+    pub series: Vec<Series>,
+    /// Metres per unit when the file says (with the wording for the report).
+    pub scale: Option<(f64, String)>,
+    /// Whether y points down in the file (pixels).
+    pub y_down: bool,
+    /// The file-clock time (seconds) that the series' times are relative to.
+    pub time_base: f64,
+    pub notes: Vec<String>,
+    pub warnings: Vec<String>,
+    pub metadata: BTreeMap<String, String>,
+    /// Names a reader joined into another series (a later name, the name it is kept under):
+    /// asking for the later name selects the joined series.
+    pub joined: Vec<(String, String)>,
+}
