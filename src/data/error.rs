@@ -8,6 +8,18 @@ use thiserror::Error;
 /// name the line (CSV) or record (MCAP), the field and what was expected.
 #[derive(Debug, Error)]
 pub enum DataError {
+    /// The file would make a reader spend more than its budget (`budget.rs`).
+    #[error("{path}: over the input budget: more than {limit} {what} for a file of {file_bytes} bytes; refusing to read it (the limits grow with the file's size up to a fixed cap)")]
+    OverBudget {
+        /// The file.
+        path: PathBuf,
+        /// What would be spent (decoded bytes, marker tracks, ...).
+        what: &'static str,
+        /// The limit for this file.
+        limit: u64,
+        /// The file's size, from which the limit follows.
+        file_bytes: u64,
+    },
     /// The file could not be opened or read.
     #[error("{path}: cannot read: {source}")]
     Io {

@@ -8,6 +8,7 @@
 //! The files, in the order a read goes through them:
 //! - `mod.rs`: the entry points, format detection, and the assembly of what a reader returns
 //!   into a calibrated recording (the slider and the bob picked, aligned on common times).
+//! - `budget.rs`: one budget per input file: what a reader may decode, hold and compute.
 //! - `options.rs`: `ReadOptions` and `Plane`; `parsed.rs`: what a reader returns (`Series`,
 //!   `Parsed`).
 //! - `table/`: the CSV-family readers, one file per tool (wide, long, Tracker, DeepLabCut,
@@ -25,6 +26,7 @@
 //!   canonical CSV it writes; `error.rs`: the one error type, `DataError`.
 //! - `synth.rs`: synthetic recordings with a known mu.
 
+mod budget;
 pub mod calibrate;
 mod dlc;
 mod error;
@@ -39,6 +41,7 @@ pub mod synth;
 mod table;
 mod tracker_project;
 
+pub use budget::{Budget, Resource};
 pub use error::DataError;
 pub use options::{Plane, ReadOptions};
 pub(crate) use parsed::{Parsed, Series};
