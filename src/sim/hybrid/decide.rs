@@ -1,12 +1,18 @@
 //! Deciding the next mode: the transition rules of PHYSICS.md applied at a located guard
-//! crossing (or at the start), and the impulsive stop that ends an impossible slide.
+//! crossing (or at the start), the impulsive stop that ends an impossible slide, and the
+//! event recorded for the decision.
 
 use super::guards::Guard;
+use super::locate::Located;
+use super::step::Step;
+use super::{Run, Segment};
 use crate::model::{
     choose_at_rest, re_state, Direction, Mode, RestChoice, Rig, Scalar, Shorthands, State, THETA,
     THETA_DOT, X_DOT,
 };
-use crate::sim::{EventKind, Impulse, Outcome, RestRule};
+use crate::sim::rk::Stepper;
+use crate::sim::{Event, EventKind, Impulse, Outcome, RestRule, SimError, Solution};
+use std::ops::ControlFlow;
 
 /// How the state changes at an event.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -275,5 +281,135 @@ pub(super) fn decide(
             }
         }
         Guard::Denominator => stop_impulsively(rig, y, EventKind::SuddenStop, rule),
+    }
+}
+
+/// The motion at the start of a run from `y`, by the same rules as at any other instant: the
+/// mode `y` is in (stick at rest, else a slide in the direction of x'), and the decision there.
+pub(super) fn start(rig: &Rig<f64>, y: &State<f64>, rule: RestRule) -> (Mode, Switch) {
+    let initial_mode = if y[X_DOT] == 0.0 {
+        Mode::Stick
+    } else {
+        Mode::Slide(Direction::of(y[X_DOT]))
+    };
+    let start = match initial_mode {
+        Mode::Stick => {
+            let c_dir = Direction::of(Shorthands::at(rig, y).c);
+            from_rest(rig, y, rule, c_dir, |_| EventKind::Slip, EventKind::Stick)
+        }
+        Mode::Slide(dir) => start_slide(rig, y, dir, EventKind::Slip, rule),
+    };
+    (initial_mode, start)
+}
+
+/// What a located crossing leads to, and what its event reports.
+pub(super) struct Decision {
+    pub(super) switch: Switch,
+    /// The state at the event after its reset (x' zeroed at a stop, theta' jumped by an
+    /// impulsive stop).
+    pub(super) state: State<f64>,
+    /// The impulsive stop applied, if any.
+    pub(super) impulse: Option<Impulse>,
+    /// |N| just before a sudden stop.
+    pub(super) peak_normal: Option<f64>,
+}
+
+/// The decision at a crossing of `guard` located at `y` while in `mode` on branch `sigma`.
+/// `c_hint`: c at the step's end, the direction to take where c is zero at the event;
+/// `at_mode_start`: the crossing is at the instant the mode began.
+pub(super) fn decide_at_crossing(
+    rig: &Rig<f64>,
+    rule: RestRule,
+    guard: Guard,
+    (mode, sigma): (Mode, f64),
+    y: &State<f64>,
+    c_hint: f64,
+    at_mode_start: bool,
+) -> Decision {
+    let mut at_event = *y;
+    if guard == Guard::Stop {
+        at_event[X_DOT] = 0.0;
+    }
+    // A slide that stopped the instant it began falls back to the maximal-dissipation
+    // choice: choosing it again would repeat the event forever.
+    let rule_here = if at_mode_start && guard == Guard::Stop {
+        RestRule::PreferStick
+    } else {
+        rule
+    };
+    let switch = decide(rig, rule_here, guard, mode, sigma, &at_event, c_hint);
+    let impulse = (switch.reset == Reset::Impulsive).then(|| {
+        let (after, impulse) = impulsive_stop(rig, y);
+        at_event = after;
+        impulse
+    });
+    let peak_normal = (switch.kind == EventKind::SuddenStop).then(|| {
+        let Mode::Slide(dir) = mode else {
+            return f64::NAN;
+        };
+        let sh = Shorthands::at(rig, y);
+        rig.slide(&sh, dir.sign(), sigma, y[X_DOT]).normal.abs()
+    });
+    Decision {
+        switch,
+        state: at_event,
+        impulse,
+        peak_normal,
+    }
+}
+
+impl<T: Scalar + 'static, const N: usize> Run<'_, '_, T, N> {
+    /// Switch mode at a located event: decide what follows, record the event and carry the
+    /// state across it. `Break` when the run ends there.
+    pub(super) fn switch_mode<M: Stepper<T, N>>(
+        &mut self,
+        seg: &Segment<'_, '_, T, M, N>,
+        step: &Step<T, N>,
+        event: Located<T, N>,
+    ) -> Result<ControlFlow<Solution<T>>, SimError> {
+        let (mode, sigma) = (self.mode, self.sigma);
+        let rig_re = &self.ctx.rig_re;
+        let c_hint = Shorthands::at(rig_re, &step.y1r[..4]).c;
+        let Decision {
+            switch,
+            state,
+            impulse,
+            peak_normal,
+        } = decide_at_crossing(
+            rig_re,
+            self.options.rest_rule,
+            event.guard,
+            (mode, sigma),
+            &re_state(&event.y),
+            c_hint,
+            event.t == seg.t_start,
+        );
+        self.out.stats.events += 1;
+        self.out.events.push(Event {
+            t: event.t,
+            from: mode,
+            to: switch.outcome.clone(),
+            kind: switch.kind,
+            state,
+            alternatives: switch.alternatives,
+            impulse,
+            peak_normal,
+        });
+        self.out.stats.rhs_evals += seg.stepper.rhs_evals();
+        let Outcome::Mode(new_mode) = switch.outcome else {
+            return Ok(ControlFlow::Break(self.out.finish(event.t, &event.y, mode)));
+        };
+        if self.out.stats.events >= self.options.max_events {
+            return Err(SimError::TooManyEvents {
+                t: event.t,
+                max: self.options.max_events,
+                state,
+            });
+        }
+        self.y = self.carry_across(&event, (new_mode, switch.sigma), switch.reset);
+        self.t = event.t;
+        self.mode = new_mode;
+        self.sigma = switch.sigma;
+        Ok(ControlFlow::Continue(()))
     }
 }

@@ -3,8 +3,10 @@
 
 use super::decide::{impulsive_stop, Reset};
 use super::guards::{Ctx, Guard};
+use super::locate::Located;
 use super::step::re_vec;
 use super::system::ModeSystem;
+use super::Run;
 use crate::model::{Mode, Rig, Scalar, X_DOT};
 use crate::sim::rk::OdeSystem;
 
@@ -60,6 +62,32 @@ pub(super) fn apply_reset<T: Scalar, const N: usize>(rig: &Rig<T>, reset: Reset,
         Reset::Impulsive => {
             let (after, _) = impulsive_stop(rig, &y[..4]);
             y[..4].copy_from_slice(&after);
+        }
+    }
+}
+
+impl<T: Scalar + 'static, const N: usize> Run<'_, '_, T, N> {
+    /// The state the `next` mode (and branch) starts from after `event`: the event's state
+    /// with its reset applied, in f64 as it is, for dual scalars with the sensitivities' jump.
+    pub(super) fn carry_across(
+        &self,
+        event: &Located<T, N>,
+        next: (Mode, f64),
+        reset: Reset,
+    ) -> [T; N] {
+        if super::is_f64::<T>() {
+            let mut y = event.y;
+            apply_reset(self.ctx.rig, reset, &mut y);
+            y
+        } else {
+            jump_with_sensitivity(
+                self.ctx,
+                event.guard,
+                (self.mode, self.sigma),
+                next,
+                reset,
+                &event.y,
+            )
         }
     }
 }
