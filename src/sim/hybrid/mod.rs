@@ -2,7 +2,7 @@
 //! locate the first crossing with a bracketing root finder, switch mode there and restart.
 //!
 //! [`run`] tells the story; each chapter has a file, with the functions that do the work
-//! and the methods of the loop's state [`Run`] that call them:
+//! (tested alone in `tests.rs`) and the methods of the loop's state [`Run`] that call them:
 //! - `mod.rs`: the entry points, the input checks, the loop and its state ([`Run`] for the
 //!   whole run, [`Segment`] for one mode).
 //! - `system.rs`: the right-hand side of one mode (and its copy for plain rigs).
@@ -24,6 +24,8 @@ mod locate;
 mod samples;
 mod step;
 mod system;
+#[cfg(test)]
+mod tests;
 
 pub use decide::impulsive_stop;
 
