@@ -266,11 +266,31 @@ pub const MAX_FRAMES: f64 = 1e7;
 /// numbers (energies, forces) leave the range where f64 keeps them meaningful.
 pub const MAX_INITIAL: f64 = 1e6;
 
-/// Masses (kg), rod length (m) and gravity (m/s^2) must lie in [RIG_MIN, RIG_MAX] (gravity
-/// may be 0), and mu at most RIG_MAX: wider ranges make mass ratios and mu* overflow.
+/// Masses (kg) and rod length (m) must lie in [RIG_MIN, RIG_MAX], and mu at most RIG_MAX:
+/// wider ranges make mass ratios and mu* overflow (gravity has its own, narrower
+/// [`GRAVITY_RANGE`]).
 pub const RIG_MIN: f64 = 1e-9;
 /// See [`RIG_MIN`].
 pub const RIG_MAX: f64 = 1e9;
+
+/// The gravity a rig may have (m/s^2): from 0.1, below Ceres' 0.28 and Pluto's 0.62, to 30,
+/// above Jupiter's 24.8 at its cloud tops: any planet or moon a lab could stand on. Outside
+/// it the value is a typo or a unit slip (1e9, or 981 in cm/s^2), which `fit` would otherwise
+/// fit for minutes to a meaningless answer.
+pub const GRAVITY_RANGE: [f64; 2] = [0.1, 30.0];
+
+/// Check `rig.gravity` against [`GRAVITY_RANGE`]: every file with a rig (scene, rig file,
+/// plan) calls it, so simulate, fit, regions and plan refuse alike.
+pub fn check_gravity(path: &Path, gravity: f64) -> Result<(), SceneError> {
+    let [lo, hi] = GRAVITY_RANGE;
+    check(
+        path,
+        (lo..=hi).contains(&gravity),
+        "rig.gravity",
+        &format!("between {lo} and {hi} m/s^2 (any planet or moon a lab could be on)"),
+        gravity,
+    )
+}
 
 /// Check that the rig's values stay where the model's arithmetic is finite.
 fn check_rig_range(path: &Path, r: &RigSpec) -> Result<(), SceneError> {
@@ -313,13 +333,7 @@ fn check_rig_range(path: &Path, r: &RigSpec) -> Result<(), SceneError> {
         &range,
         r.rod_length,
     )?;
-    check(
-        path,
-        r.gravity == 0.0 || within(r.gravity.abs()),
-        "rig.gravity",
-        &format!("0 or of magnitude {range}"),
-        r.gravity,
-    )?;
+    check_gravity(path, r.gravity)?;
     for (key, mu) in [
         ("rig.mu_kinetic", r.mu_kinetic),
         ("rig.mu_static", r.mu_static),

@@ -529,17 +529,20 @@ impl PlanRigSpec {
             pendulum_com: r.pendulum_com,
             pendulum_inertia: r.pendulum_inertia,
         };
-        keys.rig(
-            r.slider_mass,
-            r.rod_length,
-            r.gravity,
-            f.mu_kinetic,
-            f.mu_static,
-        )
-        .map_err(|e| SceneError::Invalid {
-            path: path.to_owned(),
-            message: e.to_string().replace("rig.mu_", "friction.mu_"),
-        })
+        let rig = keys
+            .rig(
+                r.slider_mass,
+                r.rod_length,
+                r.gravity,
+                f.mu_kinetic,
+                f.mu_static,
+            )
+            .map_err(|e| SceneError::Invalid {
+                path: path.to_owned(),
+                message: e.to_string().replace("rig.mu_", "friction.mu_"),
+            })?;
+        crate::scene::check_gravity(path, r.gravity)?;
+        Ok(rig)
     }
 }
 
