@@ -4,6 +4,7 @@
 use crate::model::{FrictionLaw, PendulumKeys, Rig, RigError, State};
 use crate::sim::{Method, Options, Request, RestRule};
 use serde::Deserialize;
+use std::io::Read;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -205,6 +206,16 @@ pub enum SceneError {
         /// The parser's message with line and key.
         message: String,
     },
+    /// A file larger than its kind may be, refused before it is parsed.
+    #[error("{path}: {}: expected a file of at most {limit} bytes", too_large(*size, *limit))]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// The most bytes such a file may have.
+        limit: u64,
+        /// Its size, when the file says it (`None`: a stream, cut after `limit` + 1 bytes).
+        size: Option<u64>,
+    },
     /// A value outside its range.
     #[error("{path}: {message}")]
     Invalid {
@@ -226,12 +237,46 @@ fn check(path: &Path, ok: bool, key: &str, expected: &str, value: f64) -> Result
     }
 }
 
-/// Read a file into a string, the error naming the file: shared by scene, rig and plan files.
-pub fn read_text(path: &Path) -> Result<String, SceneError> {
-    std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+/// The size part of [`SceneError::TooLarge`]'s message.
+fn too_large(size: Option<u64>, limit: u64) -> String {
+    match size {
+        Some(size) => format!("the file has {size} bytes"),
+        None => format!("more than {limit} bytes read, and it goes on"),
+    }
+}
+
+/// The largest scene, rig or plan file read, 1 MiB: the shipped ones are under 2 KB. The toml
+/// crate parses the whole document before any key is checked, at up to 80 bytes of memory a
+/// byte: a 30 MB array of small integers took 15 s and 2.4 GB, a 1 MiB one takes 0.4 s and
+/// 84 MB, so a larger file (a runaway generator's) is refused before parsing.
+pub const MAX_TOML_BYTES: u64 = 1 << 20;
+
+/// Read a text file of at most `limit` bytes, the error naming the file: shared by scene, rig
+/// and plan files ([`MAX_TOML_BYTES`]) and a fit's JSON. A file whose size says it is larger
+/// is refused before a byte is read; since devices, pipes and FIFOs say 0 (and a file may
+/// grow), at most `limit` + 1 bytes are read, so `/dev/zero` cannot make the read endless.
+pub fn read_text(path: &Path, limit: u64) -> Result<String, SceneError> {
+    let io = |source| SceneError::Io {
         path: path.to_owned(),
         source,
-    })
+    };
+    let too_large = |size| SceneError::TooLarge {
+        path: path.to_owned(),
+        limit,
+        size,
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let size = file.metadata().map_err(io)?.len();
+    if size > limit {
+        return Err(too_large(Some(size)));
+    }
+    let mut bytes = Vec::new();
+    file.take(limit + 1).read_to_end(&mut bytes).map_err(io)?;
+    if bytes.len() as u64 > limit {
+        return Err(too_large(None));
+    }
+    String::from_utf8(bytes)
+        .map_err(|e| io(std::io::Error::new(std::io::ErrorKind::InvalidData, e)))
 }
 
 /// Parse TOML into `F`; the error names the file, and the parser's message the key and line
@@ -249,7 +294,7 @@ pub fn parse_toml<F: serde::de::DeserializeOwned>(
 impl Scene {
     /// Read and validate a scene file.
     pub fn from_path(path: &Path) -> Result<Self, SceneError> {
-        Self::from_toml(&read_text(path)?, path)
+        Self::from_toml(&read_text(path, MAX_TOML_BYTES)?, path)
     }
 
     /// Parse and validate scene text; `path` only labels errors.
@@ -487,13 +532,13 @@ pub struct RigFile {
 impl RigFile {
     /// Read and validate a rig file; errors name the file and the key at fault.
     pub fn load(path: &Path) -> Result<Rig<f64>, SceneError> {
-        Self::parse(&read_text(path)?, path)
+        Self::parse(&read_text(path, MAX_TOML_BYTES)?, path)
     }
 
     /// Read a rig file for fitting: mu values are optional starting guesses (`mu_guess` when
     /// left out).
     pub fn load_for_fit(path: &Path, mu_guess: f64) -> Result<Rig<f64>, SceneError> {
-        let file: RigFile = parse_toml(&read_text(path)?, path)?;
+        let file: RigFile = parse_toml(&read_text(path, MAX_TOML_BYTES)?, path)?;
         let rig = file
             .rig
             .rig_or_guess(mu_guess)

@@ -452,7 +452,10 @@ fn non_negative(path: &Path, key: &str, v: f64) -> Result<f64, SceneError> {
 impl PlanSpec {
     /// Read and validate a plan file; errors name the file and the key.
     pub fn from_path(path: &Path) -> Result<Self, SceneError> {
-        Self::from_toml(&crate::scene::read_text(path)?, path)
+        Self::from_toml(
+            &crate::scene::read_text(path, crate::scene::MAX_TOML_BYTES)?,
+            path,
+        )
     }
 
     /// Parse and validate plan text; `path` only labels errors.
