@@ -4,6 +4,7 @@
 use crate::model::{FrictionLaw, PendulumKeys, Rig, RigError, State};
 use crate::sim::{Method, Options, Request, RestRule};
 use serde::Deserialize;
+use std::io::Read;
 use std::path::{Path, PathBuf};
 use thiserror::Error;
 
@@ -133,8 +134,9 @@ pub struct RunSpec {
     pub atol: Option<f64>,
     /// `dop853` (default) or `dp5`.
     pub method: Option<Method>,
-    /// Step limit (default 1e6).
-    pub max_steps: Option<usize>,
+    /// Step limit, accepted and rejected steps together: a whole number from 1 to
+    /// [`MAX_STEPS`] (default 1e6). A number rather than an integer so `1e6` may be written.
+    pub max_steps: Option<f64>,
     /// Choice at rest where the Painleve paradox allows several motions: `prefer_stick`
     /// (default), `prefer_slide` or `halt`.
     pub rest_rule: Option<RestRule>,
@@ -205,6 +207,16 @@ pub enum SceneError {
         /// The parser's message with line and key.
         message: String,
     },
+    /// A file larger than its kind may be, refused before it is parsed.
+    #[error("{path}: {}: expected a file of at most {limit} bytes", too_large(*size, *limit))]
+    TooLarge {
+        /// The file.
+        path: PathBuf,
+        /// The most bytes such a file may have.
+        limit: u64,
+        /// Its size, when the file says it (`None`: a stream, cut after `limit` + 1 bytes).
+        size: Option<u64>,
+    },
     /// A value outside its range.
     #[error("{path}: {message}")]
     Invalid {
@@ -226,12 +238,46 @@ fn check(path: &Path, ok: bool, key: &str, expected: &str, value: f64) -> Result
     }
 }
 
-/// Read a file into a string, the error naming the file: shared by scene, rig and plan files.
-pub fn read_text(path: &Path) -> Result<String, SceneError> {
-    std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+/// The size part of [`SceneError::TooLarge`]'s message.
+fn too_large(size: Option<u64>, limit: u64) -> String {
+    match size {
+        Some(size) => format!("the file has {size} bytes"),
+        None => format!("more than {limit} bytes read, and it goes on"),
+    }
+}
+
+/// The largest scene, rig or plan file read, 1 MiB: the shipped ones are under 2 KB. The toml
+/// crate parses the whole document before any key is checked, at up to 80 bytes of memory a
+/// byte: a 30 MB array of small integers took 15 s and 2.4 GB, a 1 MiB one takes 0.4 s and
+/// 84 MB, so a larger file (a runaway generator's) is refused before parsing.
+pub const MAX_TOML_BYTES: u64 = 1 << 20;
+
+/// Read a text file of at most `limit` bytes, the error naming the file: shared by scene, rig
+/// and plan files ([`MAX_TOML_BYTES`]) and a fit's JSON. A file whose size says it is larger
+/// is refused before a byte is read; since devices, pipes and FIFOs say 0 (and a file may
+/// grow), at most `limit` + 1 bytes are read, so `/dev/zero` cannot make the read endless.
+pub fn read_text(path: &Path, limit: u64) -> Result<String, SceneError> {
+    let io = |source| SceneError::Io {
         path: path.to_owned(),
         source,
-    })
+    };
+    let too_large = |size| SceneError::TooLarge {
+        path: path.to_owned(),
+        limit,
+        size,
+    };
+    let file = std::fs::File::open(path).map_err(io)?;
+    let size = file.metadata().map_err(io)?.len();
+    if size > limit {
+        return Err(too_large(Some(size)));
+    }
+    let mut bytes = Vec::new();
+    file.take(limit + 1).read_to_end(&mut bytes).map_err(io)?;
+    if bytes.len() as u64 > limit {
+        return Err(too_large(None));
+    }
+    String::from_utf8(bytes)
+        .map_err(|e| io(std::io::Error::new(std::io::ErrorKind::InvalidData, e)))
 }
 
 /// Parse TOML into `F`; the error names the file, and the parser's message the key and line
@@ -249,7 +295,7 @@ pub fn parse_toml<F: serde::de::DeserializeOwned>(
 impl Scene {
     /// Read and validate a scene file.
     pub fn from_path(path: &Path) -> Result<Self, SceneError> {
-        Self::from_toml(&read_text(path)?, path)
+        Self::from_toml(&read_text(path, MAX_TOML_BYTES)?, path)
     }
 
     /// Parse and validate scene text; `path` only labels errors.
@@ -262,15 +308,42 @@ impl Scene {
 /// frame rate): 10^7, about 0.5 GB of output.
 pub const MAX_FRAMES: f64 = 1e7;
 
+/// The most steps `run.max_steps` may allow (accepted and rejected together): 10^7. `appell
+/// bench` measures 0.44 us a step on the paper scene, and a run that never ends (a slide down
+/// a tilted rail) takes 0.5 us a step on the plain rig and 1.2 us with every real-rig term
+/// and the energy on, so a run at the cap ends in 5 to 12 s; 10^8 would take up to two
+/// minutes. Ten times the default, and a 2 s release takes about a hundred steps.
+pub const MAX_STEPS: f64 = 1e7;
+
 /// The largest magnitude of an initial position, angle or rate: beyond it, the simulation's
 /// numbers (energies, forces) leave the range where f64 keeps them meaningful.
 pub const MAX_INITIAL: f64 = 1e6;
 
-/// Masses (kg), rod length (m) and gravity (m/s^2) must lie in [RIG_MIN, RIG_MAX] (gravity
-/// may be 0), and mu at most RIG_MAX: wider ranges make mass ratios and mu* overflow.
+/// Masses (kg) and rod length (m) must lie in [RIG_MIN, RIG_MAX], and mu at most RIG_MAX:
+/// wider ranges make mass ratios and mu* overflow (gravity has its own, narrower
+/// [`GRAVITY_RANGE`]).
 pub const RIG_MIN: f64 = 1e-9;
 /// See [`RIG_MIN`].
 pub const RIG_MAX: f64 = 1e9;
+
+/// The gravity a rig may have (m/s^2): from 0.1, below Ceres' 0.28 and Pluto's 0.62, to 30,
+/// above Jupiter's 24.8 at its cloud tops: any planet or moon a lab could stand on. Outside
+/// it the value is a typo or a unit slip (1e9, or 981 in cm/s^2), which `fit` would otherwise
+/// fit for minutes to a meaningless answer.
+pub const GRAVITY_RANGE: [f64; 2] = [0.1, 30.0];
+
+/// Check `rig.gravity` against [`GRAVITY_RANGE`]: every file with a rig (scene, rig file,
+/// plan) calls it, so simulate, fit, regions and plan refuse alike.
+pub fn check_gravity(path: &Path, gravity: f64) -> Result<(), SceneError> {
+    let [lo, hi] = GRAVITY_RANGE;
+    check(
+        path,
+        (lo..=hi).contains(&gravity),
+        "rig.gravity",
+        &format!("between {lo} and {hi} m/s^2 (any planet or moon a lab could be on)"),
+        gravity,
+    )
+}
 
 /// Check that the rig's values stay where the model's arithmetic is finite.
 fn check_rig_range(path: &Path, r: &RigSpec) -> Result<(), SceneError> {
@@ -313,13 +386,7 @@ fn check_rig_range(path: &Path, r: &RigSpec) -> Result<(), SceneError> {
         &range,
         r.rod_length,
     )?;
-    check(
-        path,
-        r.gravity == 0.0 || within(r.gravity.abs()),
-        "rig.gravity",
-        &format!("0 or of magnitude {range}"),
-        r.gravity,
-    )?;
+    check_gravity(path, r.gravity)?;
     for (key, mu) in [
         ("rig.mu_kinetic", r.mu_kinetic),
         ("rig.mu_static", r.mu_static),
@@ -384,6 +451,15 @@ impl SceneFile {
             "a finite number > 0",
             r.duration,
         )?;
+        if let Some(n) = r.max_steps {
+            check(
+                path,
+                n.fract() == 0.0 && (1.0..=MAX_STEPS).contains(&n),
+                "run.max_steps",
+                &format!("a whole number of steps from 1 to {MAX_STEPS:e} (a run at the cap ends within seconds)"),
+                n,
+            )?;
+        }
         let defaults = Options::default();
         let rtol = r.rtol.unwrap_or(defaults.rtol);
         let atol = r.atol.unwrap_or(defaults.atol);
@@ -419,7 +495,8 @@ impl SceneFile {
                 rtol,
                 atol,
                 method: r.method.unwrap_or_default(),
-                max_steps: r.max_steps.unwrap_or(defaults.max_steps),
+                // A whole number from 1 to MAX_STEPS, checked above.
+                max_steps: r.max_steps.map_or(defaults.max_steps, |n| n as usize),
                 rest_rule: r.rest_rule.unwrap_or_default(),
                 ..defaults
             },
@@ -473,13 +550,13 @@ pub struct RigFile {
 impl RigFile {
     /// Read and validate a rig file; errors name the file and the key at fault.
     pub fn load(path: &Path) -> Result<Rig<f64>, SceneError> {
-        Self::parse(&read_text(path)?, path)
+        Self::parse(&read_text(path, MAX_TOML_BYTES)?, path)
     }
 
     /// Read a rig file for fitting: mu values are optional starting guesses (`mu_guess` when
     /// left out).
     pub fn load_for_fit(path: &Path, mu_guess: f64) -> Result<Rig<f64>, SceneError> {
-        let file: RigFile = parse_toml(&read_text(path)?, path)?;
+        let file: RigFile = parse_toml(&read_text(path, MAX_TOML_BYTES)?, path)?;
         let rig = file
             .rig
             .rig_or_guess(mu_guess)

@@ -485,9 +485,8 @@ pub fn run(args: Args) -> Result<(), Failure> {
 
 /// `--joint DIR`: the joint fit's cost against the number of releases.
 fn run_joint(args: &Args, dir: &std::path::Path) -> Result<(), Failure> {
-    use appell::data::{read_recording, ReadOptions};
+    use appell::data::ReadOptions;
     use appell::fit::joint::Release;
-    use appell::fit::Observations;
     let rig_path = args
         .rig
         .as_ref()
@@ -513,11 +512,15 @@ fn run_joint(args: &Args, dir: &std::path::Path) -> Result<(), Failure> {
     let releases = files[..need]
         .iter()
         .map(|f| {
-            let rec = read_recording(std::slice::from_ref(f), &ReadOptions::default())
-                .map_err(|e| Failure::Input(e.into()))?;
+            let obs = super::fit::read_for_rig(
+                std::slice::from_ref(f),
+                &ReadOptions::default(),
+                rig_path,
+                &rig,
+            )?;
             Ok(Release {
                 name: f.display().to_string(),
-                obs: Observations::from(&rec),
+                obs,
             })
         })
         .collect::<Result<Vec<_>, Failure>>()?;

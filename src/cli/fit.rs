@@ -6,7 +6,10 @@ use super::Failure;
 use anyhow::anyhow;
 use appell::data::{read_recording, ReadOptions};
 use appell::fit::joint::{fit_joint, JointError, JointSettings, Release};
-use appell::fit::{fit, FitReport, FitSettings, Loss, Nuisance, Observations, StaticMode};
+use appell::fit::{
+    check_rod_length, fit, FitReport, FitSettings, Loss, Nuisance, Observations, StaticMode,
+};
+use appell::model::Rig;
 use appell::report::fit::{fit_json, fit_text, FitFigure};
 use appell::report::joint::{joint_json, joint_text, JointFigure};
 use appell::report::plot::render;
@@ -209,17 +212,27 @@ pub(super) fn directory_files(dir: &Path, format_given: bool) -> Result<Vec<Path
 /// A recording's observations and fit, or why not.
 type Fitted = Result<(Observations, FitReport), Failure>;
 
+/// A recording read and compared with the rig file before any fitting work: a rod length its
+/// markers contradict is bad input naming the rig file (`fit`, `fit --joint`, `bench --joint`).
+pub(super) fn read_for_rig(
+    paths: &[PathBuf],
+    opts: &ReadOptions,
+    rig_path: &Path,
+    rig: &Rig<f64>,
+) -> Result<Observations, Failure> {
+    let rec = read_recording(paths, opts).map_err(|e| Failure::Input(e.into()))?;
+    check_rod_length(rig_path, rig, &rec).map_err(|e| Failure::Input(e.into()))?;
+    Ok(Observations::from(&rec))
+}
+
 fn fit_one(
     paths: &[PathBuf],
     opts: &ReadOptions,
-    rig: &appell::model::Rig<f64>,
+    (rig_path, rig): (&Path, &Rig<f64>),
     settings: &FitSettings,
     keep: bool,
 ) -> Fitted {
-    let obs = {
-        let rec = read_recording(paths, opts).map_err(|e| Failure::Input(e.into()))?;
-        Observations::from(&rec)
-    };
+    let obs = read_for_rig(paths, opts, rig_path, rig)?;
     // Only the figure needs the observations after the fit: a long recording is held once.
     let (kept, given) = if keep {
         (obs.clone(), obs)
@@ -272,7 +285,13 @@ pub fn run(args: Args) -> Result<(), Failure> {
         let results: Vec<(PathBuf, Fitted)> = files
             .par_iter()
             .map(|f| {
-                let r = fit_one(std::slice::from_ref(f), &opts, &rig, &settings, false);
+                let r = fit_one(
+                    std::slice::from_ref(f),
+                    &opts,
+                    (&args.rig, &rig),
+                    &settings,
+                    false,
+                );
                 bar.inc(1);
                 (f.clone(), r)
             })
@@ -323,7 +342,13 @@ pub fn run(args: Args) -> Result<(), Failure> {
         }
         return Ok(());
     }
-    let (obs, rep) = fit_one(&args.inputs, &opts, &rig, &settings, args.plot.is_some())?;
+    let (obs, rep) = fit_one(
+        &args.inputs,
+        &opts,
+        (&args.rig, &rig),
+        &settings,
+        args.plot.is_some(),
+    )?;
     if let Some(p) = &args.plot {
         render(
             p,
@@ -369,7 +394,7 @@ fn release_paths(args: &Args, format_given: bool) -> Result<Vec<Vec<PathBuf>>, F
 fn run_joint(
     args: &Args,
     opts: &ReadOptions,
-    rig: &appell::model::Rig<f64>,
+    rig: &Rig<f64>,
     settings: &FitSettings,
 ) -> Result<(), Failure> {
     let paths = release_paths(args, opts.format.is_some())?;
@@ -381,9 +406,7 @@ fn run_joint(
                 .map(|f| f.display().to_string())
                 .collect::<Vec<_>>()
                 .join(",");
-            let obs = read_recording(p, opts)
-                .map(|rec| Observations::from(&rec))
-                .map_err(|e| Failure::Input(e.into()));
+            let obs = read_for_rig(p, opts, &args.rig, rig);
             (name, obs)
         })
         .collect();

@@ -8,6 +8,7 @@
 //!
 //! The folder's files:
 //! - `mod.rs`: the settings, the report's types and the driver [`fit`];
+//! - `plausible.rs`: the rig file's rod length compared with the recording's markers;
 //! - `prepare.rs`: the recording checked, each marker's noise, mis-tracked frames dropped;
 //! - `guess.rs`: starting values from the data;
 //! - `base.rs`: the base model from several starts;
@@ -34,6 +35,7 @@ mod motion;
 pub mod noise;
 mod outliers;
 mod pendulum;
+mod plausible;
 mod prepare;
 mod problem;
 mod select;
@@ -44,6 +46,7 @@ mod uncertainty;
 pub use adequacy::is_noise_free;
 pub use noise::NoiseEstimate;
 pub use pendulum::{PendulumFound, ValueSe};
+pub use plausible::{check_rod_length, ROD_LENGTH_FACTOR};
 pub use problem::{Counters, Observations, Param, TrajectoryProblem, MAX_FREE};
 pub use select::{ModelRow, Nuisance};
 pub use uncertainty::WindowFit;

@@ -40,18 +40,7 @@ fn invalid(path: &Path, message: String) -> SceneError {
 impl Prior {
     /// Read the JSON of `appell fit --json` (one recording) or `appell fit --joint --json`.
     pub fn from_path(path: &Path) -> Result<Prior, SceneError> {
-        let io = |source| SceneError::Io {
-            path: path.to_owned(),
-            source,
-        };
-        let size = std::fs::metadata(path).map_err(io)?.len();
-        if size > MAX_FIT_JSON {
-            return Err(invalid(
-                path,
-                format!("a fit's JSON of at most {MAX_FIT_JSON} bytes, got {size} bytes"),
-            ));
-        }
-        let text = std::fs::read_to_string(path).map_err(io)?;
+        let text = crate::scene::read_text(path, MAX_FIT_JSON)?;
         let v: Value = serde_json::from_str(text.trim()).map_err(|e| SceneError::Parse {
             path: path.to_owned(),
             message: format!("not the JSON of `appell fit --json`: {e}"),

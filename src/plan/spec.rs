@@ -452,7 +452,10 @@ fn non_negative(path: &Path, key: &str, v: f64) -> Result<f64, SceneError> {
 impl PlanSpec {
     /// Read and validate a plan file; errors name the file and the key.
     pub fn from_path(path: &Path) -> Result<Self, SceneError> {
-        Self::from_toml(&crate::scene::read_text(path)?, path)
+        Self::from_toml(
+            &crate::scene::read_text(path, crate::scene::MAX_TOML_BYTES)?,
+            path,
+        )
     }
 
     /// Parse and validate plan text; `path` only labels errors.
@@ -529,17 +532,20 @@ impl PlanRigSpec {
             pendulum_com: r.pendulum_com,
             pendulum_inertia: r.pendulum_inertia,
         };
-        keys.rig(
-            r.slider_mass,
-            r.rod_length,
-            r.gravity,
-            f.mu_kinetic,
-            f.mu_static,
-        )
-        .map_err(|e| SceneError::Invalid {
-            path: path.to_owned(),
-            message: e.to_string().replace("rig.mu_", "friction.mu_"),
-        })
+        let rig = keys
+            .rig(
+                r.slider_mass,
+                r.rod_length,
+                r.gravity,
+                f.mu_kinetic,
+                f.mu_static,
+            )
+            .map_err(|e| SceneError::Invalid {
+                path: path.to_owned(),
+                message: e.to_string().replace("rig.mu_", "friction.mu_"),
+            })?;
+        crate::scene::check_gravity(path, r.gravity)?;
+        Ok(rig)
     }
 }
 
