@@ -17,8 +17,10 @@
 //!   5 x 10^7 samples (about 1.2 GB as series of time and position);
 //! - series (marker tracks): a lab's file holds a few to a few hundred; at most 10^5, and one
 //!   per 16 file bytes (a track needs at least a name and a value);
-//! - channels and schemas (MCAP): at most 10^4 channels, each schema decoded once;
-//! - metadata entries (MCAP metadata and attachments' names): at most 10^5 in all;
+//! - channels and schemas (MCAP): at most 1024 channels and 256 schemas whatever the size (a
+//!   lab's file has a few; the largest real file here, a ROS 2 bag, has 10), each schema
+//!   decoded once;
+//! - metadata entries (MCAP metadata records and channel metadata): at most 10^4 in all;
 //! - TF work (stamps x the depth of the frame chains walked, MCAP `/tf`): at most 10^8, and 64
 //!   per file byte.
 
@@ -76,9 +78,9 @@ impl Resource {
             Resource::DecodedBytes => (64 << 20, 1032, 1, 1 << 30),
             Resource::Samples => (1 << 20, 16, 1, 50_000_000),
             Resource::Series => (1024, 1, 16, 100_000),
-            Resource::Channels => (1024, 0, 1, 10_000),
-            Resource::Schemas => (256, 0, 1, 10_000),
-            Resource::MetadataEntries => (10_000, 0, 1, 100_000),
+            Resource::Channels => (1024, 0, 1, 1024),
+            Resource::Schemas => (256, 0, 1, 256),
+            Resource::MetadataEntries => (10_000, 0, 1, 10_000),
             Resource::TfWork => (1 << 20, 64, 1, 100_000_000),
         }
     }
