@@ -3,9 +3,9 @@
 //! then its records are walked in file order ([`Reading::chunk`], [`Reading::flush`]).
 
 use super::decode::PreParsed;
-use super::records::{over_budget, plain};
+use super::records::plain;
 use super::{Reading, Step};
-use crate::data::DataError;
+use crate::data::{DataError, Resource};
 use ::mcap::records::op;
 use ::mcap::McapError;
 use std::io::Read;
@@ -156,8 +156,8 @@ impl Reading<'_> {
     ) -> Result<(Step, Option<u64>), DataError> {
         // The budget left before the chunks ahead are read: looser than when this chunk is
         // read (checked again then), so at most CHUNKS_AHEAD + 1 budgets are held at once.
-        let room = self.budget.saturating_sub(self.record_bytes);
-        let (budget, limit) = (self.budget, self.limit);
+        let room = self.acc.budget.remaining(Resource::DecodedBytes);
+        let limit = self.limit;
         let out = self.bufs.spare.pop().unwrap_or_default();
         // The reader's buffer moves on: the chunk is copied for the pool.
         let body = body.to_vec();
@@ -165,8 +165,7 @@ impl Reading<'_> {
         let prepare = move || {
             let prepared = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
                 let mut zstd = ZSTD.take();
-                let prepared =
-                    prepare_chunk(&body, len, start, (room, budget, limit), &mut zstd, out);
+                let prepared = prepare_chunk(&body, len, start, (room, limit), &mut zstd, out);
                 ZSTD.set(zstd);
                 prepared
             }))
@@ -221,13 +220,20 @@ impl Reading<'_> {
                 self.unsupported_compression = Some(c);
                 (Step::Damage(why), None)
             }
+            // What the chunk declares is refused before its records are read.
+            Prepared::OverBudget(size) => {
+                // The budget only shrinks: what did not fit then does not fit now.
+                self.acc.afford(Resource::DecodedBytes, size)?;
+                let why = format!("chunk at byte {}: {size} bytes declared", d.start);
+                (Step::Damage(why), None)
+            }
             Prepared::Records(r) => {
-                let room = self.budget.saturating_sub(self.record_bytes);
                 let result = match r.uncompressed {
-                    Some(size) if size > room => {
-                        Ok((Step::Damage(over_budget(self.budget, d.start, size)), None))
-                    }
-                    _ => self.chunk_records(&r, d.start),
+                    Some(size) => self
+                        .acc
+                        .afford(Resource::DecodedBytes, size)
+                        .and_then(|()| self.chunk_records(&r, d.start)),
+                    None => self.chunk_records(&r, d.start),
                 };
                 self.bufs.spare.push(r.out);
                 result?
@@ -237,10 +243,8 @@ impl Reading<'_> {
             return Ok((step, at.or(Some(d.bytes))));
         }
         if let Step::Next = step {
-            for (len, bytes) in d.counted {
-                if let Some(damage) = self.tally(len) {
-                    return Ok((damage, Some(bytes)));
-                }
+            for (len, _) in d.counted {
+                self.tally(len)?;
             }
         }
         Ok((step, at))
@@ -332,6 +336,9 @@ enum Prepared {
     Damage(String),
     /// Its compression is not supported (the name).
     Unsupported(String),
+    /// It declares more decompressed bytes (this many) than the budget had left when it was
+    /// taken.
+    OverBudget(u64),
     /// Its records.
     Records(ChunkRecords),
 }
@@ -358,7 +365,7 @@ struct ChunkRecords {
 }
 
 /// Prepare a chunk record's `body` (see [`Reading::chunk`]): check its header, decompress its
-/// records in one go into `out` (at most `room` bytes of the `budget`), compute their CRC and
+/// records in one go into `out` (at most `room` bytes, what the budget has left), compute their CRC and
 /// parse the canonical JSON frames of its messages (records longer than `limit` are left to
 /// the ordered read, which reports them). Touches no reading state, so it runs beside the
 /// ordered read of the chunk before.
@@ -366,7 +373,7 @@ fn prepare_chunk(
     body: &[u8],
     len: u64,
     start: u64,
-    (room, budget, limit): (u64, u64, usize),
+    (room, limit): (u64, usize),
     zstd: &mut Option<::zstd::zstd_safe::DCtx<'static>>,
     mut out: Vec<u8>,
 ) -> Prepared {
@@ -428,9 +435,7 @@ fn prepare_chunk(
             // Checked before allocating: the declared size is untrusted.
             let size = match usize::try_from(uncompressed_size) {
                 Ok(size) if uncompressed_size <= room => size,
-                _ => {
-                    return Prepared::Damage(over_budget(budget, start, uncompressed_size));
-                }
+                _ => return Prepared::OverBudget(uncompressed_size),
             };
             let failed = decompress_chunk(compression, src, size, zstd, &mut out);
             // Fewer bytes than declared: the file ended inside the chunk, or its data is bad.

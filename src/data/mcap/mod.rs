@@ -6,8 +6,8 @@
 //! - `mod.rs`: the public constants, the entry points `read` and `read_from` (the walk over
 //!   the file's records, then the samples checked and turned into series) and the reading
 //!   state they share.
-//! - `records.rs`: the limits on record lengths and decompressed bytes, the length checks
-//!   before a record is parsed, and one record read into the state.
+//! - `records.rs`: the limit on record lengths, the length checks before a record is parsed
+//!   (each map entry charged to the budget), and one record read into the state.
 //! - `chunks.rs`: the chunk pipeline: each chunk decompressed, CRC-checked and its JSON frames
 //!   parsed ahead on the thread pool, then its records read in file order.
 //! - `decode/`: which decoder a channel gets (the Foxglove JSON schemas that are not positions,
@@ -24,16 +24,16 @@ mod tf;
 mod write;
 
 pub use decode::{NOT_POSITIONS, POINTS_NAMES};
-pub use records::{decompressed_limit, record_limit};
+pub use records::record_limit;
 pub use tf::TF_SAMPLE_LIMIT;
 pub use write::{write_json, FRAME_SCHEMA};
 
-use super::{DataError, Parsed, ReadOptions, Series};
+use super::{Budget, DataError, Parsed, ReadOptions, Series};
 use ::mcap::records::op;
 use ::mcap::sans_io::linear_reader::{LinearReadEvent, LinearReader, LinearReaderOptions};
 use ::mcap::McapError;
 use chunks::{ChunkBuffers, Deferred};
-use decode::Decoder;
+use decode::{Decoder, Failed, Reject};
 use records::{plain, USED_RECORDS};
 use std::collections::{BTreeMap, HashMap};
 use std::io::Read;
@@ -87,14 +87,17 @@ struct Reading<'a> {
     path: &'a Path,
     opts: &'a ReadOptions,
     limit: usize,
-    budget: u64,
+    /// Schema records by id: name, encoding and data (protobuf's only).
     schemas: HashMap<u16, (String, String, Vec<u8>)>,
+    /// The decoders made from each schema (by id and message encoding): a schema shared by
+    /// many channels is decoded once.
+    decoders: HashMap<(u16, String), Result<Decoder, Reject>>,
     channels: BTreeMap<u16, Channel>,
+    /// The samples, and the file's budget (`acc.budget`).
     acc: Acc,
     parsed: Parsed,
     records: u64,
     messages: u64,
-    record_bytes: u64,
     unsupported_compression: Option<String>,
     window_end: Option<f64>,
     first_log_time: Option<u64>,
@@ -113,7 +116,8 @@ pub(crate) fn read_from(
     size: Option<u64>,
 ) -> Result<Parsed, DataError> {
     let limit = record_limit(size);
-    let budget = decompressed_limit(size);
+    // An unknown size (a stream) gets the largest limits.
+    let budget = Budget::new(path, size.unwrap_or(u64::MAX));
     let mut st = Reading::new(path, opts, limit, budget);
     let (damage, bytes) = walk(input, &mut st, limit)?;
     finish(st, damage, bytes)
@@ -121,20 +125,19 @@ pub(crate) fn read_from(
 
 impl<'a> Reading<'a> {
     /// The state of a read of `path` before its first record: records up to `limit` bytes,
-    /// `budget` decompressed bytes in all.
-    fn new(path: &'a Path, opts: &'a ReadOptions, limit: usize, budget: u64) -> Self {
+    /// what is decoded and kept charged to `budget`.
+    fn new(path: &'a Path, opts: &'a ReadOptions, limit: usize, budget: Budget) -> Self {
         Reading {
             path,
             opts,
             limit,
-            budget,
             schemas: HashMap::new(),
+            decoders: HashMap::new(),
             channels: BTreeMap::new(),
-            acc: Acc::default(),
+            acc: Acc::new(budget),
             parsed: Parsed::default(),
             records: 0,
             messages: 0,
-            record_bytes: 0,
             unsupported_compression: None,
             // With a time window, reading stops once marker messages are past its end (by
             // log_time, with a second of margin for stamps that differ from it): the rest is never
@@ -346,8 +349,12 @@ fn finish(st: Reading, damage: Option<String>, bytes: u64) -> Result<Parsed, Dat
             path.display()
         ));
     }
-    let tf_notes = compose_tf(&mut acc, opts.plane)
-        .map_err(|why| DataError::parse(path, "the /tf messages", "transforms", why, "more"))?;
+    let tf_notes = compose_tf(&mut acc, opts.plane).map_err(|e| match e {
+        Failed::Budget(e) => e,
+        Failed::Message(why) => {
+            DataError::parse(path, "the /tf messages", "transforms", why, "more")
+        }
+    })?;
     parsed.notes.extend(tf_notes);
     if acc.series.is_empty() {
         return Err(no_markers(&channels, messages, path));

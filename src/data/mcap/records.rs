@@ -1,9 +1,9 @@
 //! Records: the limits on their lengths, the checks before parsing, and reading one record
 //! (schema, channel, message, metadata) into the reading state.
 
-use super::decode::{decode, decoder_for, PreFrame, Reject};
+use super::decode::{decode, decoder_for, Failed, PreFrame, Reject};
 use super::{Channel, ChannelState, Reading, Step};
-use crate::data::DataError;
+use crate::data::{DataError, Resource};
 use ::mcap::records::{op, MessageHeader, Metadata, Record};
 use ::mcap::McapError;
 
@@ -16,17 +16,10 @@ pub fn record_limit(size: Option<u64>) -> usize {
     limit as usize
 }
 
-/// The most bytes the records of a file of `size` bytes may decompress to, in all: 1024 times
-/// the file plus 64 MiB (a bomb of zeros stops here instead of running for minutes).
-pub fn decompressed_limit(size: Option<u64>) -> u64 {
-    size.unwrap_or(1 << 30)
-        .saturating_mul(1024)
-        .saturating_add(64 << 20)
-}
-
 /// Check that every length field of a Schema, Channel, Message or Metadata record fits in
-/// the record, so parsing it allocates no more than the record holds.
-fn check_lengths(opcode: u8, data: &[u8]) -> Result<(), String> {
+/// the record, so parsing it allocates no more than the record holds; returns the entries of
+/// its map (channel or metadata), which parsing allocates for one by one.
+fn check_lengths(opcode: u8, data: &[u8]) -> Result<u64, String> {
     struct Cur<'a> {
         d: &'a [u8],
         at: usize,
@@ -55,7 +48,7 @@ fn check_lengths(opcode: u8, data: &[u8]) -> Result<(), String> {
             let n = self.len(what)?;
             self.skip(n, what)
         }
-        fn map(&mut self, what: &str) -> Result<(), String> {
+        fn map(&mut self, what: &str) -> Result<u64, String> {
             let n = self.len(what)?;
             let end = self.at;
             self.skip(n, what)?;
@@ -63,11 +56,13 @@ fn check_lengths(opcode: u8, data: &[u8]) -> Result<(), String> {
                 d: &self.d[end..end + n],
                 at: 0,
             };
+            let mut entries = 0;
             while inner.at < n {
                 inner.string(what)?;
                 inner.string(what)?;
+                entries += 1;
             }
-            Ok(())
+            Ok(entries)
         }
     }
     let mut c = Cur { d: data, at: 0 };
@@ -76,7 +71,7 @@ fn check_lengths(opcode: u8, data: &[u8]) -> Result<(), String> {
             c.skip(2, "schema id")?;
             c.string("schema name")?;
             c.string("schema encoding")?;
-            c.string("schema data")
+            c.string("schema data").map(|_| 0)
         }
         op::CHANNEL => {
             c.skip(4, "channel ids")?;
@@ -84,12 +79,12 @@ fn check_lengths(opcode: u8, data: &[u8]) -> Result<(), String> {
             c.string("message encoding")?;
             c.map("channel metadata")
         }
-        op::MESSAGE => c.skip(22, "message header"),
+        op::MESSAGE => c.skip(22, "message header").map(|_| 0),
         op::METADATA => {
             c.string("metadata name")?;
             c.map("metadata")
         }
-        _ => Ok(()),
+        _ => Ok(0),
     }
 }
 
@@ -149,16 +144,11 @@ impl Reading<'_> {
         )
     }
 
-    /// Count a record of `len` bytes against the budget of decompressed bytes.
-    pub(super) fn tally(&mut self, len: usize) -> Option<Step> {
+    /// Count a record of `len` bytes, charged to the budget of decoded bytes (a bomb of
+    /// zeros stops there instead of running for minutes).
+    pub(super) fn tally(&mut self, len: usize) -> Result<(), DataError> {
         self.records += 1;
-        self.record_bytes += len as u64;
-        (self.record_bytes > self.budget).then(|| {
-            Step::Damage(format!(
-                "records decompress to more than {} bytes (1024 times the file plus 64 MiB)",
-                self.budget
-            ))
-        })
+        self.acc.budget.charge(Resource::DecodedBytes, len as u64)
     }
 
     /// Read one record (outside chunks or inside one); `pre` is the message's canonical frame
@@ -170,19 +160,21 @@ impl Reading<'_> {
         pre: Option<PreFrame<'_>>,
     ) -> Result<Step, DataError> {
         let (path, opts) = (self.path, self.opts);
-        if let Some(damage) = self.tally(data.len()) {
-            return Ok(damage);
-        }
+        self.tally(data.len())?;
         let records = self.records;
         // Only these records are used; the mcap crate sizes strings from their length
         // fields before checking them, so their lengths are checked here first.
         if !USED_RECORDS.contains(&opcode) {
             return Ok(Step::Next);
         }
-        if let Err(why) = check_lengths(opcode, data) {
-            return Ok(Step::Damage(format!(
-                "record {records} (opcode {opcode:#04x}): {why}"
-            )));
+        match check_lengths(opcode, data) {
+            // Each entry is allocated for as the record is parsed: charged first.
+            Ok(entries) => self.acc.budget.charge(Resource::MetadataEntries, entries)?,
+            Err(why) => {
+                return Ok(Step::Damage(format!(
+                    "record {records} (opcode {opcode:#04x}): {why}"
+                )))
+            }
         }
         // A message's header is four fixed fields (check_lengths saw its 22 bytes):
         // read here, the payload borrowed, as parse_record would give them.
@@ -203,19 +195,36 @@ impl Reading<'_> {
                 } else {
                     Vec::new()
                 };
-                self.schemas
-                    .insert(header.id, (header.name, header.encoding, data));
+                let schema = (header.name, header.encoding, data);
+                // Writers may repeat a schema (in every chunk): the same one again is kept
+                // as it is, decoded once.
+                if self.schemas.get(&header.id) != Some(&schema) {
+                    self.acc.budget.charge(Resource::Schemas, 1)?;
+                    self.decoders.retain(|(id, _), _| *id != header.id);
+                    self.schemas.insert(header.id, schema);
+                }
             }
             Record::Channel(c) => {
-                let (sname, senc, sdata) = self
-                    .schemas
-                    .get(&c.schema_id)
-                    .map(|(n, e, d)| (n.as_str(), e.as_str(), d.as_slice()))
-                    .unwrap_or_default();
+                // The first definition of a channel holds (as before); a repeat costs nothing.
+                if self.channels.contains_key(&c.id) {
+                    return Ok(Step::Next);
+                }
+                self.acc.budget.charge(Resource::Channels, 1)?;
                 let state = if !opts.topics.is_empty() && !opts.topics.contains(&c.topic) {
                     ChannelState::Ignored("not chosen by --topic".into())
                 } else {
-                    match decoder_for(&c.message_encoding, sname, senc, sdata) {
+                    let schemas = &self.schemas;
+                    let decoder = self
+                        .decoders
+                        .entry((c.schema_id, c.message_encoding))
+                        .or_insert_with_key(|(id, encoding)| {
+                            let (sname, senc, sdata) = schemas
+                                .get(id)
+                                .map(|(n, e, d)| (n.as_str(), e.as_str(), d.as_slice()))
+                                .unwrap_or_default();
+                            decoder_for(encoding, sname, senc, sdata)
+                        });
+                    match decoder.clone() {
                         Ok(d) => ChannelState::Markers(d),
                         Err(Reject::Unsupported(why)) => {
                             ChannelState::Ignored(format!("{why} is not supported"))
@@ -223,11 +232,14 @@ impl Reading<'_> {
                         Err(Reject::Invalid(why)) => ChannelState::Ignored(why),
                     }
                 };
-                self.channels.entry(c.id).or_insert(Channel {
-                    topic: c.topic,
-                    state,
-                    decoded: 0,
-                });
+                self.channels.insert(
+                    c.id,
+                    Channel {
+                        topic: c.topic,
+                        state,
+                        decoded: 0,
+                    },
+                );
             }
             Record::Message { header, data } => {
                 self.messages += 1;
@@ -262,19 +274,20 @@ impl Reading<'_> {
                         &mut self.acc,
                         pre,
                     ),
-                    Err(_) => Err(format!(
+                    Err(_) => Err(Failed::Message(format!(
                         "a log_time below 2^63 ns (year 2262), found {}",
                         header.log_time
-                    )),
+                    ))),
                 };
                 match result {
                     Ok(_) => ch.decoded += 1,
-                    Err(why) if ch.decoded == 0 => {
+                    Err(Failed::Budget(e)) => return Err(e),
+                    Err(Failed::Message(why)) if ch.decoded == 0 => {
                         ch.state = ChannelState::Ignored(format!(
                             "its first message is not marker data: {why}"
                         ));
                     }
-                    Err(why) => {
+                    Err(Failed::Message(why)) => {
                         return Err(DataError::parse(
                             path,
                             format!("message {messages} (record {records}) on {}", ch.topic),
@@ -294,13 +307,6 @@ impl Reading<'_> {
         }
         Ok(Step::Next)
     }
-}
-
-/// The damage text of a chunk at `start` declaring `size` decompressed bytes, past `budget`.
-pub(super) fn over_budget(budget: u64, start: u64, size: u64) -> String {
-    format!(
-        "records decompress to more than {budget} bytes (1024 times the file plus 64 MiB): the chunk at byte {start} declares {size}"
-    )
 }
 
 #[cfg(test)]

@@ -1,7 +1,8 @@
 //! The samples accumulated while reading ([`Acc`]) and the composition of `/tf` transform
 //! trees to their root frame.
 
-use crate::data::{ros_cdr, Plane};
+use super::decode::Failed;
+use crate::data::{ros_cdr, Budget, DataError, Plane, Resource};
 use std::collections::{BTreeMap, HashMap};
 
 /// One marker's samples with nanosecond stamps.
@@ -19,8 +20,8 @@ struct Tf {
 }
 
 /// Accumulates marker samples with nanosecond stamps, per channel (topic) and marker name,
-/// and the transforms of `/tf` trees to compose at the end.
-#[derive(Default)]
+/// and the transforms of `/tf` trees to compose at the end; holds the file's budget, which the
+/// series (and, by the decoders, the samples) are charged to.
 pub(super) struct Acc {
     index: HashMap<(String, String), usize>,
     /// Topic, marker name, samples; in the order markers were first seen.
@@ -28,10 +29,34 @@ pub(super) struct Acc {
     tf: Vec<Tf>,
     /// The series after the one pushed to last.
     next: usize,
+    /// The input file's budget.
+    pub(super) budget: Budget,
+    /// The most points a `PointsAnnotation` on each topic has held (their series exist).
+    pub(super) widest: HashMap<String, usize>,
 }
 
 impl Acc {
-    pub(super) fn push(&mut self, topic: &str, name: &str, ns: i64, p: Option<[f64; 2]>) {
+    /// An empty accumulator charging `budget`.
+    pub(super) fn new(budget: Budget) -> Self {
+        Acc {
+            index: HashMap::new(),
+            series: Vec::new(),
+            tf: Vec::new(),
+            next: 0,
+            budget,
+            widest: HashMap::new(),
+        }
+    }
+
+    /// Add a sample (its position charged by the caller); a new marker's series is charged
+    /// here, before it is created.
+    pub(super) fn push(
+        &mut self,
+        topic: &str,
+        name: &str,
+        ns: i64,
+        p: Option<[f64; 2]>,
+    ) -> Result<(), DataError> {
         // Markers come in the same order in every frame: try the one after the last first, so
         // the usual sample needs no key (no allocation, no hash).
         let guess = self.next % self.series.len().max(1);
@@ -42,6 +67,7 @@ impl Acc {
                 match self.index.get(&key) {
                     Some(&k) => k,
                     None => {
+                        self.budget.charge(Resource::Series, 1)?;
                         self.index.insert(key, self.series.len());
                         self.series
                             .push((topic.to_string(), name.to_string(), Vec::new()));
@@ -52,6 +78,17 @@ impl Acc {
         };
         self.series[k].2.push((ns, p));
         self.next = k + 1;
+        Ok(())
+    }
+
+    /// Refuse the file now if `n` more of `r` would go over its limit, without spending them
+    /// (they are charged as they are spent): for a decoder about to allocate for them.
+    pub(super) fn afford(&mut self, r: Resource, n: u64) -> Result<(), DataError> {
+        if n > self.budget.remaining(r) {
+            // Over the limit: the charge fails, spends nothing, and words the error.
+            self.budget.charge(r, n)?;
+        }
+        Ok(())
     }
 
     pub(super) fn push_tf(&mut self, t: ros_cdr::TransformStamped, fixed: bool) {
@@ -98,88 +135,179 @@ fn rotate(q: [f64; 4], v: [f64; 3]) -> [f64; 3] {
 /// The most samples a `/tf` tree may expand into (frames times distinct stamps).
 pub const TF_SAMPLE_LIMIT: usize = 20_000_000;
 
+/// The identity rotation (x, y, z, w).
+const IDENTITY: [f64; 4] = [0.0, 0.0, 0.0, 1.0];
+
+/// `q` normalised; the identity when it has no direction (zero or not finite), as [`rotate`]
+/// treats it.
+fn unit(q: [f64; 4]) -> [f64; 4] {
+    let n = (q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]).sqrt();
+    if n.is_finite() && n > 0.0 {
+        [q[0] / n, q[1] / n, q[2] / n, q[3] / n]
+    } else {
+        IDENTITY
+    }
+}
+
+/// The Hamilton product `a b` (x, y, z, w): rotating by `b`, then by `a`.
+fn mul(a: [f64; 4], b: [f64; 4]) -> [f64; 4] {
+    let ([ax, ay, az, aw], [bx, by, bz, bw]) = (a, b);
+    [
+        aw * bx + ax * bw + ay * bz - az * by,
+        aw * by - ax * bz + ay * bw + az * bx,
+        aw * bz + ax * by - ay * bx + az * bw,
+        aw * bw - ax * bx - ay * by - az * bz,
+    ]
+}
+
+/// A frame's transform to its parent: the parent, translation and rotation.
+type Link = (usize, [f64; 3], [f64; 4]);
+
+/// A frame's pose in its tree's root at one stamp: rotation, origin, and the root.
+#[derive(Clone, Copy)]
+struct Composed {
+    q: [f64; 4],
+    t: [f64; 3],
+    root: usize,
+}
+
 /// Compose `/tf` transforms to their tree's root: at every stamp of a dynamic transform, every
 /// frame's origin in the root frame. Static transforms hold for the whole recording. The samples
 /// go to `acc` under the topic `/tf`; returns notes on the roots used.
-pub(super) fn compose_tf(acc: &mut Acc, plane: Option<Plane>) -> Result<Vec<String>, String> {
+///
+/// Each frame's pose in the root is composed once per stamp from its parent's (memoised), so a
+/// stamp costs one step per frame whatever the depth of the chains; the steps are charged to
+/// the budget as `TfWork`, the samples as `Samples`.
+pub(super) fn compose_tf(acc: &mut Acc, plane: Option<Plane>) -> Result<Vec<String>, Failed> {
     let tf = std::mem::take(&mut acc.tf);
-    let mut current: BTreeMap<String, (String, [f64; 3], [f64; 4])> = BTreeMap::new();
-    let mut dynamic: Vec<&Tf> = Vec::new();
+    // Frames by number: every child and parent named.
+    let mut ids: HashMap<&str, usize> = HashMap::new();
+    let mut names: Vec<&str> = Vec::new();
+    let mut links: Vec<(usize, usize)> = Vec::with_capacity(tf.len());
     for t in &tf {
+        let mut pair = [0; 2];
+        for (k, f) in [t.child.as_str(), t.parent.as_str()]
+            .into_iter()
+            .enumerate()
+        {
+            pair[k] = *ids.entry(f).or_insert_with(|| {
+                names.push(f);
+                names.len() - 1
+            });
+        }
+        links.push((pair[0], pair[1]));
+    }
+    let n = names.len();
+    // Each frame's transform to its parent now: the static ones first.
+    let mut current: Vec<Option<Link>> = vec![None; n];
+    let mut dynamic: Vec<(&Tf, (usize, usize))> = Vec::new();
+    for (t, &(c, p)) in tf.iter().zip(&links) {
         if t.fixed {
-            current.insert(
-                t.child.clone(),
-                (t.parent.clone(), t.translation, t.rotation),
-            );
+            current[c] = Some((p, t.translation, t.rotation));
         } else {
-            dynamic.push(t);
+            dynamic.push((t, (c, p)));
         }
     }
-    dynamic.sort_by_key(|t| t.ns);
-    let mut frames: BTreeMap<&str, ()> = BTreeMap::new();
-    for t in &tf {
-        frames.insert(&t.child, ());
-    }
-    let stamps = dynamic.chunk_by(|a, b| a.ns == b.ns).count();
-    if stamps.saturating_mul(frames.len()) > TF_SAMPLE_LIMIT {
+    dynamic.sort_by_key(|(t, _)| t.ns);
+    // The children, in name order (the order their samples are pushed at each stamp).
+    let mut children: Vec<usize> = links.iter().map(|&(c, _)| c).collect();
+    children.sort_unstable_by_key(|&c| names[c]);
+    children.dedup();
+    let stamps = dynamic.chunk_by(|a, b| a.0.ns == b.0.ns).count();
+    if stamps.saturating_mul(children.len()) > TF_SAMPLE_LIMIT {
         return Err(format!(
             "a /tf tree of at most {TF_SAMPLE_LIMIT} frame samples, found {} frames at {stamps} stamps",
-            frames.len()
-        ));
+            children.len()
+        )
+        .into());
     }
     // Each frame's root in the whole recording's tree: a frame is placed only once its chain
     // reaches that root, so its positions never switch frames when a parent arrives late.
-    let mut parent_of: HashMap<&str, &str> = HashMap::new();
-    for t in &tf {
-        parent_of.insert(&t.child, &t.parent);
+    let mut final_parent: Vec<Option<usize>> = vec![None; n];
+    for &(c, p) in &links {
+        final_parent[c] = Some(p);
     }
-    let depth_limit = frames.len() + 1;
-    let root_of = |f: &str| -> Option<String> {
-        let mut f = f;
-        for _ in 0..=depth_limit {
-            match parent_of.get(f) {
-                Some(p) => f = p,
-                None => return Some(f.to_string()),
+    let final_root = roots_of(&final_parent);
+    let mut roots: BTreeMap<&str, usize> = BTreeMap::new();
+    // The poses composed at the current stamp (`at[f]` is the stamp's number when `pose[f]`
+    // holds it), and the frames on the chain being walked.
+    let mut pose = vec![
+        Composed {
+            q: IDENTITY,
+            t: [0.0; 3],
+            root: 0
+        };
+        n
+    ];
+    let mut at = vec![usize::MAX; n];
+    // The walk each frame was last on (a frame met twice on one walk closes a cycle).
+    let mut walking = vec![0u64; n];
+    let mut walks = 0u64;
+    let mut chain: Vec<usize> = Vec::new();
+    for (stamp, group) in dynamic.chunk_by(|a, b| a.0.ns == b.0.ns).enumerate() {
+        for &(t, (c, p)) in group {
+            current[c] = Some((p, t.translation, t.rotation));
+        }
+        let ns = group[0].0.ns;
+        for &child in &children {
+            if current[child].is_none() {
+                continue;
             }
-        }
-        None
-    };
-    let final_root: HashMap<String, Option<String>> =
-        frames.keys().map(|f| (f.to_string(), root_of(f))).collect();
-    let mut roots: BTreeMap<String, usize> = BTreeMap::new();
-    for group in dynamic.chunk_by(|a, b| a.ns == b.ns) {
-        for t in group {
-            current.insert(
-                t.child.clone(),
-                (t.parent.clone(), t.translation, t.rotation),
-            );
-        }
-        let ns = group[0].ns;
-        for child in current.keys() {
-            let (mut frame, mut p) = (child.as_str(), [0.0; 3]);
-            let mut depth = 0;
-            while let Some((parent, tr, q)) = current.get(frame) {
-                let r = rotate(*q, p);
-                p = [r[0] + tr[0], r[1] + tr[1], r[2] + tr[2]];
-                frame = parent;
-                depth += 1;
-                if depth > depth_limit {
-                    return Err(format!("a /tf tree, found a cycle through frame {child:?}"));
+            // Up the chain to a frame composed at this stamp, or the root.
+            let mut f = child;
+            chain.clear();
+            walks += 1;
+            let base = loop {
+                if at[f] == stamp {
+                    break pose[f];
                 }
+                let Some((parent, _, _)) = current[f] else {
+                    break Composed {
+                        q: IDENTITY,
+                        t: [0.0; 3],
+                        root: f,
+                    };
+                };
+                if walking[f] == walks {
+                    return Err(format!(
+                        "a /tf tree, found a cycle through frame {:?}",
+                        names[child]
+                    )
+                    .into());
+                }
+                walking[f] = walks;
+                chain.push(f);
+                f = parent;
+            };
+            acc.budget.charge(Resource::TfWork, chain.len() as u64)?;
+            // Down again, composing each frame's pose from its parent's.
+            let mut up = base;
+            for &g in chain.iter().rev() {
+                let (_, tr, q) = current[g].expect("a frame on the chain has a parent");
+                let r = rotate(up.q, tr);
+                up = Composed {
+                    q: unit(mul(up.q, unit(q))),
+                    t: [up.t[0] + r[0], up.t[1] + r[1], up.t[2] + r[2]],
+                    root: up.root,
+                };
+                pose[g] = up;
+                at[g] = stamp;
             }
-            if final_root.get(child).and_then(|r| r.as_deref()) != Some(frame) {
+            let Composed { t: p, root, .. } = pose[child];
+            if final_root[child] != Some(root) {
                 // The chain to the root is not complete yet at this stamp.
                 continue;
             }
+            acc.budget.charge(Resource::Samples, 1)?;
             if p.iter().all(|v| v.is_finite()) {
-                *roots.entry(frame.to_string()).or_default() += 1;
+                *roots.entry(names[root]).or_default() += 1;
                 let xy = match plane {
                     Some(pl) => pl.project(p),
                     None => [p[0], p[1]],
                 };
-                acc.push("/tf", child, ns, Some(xy));
+                acc.push("/tf", names[child], ns, Some(xy))?;
             } else {
-                acc.push("/tf", child, ns, None);
+                acc.push("/tf", names[child], ns, None)?;
             }
         }
     }
@@ -194,4 +322,38 @@ pub(super) fn compose_tf(acc: &mut Acc, plane: Option<Plane>) -> Result<Vec<Stri
         ));
     }
     Ok(notes)
+}
+
+/// Each frame's root given each frame's parent (`None` for a frame on or under a cycle), in
+/// one pass: each frame is walked once, later walks stop at a frame already settled.
+fn roots_of(parent: &[Option<usize>]) -> Vec<Option<usize>> {
+    const UNKNOWN: u8 = 0;
+    const WALKING: u8 = 1;
+    const SETTLED: u8 = 2;
+    let mut state = vec![UNKNOWN; parent.len()];
+    let mut root = vec![None; parent.len()];
+    let mut path = Vec::new();
+    for start in 0..parent.len() {
+        let mut f = start;
+        path.clear();
+        let found = loop {
+            match state[f] {
+                SETTLED => break root[f],
+                // Back on this walk's own path: a cycle.
+                WALKING => break None,
+                _ => {}
+            }
+            state[f] = WALKING;
+            path.push(f);
+            match parent[f] {
+                Some(p) => f = p,
+                None => break Some(f),
+            }
+        };
+        for &g in &path {
+            state[g] = SETTLED;
+            root[g] = found;
+        }
+    }
+    root
 }

@@ -349,6 +349,7 @@ mod tests {
     use super::super::{decode, xy, Decoder};
     use super::*;
     use crate::data::mcap::tf::Acc;
+    use crate::data::Budget;
     use rand::{Rng, SeedableRng};
 
     /// Samples: marker, stamp, position bits.
@@ -372,8 +373,13 @@ mod tests {
     /// frame is parsed ahead in a message record, as chunks are.
     fn by_decode(data: &[u8]) -> Result<Samples, String> {
         let samples = |pre: Option<PreFrame<'_>>| -> Result<Samples, String> {
-            let mut acc = Acc::default();
-            decode(&Decoder::Json, "/markers", data, 0, None, &mut acc, pre)?;
+            let mut acc = Acc::new(Budget::new(std::path::Path::new("t.mcap"), 1 << 20));
+            decode(&Decoder::Json, "/markers", data, 0, None, &mut acc, pre).map_err(
+                |e| match e {
+                    super::super::Failed::Message(why) => why,
+                    super::super::Failed::Budget(e) => e.to_string(),
+                },
+            )?;
             let mut out = Vec::new();
             for (_, name, s) in acc.series {
                 for (ns, p) in s {

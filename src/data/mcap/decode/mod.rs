@@ -8,10 +8,10 @@ mod protobuf;
 pub(crate) use json::{PreFrame, PreParsed};
 
 use super::tf::Acc;
-use crate::data::{ros_cdr, Plane};
+use crate::data::{ros_cdr, DataError, Plane, Resource};
 use json::{canonical_frame, FastMsg, JMsg, JStamp};
 use prost_reflect::{DescriptorPool, MessageDescriptor};
-use protobuf::{pb_decode, pb_f64, pb_field, pb_stamp};
+use protobuf::{pb_count, pb_decode, pb_f64, pb_field, pb_stamp};
 use std::fmt;
 
 /// JSON schemas (Foxglove's) whose x, y are not a position: skipped rather than read as
@@ -58,11 +58,39 @@ impl fmt::Debug for Decoder {
 }
 
 /// Why a channel gets no decoder.
+#[derive(Clone, Debug)]
 pub(super) enum Reject {
     /// An encoding or type this reader does not decode.
     Unsupported(String),
     /// A supported type whose schema is unusable.
     Invalid(String),
+}
+
+/// Why a message gave no samples: it is not what its channel should carry (a message for the
+/// caller to locate), or reading it would take the file over its budget.
+pub(super) enum Failed {
+    /// What was expected, or what is wrong.
+    Message(String),
+    /// The file is over its budget: refused whole.
+    Budget(DataError),
+}
+
+impl From<String> for Failed {
+    fn from(why: String) -> Self {
+        Failed::Message(why)
+    }
+}
+
+impl From<&str> for Failed {
+    fn from(why: &str) -> Self {
+        Failed::Message(why.to_string())
+    }
+}
+
+impl From<DataError> for Failed {
+    fn from(e: DataError) -> Self {
+        Failed::Budget(e)
+    }
 }
 
 /// A 3-D point (`p3`) on the plane of motion: see [`xy`].
@@ -144,7 +172,7 @@ pub(super) fn decode(
     plane: Option<Plane>,
     acc: &mut Acc,
     pre: Option<PreFrame<'_>>,
-) -> Result<usize, String> {
+) -> Result<usize, Failed> {
     match dec {
         Decoder::Json => decode_json(topic, data, log_time, plane, acc, pre),
         Decoder::PointStamped | Decoder::PoseStamped => {
@@ -155,7 +183,8 @@ pub(super) fn decode(
                     if pose { "PoseStamped" } else { "PointStamped" }
                 )
             })?;
-            acc.push(topic, topic, h.stamp.ns(), p3(p, plane));
+            acc.budget.charge(Resource::Samples, 1)?;
+            acc.push(topic, topic, h.stamp.ns(), p3(p, plane))?;
             Ok(1)
         }
         Decoder::TransformStamped => {
@@ -186,7 +215,9 @@ fn decode_json(
     plane: Option<Plane>,
     acc: &mut Acc,
     pre: Option<PreFrame<'_>>,
-) -> Result<usize, String> {
+) -> Result<usize, Failed> {
+    // Each position kept is charged before the message's are pushed.
+    let keep = |acc: &mut Acc, n: usize| acc.budget.charge(Resource::Samples, n as u64);
     if let Some(f) = pre {
         // Parsed ahead by canonical_frame from these same bytes.
         let stamp = JStamp::Parts {
@@ -194,12 +225,13 @@ fn decode_json(
             nsec: f.nsec,
         }
         .ns()?;
+        keep(acc, f.markers.len())?;
         for (at, x, y) in f.markers {
             let id = data
                 .get(at.clone())
                 .and_then(|b| std::str::from_utf8(b).ok())
                 .ok_or("a marker name parsed ahead is not in the message")?;
-            acc.push(topic, id, stamp, xy(*x, *y, None, plane));
+            acc.push(topic, id, stamp, xy(*x, *y, None, plane))?;
         }
         return Ok(f.markers.len());
     }
@@ -209,8 +241,9 @@ fn decode_json(
             nsec: f.nsec,
         }
         .ns()?;
+        keep(acc, f.len)?;
         for &(id, x, y) in &f.markers[..f.len] {
-            acc.push(topic, id, stamp, xy(x, y, None, plane));
+            acc.push(topic, id, stamp, xy(x, y, None, plane))?;
         }
         return Ok(f.len);
     }
@@ -224,17 +257,20 @@ fn decode_json(
             None => log_time,
         };
         if let Some(markers) = m.markers {
+            keep(acc, markers.len())?;
             for mk in &markers {
-                acc.push(topic, &mk.id, stamp, xy(mk.x, mk.y, mk.z, plane));
+                acc.push(topic, &mk.id, stamp, xy(mk.x, mk.y, mk.z, plane))?;
             }
             return Ok(markers.len());
         }
         if let Some(p) = m.point.or(m.position) {
-            acc.push(topic, topic, stamp, xy(p.x, p.y, p.z, plane));
+            keep(acc, 1)?;
+            acc.push(topic, topic, stamp, xy(p.x, p.y, p.z, plane))?;
             return Ok(1);
         }
         if m.x.is_some() || m.y.is_some() {
-            acc.push(topic, topic, stamp, xy(m.x, m.y, m.z, plane));
+            keep(acc, 1)?;
+            acc.push(topic, topic, stamp, xy(m.x, m.y, m.z, plane))?;
             return Ok(1);
         }
     }
@@ -245,15 +281,18 @@ fn decode_json(
     };
     if let Some(markers) = m.markers {
         let n = markers.len();
+        keep(acc, n)?;
         for mk in markers {
-            acc.push(topic, &mk.id, stamp, xy(mk.x, mk.y, mk.z, plane));
+            acc.push(topic, &mk.id, stamp, xy(mk.x, mk.y, mk.z, plane))?;
         }
         Ok(n)
     } else if let Some(p) = m.point.or(m.position) {
-        acc.push(topic, topic, stamp, xy(p.x, p.y, p.z, plane));
+        keep(acc, 1)?;
+        acc.push(topic, topic, stamp, xy(p.x, p.y, p.z, plane))?;
         Ok(1)
     } else if m.x.is_some() || m.y.is_some() {
-        acc.push(topic, topic, stamp, xy(m.x, m.y, m.z, plane));
+        keep(acc, 1)?;
+        acc.push(topic, topic, stamp, xy(m.x, m.y, m.z, plane))?;
         Ok(1)
     } else {
         Err("a JSON object with a \"markers\" array, a \"point\", or x and y".into())
@@ -269,7 +308,7 @@ fn frame_transform(
     log_time: i64,
     plane: Option<Plane>,
     acc: &mut Acc,
-) -> Result<usize, String> {
+) -> Result<usize, Failed> {
     let m = pb_decode(desc, data)?;
     let stamp = pb_stamp(&m)?.unwrap_or(log_time);
     let name = pb_field(&m, "child_frame_id")?;
@@ -285,7 +324,8 @@ fn frame_transform(
     } else {
         None
     };
-    acc.push(topic, name, stamp, p);
+    acc.budget.charge(Resource::Samples, 1)?;
+    acc.push(topic, name, stamp, p)?;
     Ok(1)
 }
 
@@ -297,7 +337,15 @@ fn points_annotation(
     data: &[u8],
     log_time: i64,
     acc: &mut Acc,
-) -> Result<usize, String> {
+) -> Result<usize, Failed> {
+    // Every point is a position kept, and a marker of its own past the known ones: both are
+    // counted in the encoded message and charged before it is decoded (decoding allocates for
+    // each point).
+    let n = pb_count(desc, "points", data);
+    let keep = n.max(POINTS_NAMES.len());
+    acc.budget.charge(Resource::Samples, keep as u64)?;
+    let known = acc.widest.get(topic).copied().unwrap_or(0);
+    acc.afford(Resource::Series, keep.saturating_sub(known) as u64)?;
     let m = pb_decode(desc, data)?;
     let stamp = pb_stamp(&m)?.unwrap_or(log_time);
     let v = pb_field(&m, "points")?;
@@ -310,10 +358,13 @@ fn points_annotation(
     // Identity by index; the two roles get a sample every frame so a short list reads
     // as missing markers rather than shifting the others.
     for (k, name) in POINTS_NAMES.iter().enumerate() {
-        acc.push(topic, name, stamp, xys.get(k).copied());
+        acc.push(topic, name, stamp, xys.get(k).copied())?;
     }
     for (k, p) in xys.iter().enumerate().skip(POINTS_NAMES.len()) {
-        acc.push(topic, &format!("point{k}"), stamp, Some(*p));
+        acc.push(topic, &format!("point{k}"), stamp, Some(*p))?;
+    }
+    if keep > known {
+        acc.widest.insert(topic.to_string(), keep);
     }
     Ok(xys.len())
 }

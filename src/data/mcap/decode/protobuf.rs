@@ -63,3 +63,52 @@ pub(super) fn pb_decode(desc: &MessageDescriptor, data: &[u8]) -> Result<Dynamic
     DynamicMessage::decode(desc.clone(), data)
         .map_err(|e| format!("protobuf {}: {e}", desc.full_name()))
 }
+
+/// How many times the top-level field `name` of `desc` occurs in the encoded message `data`
+/// (the entries of a repeated message field), counted on the wire without decoding: what
+/// decoding would allocate for is known, and charged, first. Stops at bytes that are not
+/// protobuf (decoding then says what is wrong).
+pub(super) fn pb_count(desc: &MessageDescriptor, name: &str, data: &[u8]) -> usize {
+    let Some(number) = desc.get_field_by_name(name).map(|f| f.number()) else {
+        return 0;
+    };
+    let mut at = 0usize;
+    let varint = |at: &mut usize| -> Option<u64> {
+        let mut v = 0u64;
+        for shift in (0..64).step_by(7) {
+            let b = *data.get(*at)?;
+            *at += 1;
+            v |= u64::from(b & 0x7f) << shift;
+            if b < 0x80 {
+                return Some(v);
+            }
+        }
+        None
+    };
+    let mut n = 0;
+    while at < data.len() {
+        let Some(key) = varint(&mut at) else {
+            break;
+        };
+        let skip = match key & 7 {
+            0 => varint(&mut at).map(|_| 0),
+            1 => Some(8),
+            2 => varint(&mut at),
+            5 => Some(4),
+            // Groups (long deprecated) and invalid wire types: decoding reports them.
+            _ => None,
+        };
+        let Some(end) = skip
+            .and_then(|s| usize::try_from(s).ok())
+            .and_then(|s| at.checked_add(s))
+            .filter(|&e| e <= data.len())
+        else {
+            break;
+        };
+        if key >> 3 == u64::from(number) && key & 7 == 2 {
+            n += 1;
+        }
+        at = end;
+    }
+    n
+}
