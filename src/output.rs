@@ -167,7 +167,7 @@ pub fn output_target(path: &Path) -> std::io::Result<PathBuf> {
 
 /// The canonical form of a path that may not exist yet (its directory canonicalised, links
 /// followed), to tell whether two paths name the same file.
-pub fn canonical(path: &Path) -> PathBuf {
+fn canonical(path: &Path) -> PathBuf {
     let target = output_target(path).unwrap_or_else(|_| path.to_path_buf());
     if let Ok(c) = std::fs::canonicalize(&target) {
         return c;
