@@ -9,6 +9,112 @@ use csv::StringRecord;
 use std::io::Read;
 use std::path::Path;
 
+/// The longest line a text reader takes (bytes, line end included). The widest real header,
+/// a 20-animal DeepLabCut table of 3,000 columns, is under 100 KB; without a cap one endless
+/// line (`/dev/zero`) grows the csv crate's record, or a line reader's buffer, until memory
+/// runs out.
+pub(crate) const MAX_LINE_BYTES: u64 = 1 << 20;
+
+/// A line longer than [`MAX_LINE_BYTES`], carried in an `io::Error` by [`LineCap`].
+#[derive(Debug)]
+pub(crate) struct LineTooLong {
+    /// The line's number (from 1).
+    pub(crate) line: u64,
+}
+
+impl std::fmt::Display for LineTooLong {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(
+            f,
+            "line {} is longer than {MAX_LINE_BYTES} bytes",
+            self.line
+        )
+    }
+}
+
+impl std::error::Error for LineTooLong {}
+
+/// A reader that fails with [`LineTooLong`] as soon as a line passes [`MAX_LINE_BYTES`], so
+/// that the parser behind it never holds more than that of one line. It counts lines so that
+/// the error names the line.
+pub(crate) struct LineCap<R> {
+    inner: R,
+    /// Lines ended so far.
+    lines: u64,
+    /// Bytes of the current (unended) line.
+    current: u64,
+}
+
+impl<R: Read> LineCap<R> {
+    /// Cap the lines of `inner`, counted from its first byte.
+    pub(crate) fn new(inner: R) -> Self {
+        LineCap {
+            inner,
+            lines: 0,
+            current: 0,
+        }
+    }
+}
+
+impl<R: Read> Read for LineCap<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        let chunk = &buf[..n];
+        // A line ends at `\n`, or at `\r` as the csv crate also takes it (lines are numbered by
+        // `\n` alone, so that `\r\n` counts once).
+        let end = |b: &u8| *b == b'\n' || *b == b'\r';
+        let too_long = |line: u64| std::io::Error::other(LineTooLong { line });
+        let Some(first) = chunk.iter().position(end) else {
+            self.current += n as u64;
+            if self.current > MAX_LINE_BYTES {
+                return Err(too_long(self.lines + 1));
+            }
+            return Ok(n);
+        };
+        if self.current + first as u64 + 1 > MAX_LINE_BYTES {
+            return Err(too_long(self.lines + 1));
+        }
+        let last = chunk.iter().rposition(end).unwrap_or(first);
+        // Lines wholly inside the chunk can be too long only when the chunk is.
+        if (last - first) as u64 > MAX_LINE_BYTES {
+            let (mut start, mut line) = (first + 1, self.lines + u64::from(chunk[first] == b'\n'));
+            for (i, b) in chunk.iter().enumerate().take(last + 1).skip(first + 1) {
+                if end(b) {
+                    if (i + 1 - start) as u64 > MAX_LINE_BYTES {
+                        return Err(too_long(line + 1));
+                    }
+                    line += u64::from(*b == b'\n');
+                    start = i + 1;
+                }
+            }
+        }
+        self.lines += chunk.iter().filter(|&&b| b == b'\n').count() as u64;
+        self.current = (n - last - 1) as u64;
+        if self.current > MAX_LINE_BYTES {
+            return Err(too_long(self.lines + 1));
+        }
+        Ok(n)
+    }
+}
+
+/// A read error as the file's error: a line over [`MAX_LINE_BYTES`] is a parse error that
+/// names the line and the limit (bad input), anything else an I/O error.
+pub(crate) fn read_error(path: &Path, e: std::io::Error) -> DataError {
+    match e.get_ref().and_then(|i| i.downcast_ref::<LineTooLong>()) {
+        Some(long) => DataError::parse(
+            path,
+            format!("line {}", long.line),
+            "line",
+            format!("at most {MAX_LINE_BYTES} bytes per line"),
+            "a longer line; refusing to read it",
+        ),
+        None => DataError::Io {
+            path: path.to_owned(),
+            source: e,
+        },
+    }
+}
+
 /// Rows of a delimited file with line numbers and errors that name the file.
 pub(super) struct Rows<R: Read> {
     rdr: csv::Reader<R>,
@@ -49,6 +155,12 @@ impl<R: Read> Rows<R> {
                 Ok(more)
             }
             Err(e) => {
+                if let csv::ErrorKind::Io(io) = e.kind() {
+                    if let Some(long) = io.get_ref().and_then(|i| i.downcast_ref::<LineTooLong>()) {
+                        let long = LineTooLong { line: long.line };
+                        return Err(read_error(&self.path, std::io::Error::other(long)));
+                    }
+                }
                 let line = e.position().map_or(self.line + 1, |p| p.line());
                 Err(DataError::parse(
                     &self.path,
@@ -362,4 +474,14 @@ impl TimeReader {
 /// The header's cells, lower-cased.
 pub(super) fn lower(h: &[String]) -> Vec<String> {
     h.iter().map(|c| c.to_lowercase()).collect()
+}
+
+/// Each cell's first column: headers are matched through this map, so that matching is linear
+/// in the header however many columns it has.
+pub(crate) fn first_index(cells: &[String]) -> std::collections::HashMap<&str, usize> {
+    let mut at = std::collections::HashMap::with_capacity(cells.len());
+    for (i, c) in cells.iter().enumerate() {
+        at.entry(c.as_str()).or_insert(i);
+    }
+    at
 }

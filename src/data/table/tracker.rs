@@ -2,7 +2,7 @@
 //! (`#multi:`, a name row, then `t x y t x y ...`), delimited by tab, semicolon, comma or space,
 //! with the decimal comma of some locales. Projects (`.trk`, XML) are `data::tracker_project`'s.
 
-use super::rows::{Clock, Rows};
+use super::rows::{read_error, Clock, Rows};
 use crate::data::{DataError, Parsed, Series};
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
@@ -71,10 +71,7 @@ type Group = (String, usize, usize, usize);
 /// Read the lines up to the column names (`t x y` in some delimiter): at most three, else an
 /// error that says what was found.
 fn read_head(input: &mut impl BufRead, path: &Path) -> Result<Head, DataError> {
-    let io = |source| DataError::Io {
-        path: path.to_owned(),
-        source,
-    };
+    let io = |e| read_error(path, e);
     // Up to three lines before the data: `#multi:`, a name row, the column names.
     let mut head: Vec<String> = Vec::new();
     let (delim, names_row) = loop {
@@ -153,22 +150,43 @@ fn track_columns(head: &Head, path: &Path, header_line: u64) -> Result<Vec<Group
         Some(l) if !multi => clean(l).trim().trim_matches('"').to_string(),
         _ => stem.clone(),
     };
+    // Per column, the next y at or after it, the last t and the last named cell at or before
+    // it: one pass each, so that a header of many x columns is read in linear time.
+    let mut next_y = vec![None; cols.len() + 1];
+    for j in (0..cols.len()).rev() {
+        next_y[j] = if cols[j] == "y" {
+            Some(j)
+        } else {
+            next_y[j + 1]
+        };
+    }
+    let mut last_t = vec![None; cols.len()];
+    let mut last_name = vec![None; cols.len()];
+    let (mut t, mut named) = (None, None);
+    for j in 0..cols.len() {
+        last_t[j] = t;
+        if cols[j] == "t" {
+            t = Some(j);
+        }
+        if name_cells.get(j).is_some_and(|n| !n.is_empty()) {
+            named = Some(j);
+        }
+        last_name[j] = named;
+    }
     let mut groups: Vec<Group> = Vec::new();
     for (xc, c) in cols.iter().enumerate() {
         if c != "x" {
             continue;
         }
-        let Some(yc) = (xc + 1..cols.len()).find(|&j| cols[j] == "y") else {
+        let Some(yc) = next_y[xc + 1] else {
             continue;
         };
-        let Some(tc) = (0..xc).rev().find(|&j| cols[j] == "t") else {
+        let Some(tc) = last_t[xc] else {
             continue;
         };
         let name = if multi {
-            (0..=xc.min(name_cells.len().saturating_sub(1)))
-                .rev()
-                .find(|&j| name_cells.get(j).is_some_and(|n| !n.is_empty()))
-                .map(|j| name_cells[j].clone())
+            last_name[xc]
+                .map(|j: usize| name_cells[j].clone())
                 .unwrap_or_else(|| format!("{stem} {}", groups.len() + 1))
         } else if groups.is_empty() {
             single_name.clone()
