@@ -1,5 +1,6 @@
 //! Integration tests: one binary, shared helpers, one module per capability.
 
+mod budgets_files;
 mod cli_fit;
 mod cli_messages;
 mod cli_regions;
