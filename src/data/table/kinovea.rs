@@ -15,7 +15,7 @@ pub(super) fn read_kinovea(input: impl Read, path: &Path) -> Result<Parsed, Data
     let mut saw_header = false;
     let reader = BufReader::new(input);
     for (k, line) in reader.split(b'\n').enumerate() {
-        let line = line.map_err(|e| read_error(path, e))?;
+        let line = line.map_err(|e| read_error(path, k as u64 + 1, e))?;
         let line = String::from_utf8_lossy(&line);
         let line = line.trim_start_matches('\u{feff}').trim();
         let at = format!("line {}", k + 1);

@@ -15,44 +15,33 @@ use std::path::Path;
 /// runs out.
 pub(crate) const MAX_LINE_BYTES: u64 = 1 << 20;
 
-/// A line longer than [`MAX_LINE_BYTES`], carried in an `io::Error` by [`LineCap`].
+/// A line longer than [`MAX_LINE_BYTES`], carried in an `io::Error` by [`LineCap`]; the
+/// reader behind it knows which line it was reading.
 #[derive(Debug)]
-pub(crate) struct LineTooLong {
-    /// The line's number (from 1).
-    pub(crate) line: u64,
-}
+pub(crate) struct LineTooLong;
 
 impl std::fmt::Display for LineTooLong {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        write!(
-            f,
-            "line {} is longer than {MAX_LINE_BYTES} bytes",
-            self.line
-        )
+        write!(f, "a line longer than {MAX_LINE_BYTES} bytes")
     }
 }
 
 impl std::error::Error for LineTooLong {}
 
 /// A reader that fails with [`LineTooLong`] as soon as a line passes [`MAX_LINE_BYTES`], so
-/// that the parser behind it never holds more than that of one line. It counts lines so that
-/// the error names the line.
+/// that the parser behind it never holds more than that of one line. It looks only at the
+/// first and last line ends of each read (lines are short), and scans a read whole only when
+/// the read is longer than the cap.
 pub(crate) struct LineCap<R> {
     inner: R,
-    /// Lines ended so far.
-    lines: u64,
     /// Bytes of the current (unended) line.
     current: u64,
 }
 
 impl<R: Read> LineCap<R> {
-    /// Cap the lines of `inner`, counted from its first byte.
+    /// Cap the lines of `inner`.
     pub(crate) fn new(inner: R) -> Self {
-        LineCap {
-            inner,
-            lines: 0,
-            current: 0,
-        }
+        LineCap { inner, current: 0 }
     }
 }
 
@@ -60,58 +49,55 @@ impl<R: Read> Read for LineCap<R> {
     fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
         let n = self.inner.read(buf)?;
         let chunk = &buf[..n];
-        // A line ends at `\n`, or at `\r` as the csv crate also takes it (lines are numbered by
-        // `\n` alone, so that `\r\n` counts once).
+        // A line ends at `\n`, or at `\r` as the csv crate also takes it.
         let end = |b: &u8| *b == b'\n' || *b == b'\r';
-        let too_long = |line: u64| std::io::Error::other(LineTooLong { line });
+        let too_long = || std::io::Error::other(LineTooLong);
         let Some(first) = chunk.iter().position(end) else {
             self.current += n as u64;
             if self.current > MAX_LINE_BYTES {
-                return Err(too_long(self.lines + 1));
+                return Err(too_long());
             }
             return Ok(n);
         };
         if self.current + first as u64 + 1 > MAX_LINE_BYTES {
-            return Err(too_long(self.lines + 1));
+            return Err(too_long());
         }
         let last = chunk.iter().rposition(end).unwrap_or(first);
-        // Lines wholly inside the chunk can be too long only when the chunk is.
+        // Lines wholly inside the read can be too long only when the read is.
         if (last - first) as u64 > MAX_LINE_BYTES {
-            let (mut start, mut line) = (first + 1, self.lines + u64::from(chunk[first] == b'\n'));
+            let mut start = first + 1;
             for (i, b) in chunk.iter().enumerate().take(last + 1).skip(first + 1) {
                 if end(b) {
                     if (i + 1 - start) as u64 > MAX_LINE_BYTES {
-                        return Err(too_long(line + 1));
+                        return Err(too_long());
                     }
-                    line += u64::from(*b == b'\n');
                     start = i + 1;
                 }
             }
         }
-        self.lines += chunk.iter().filter(|&&b| b == b'\n').count() as u64;
         self.current = (n - last - 1) as u64;
         if self.current > MAX_LINE_BYTES {
-            return Err(too_long(self.lines + 1));
+            return Err(too_long());
         }
         Ok(n)
     }
 }
 
-/// A read error as the file's error: a line over [`MAX_LINE_BYTES`] is a parse error that
-/// names the line and the limit (bad input), anything else an I/O error.
-pub(crate) fn read_error(path: &Path, e: std::io::Error) -> DataError {
-    match e.get_ref().and_then(|i| i.downcast_ref::<LineTooLong>()) {
-        Some(long) => DataError::parse(
+/// A read error at line `line` as the file's error: a line over [`MAX_LINE_BYTES`] is a parse
+/// error that names the line and the limit (bad input), anything else an I/O error.
+pub(crate) fn read_error(path: &Path, line: u64, e: std::io::Error) -> DataError {
+    if e.get_ref().is_some_and(|i| i.is::<LineTooLong>()) {
+        return DataError::parse(
             path,
-            format!("line {}", long.line),
+            format!("line {line}"),
             "line",
             format!("at most {MAX_LINE_BYTES} bytes per line"),
             "a longer line; refusing to read it",
-        ),
-        None => DataError::Io {
-            path: path.to_owned(),
-            source: e,
-        },
+        );
+    }
+    DataError::Io {
+        path: path.to_owned(),
+        source: e,
     }
 }
 
@@ -125,6 +111,8 @@ pub(super) struct Rows<R: Read> {
     pub(super) line: u64,
     /// Whether a `nan` cell means a missing value (pandas and idtracker.ai write it so).
     pub(super) nan_missing: bool,
+    /// Lines read before these rows (Tracker's head), for a long line's number.
+    pub(super) lines_before: u64,
 }
 
 impl<R: Read> Rows<R> {
@@ -142,6 +130,7 @@ impl<R: Read> Rows<R> {
             path: path.to_owned(),
             line: 0,
             nan_missing: false,
+            lines_before: 0,
         }
     }
 
@@ -156,9 +145,11 @@ impl<R: Read> Rows<R> {
             }
             Err(e) => {
                 if let csv::ErrorKind::Io(io) = e.kind() {
-                    if let Some(long) = io.get_ref().and_then(|i| i.downcast_ref::<LineTooLong>()) {
-                        let long = LineTooLong { line: long.line };
-                        return Err(read_error(&self.path, std::io::Error::other(long)));
+                    if io.get_ref().is_some_and(|i| i.is::<LineTooLong>()) {
+                        // The record being read, the long line, starts where the last ended.
+                        let line = self.lines_before + self.rdr.position().line();
+                        let long = std::io::Error::other(LineTooLong);
+                        return Err(read_error(&self.path, line, long));
                     }
                 }
                 let line = e.position().map_or(self.line + 1, |p| p.line());

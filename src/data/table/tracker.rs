@@ -37,7 +37,8 @@ pub(super) fn read_tracker(input: impl Read, path: &Path) -> Result<Parsed, Data
     let header_line = head.lines.len() as u64;
     let groups = track_columns(&head, path, header_line)?;
     let decimal_comma = head.delim != b',';
-    let rows = Rows::new(input, path, head.delim);
+    let mut rows = Rows::new(input, path, head.delim);
+    rows.lines_before = header_line;
     let series = read_tracks(rows, &groups, path, header_line, decimal_comma)?;
     let notes = vec![note(path, &head, &series, decimal_comma)];
     Ok(Parsed {
@@ -71,12 +72,12 @@ type Group = (String, usize, usize, usize);
 /// Read the lines up to the column names (`t x y` in some delimiter): at most three, else an
 /// error that says what was found.
 fn read_head(input: &mut impl BufRead, path: &Path) -> Result<Head, DataError> {
-    let io = |e| read_error(path, e);
+    let io = |e, line: usize| read_error(path, line as u64 + 1, e);
     // Up to three lines before the data: `#multi:`, a name row, the column names.
     let mut head: Vec<String> = Vec::new();
     let (delim, names_row) = loop {
         let mut line = String::new();
-        if input.read_line(&mut line).map_err(io)? == 0 || head.len() == 3 {
+        if input.read_line(&mut line).map_err(|e| io(e, head.len()))? == 0 || head.len() == 3 {
             return Err(if head.iter().all(|l| l.trim().is_empty()) {
                 DataError::Empty {
                     path: path.to_owned(),
