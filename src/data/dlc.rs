@@ -5,6 +5,7 @@
 
 use super::table::rows::{all_or_none, Clock};
 use super::{DataError, Parsed, Plane, ReadOptions, Series};
+use std::collections::HashMap;
 use std::path::Path;
 
 /// One row's cells, as the CSV and HDF5 readers hold them.
@@ -45,18 +46,17 @@ impl Builder {
         bad: impl Fn(String, String, String) -> DataError,
     ) -> Result<Builder, DataError> {
         let mut grouped: Vec<(String, Slots)> = Vec::new();
+        // Each marker's place in `grouped`: wide headers are grouped in linear time.
+        let mut index: HashMap<String, usize> = HashMap::new();
         for (j, individual, part, coord) in columns {
             let name = match individual {
                 Some(ind) if !(ind.is_empty() || ind == "single") => format!("{ind}/{part}"),
                 _ => part.to_string(),
             };
-            let k = match grouped.iter().position(|(n, _)| *n == name) {
-                Some(k) => k,
-                None => {
-                    grouped.push((name, [None; 4]));
-                    grouped.len() - 1
-                }
-            };
+            let k = *index.entry(name.clone()).or_insert_with(|| {
+                grouped.push((name, [None; 4]));
+                grouped.len() - 1
+            });
             let slot = match coord.to_lowercase().as_str() {
                 "x" => 0,
                 "y" => 1,

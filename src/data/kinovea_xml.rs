@@ -42,6 +42,7 @@ pub(crate) fn read(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Pars
     }
     let text = std::str::from_utf8(bytes)
         .map_err(|e| bad("the file".into(), "file", "UTF-8 XML", e.to_string()))?;
+    super::xml_limits::check_attributes(text, path)?;
     let doc = Document::parse(text).map_err(|e| {
         bad(
             format!("line {}", e.pos().row),
@@ -108,8 +109,12 @@ pub(crate) fn read(bytes: &[u8], path: &Path, opts: &ReadOptions) -> Result<Pars
     })
 }
 
-/// The spreadsheet's rows: each row's line in the file and its cells' text, trimmed.
+/// The spreadsheet's rows: each row's line in the file and its cells' text, trimmed. Rows come
+/// in the order of the text, so each line is counted on from the last row's (asking the
+/// document for each row's position would rescan the text from its start).
 fn sheet_rows(doc: &Document) -> Vec<(u32, Vec<String>)> {
+    let text = doc.input_text().as_bytes();
+    let (mut pos, mut line) = (0usize, 1u32);
     doc.descendants()
         .filter(|n| n.tag_name().name() == "Row")
         .map(|r| {
@@ -118,7 +123,10 @@ fn sheet_rows(doc: &Document) -> Vec<(u32, Vec<String>)> {
                 .filter(|n| n.tag_name().name() == "Data")
                 .map(|d| d.text().unwrap_or("").trim().to_string())
                 .collect();
-            (doc.text_pos_at(r.range().start).row, cells)
+            let start = r.range().start.max(pos);
+            line += text[pos..start].iter().filter(|&&c| c == b'\n').count() as u32;
+            pos = start;
+            (line, cells)
         })
         .collect()
 }

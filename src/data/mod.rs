@@ -19,6 +19,7 @@
 //! - `dlc.rs`: DeepLabCut's table layout (columns to markers, likelihood, frames to times),
 //!   shared by its CSV reader (`table/dlc.rs`) and its HDF5 reader (`hdf5/dlc.rs`).
 //! - `tracker_project.rs`, `kinovea_xml.rs`: Tracker's projects and Kinovea's spreadsheets (XML).
+//! - `xml_limits.rs`: the attributes per element both XML readers allow, checked before parsing.
 //! - `mcap/`: MCAP recordings, read and written; ROS 2 CDR messages in `ros_cdr.rs`.
 //! - `calibrate.rs`: into the rail frame (metres, y up, the rail axis, the origin) and the
 //!   rod-length check that flags outlier frames.
@@ -40,6 +41,7 @@ mod ros_cdr;
 pub mod synth;
 mod table;
 mod tracker_project;
+mod xml_limits;
 
 pub use budget::{Budget, Resource};
 pub use error::DataError;

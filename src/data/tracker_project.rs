@@ -87,6 +87,7 @@ pub(crate) fn read(bytes: &[u8], path: &Path) -> Result<Parsed, DataError> {
         ));
     }
     let text = std::str::from_utf8(bytes).map_err(|e| bad("file", "UTF-8 XML", e.to_string()))?;
+    super::xml_limits::check_attributes(text, path)?;
     let doc = Document::parse(text).map_err(|e| {
         DataError::parse(
             path,
@@ -197,6 +198,15 @@ fn point_masses(
     coords: &[(usize, Coords)],
     bad: &impl Fn(&str, &str, String) -> DataError,
 ) -> Result<(Vec<Series>, Vec<String>), DataError> {
+    // The frames' coordinate systems are listed in file order, so the entry for frame n
+    // (the last listed at or before n) is found from the suffix minima of the frame
+    // numbers, which never decrease: a binary search instead of a scan per frame.
+    let mut floor = vec![usize::MAX; coords.len()];
+    for i in (0..coords.len()).rev() {
+        floor[i] = coords[i]
+            .0
+            .min(floor.get(i + 1).copied().unwrap_or(usize::MAX));
+    }
     let mut series = Vec::new();
     let mut models = Vec::new();
     for o in objects {
@@ -227,11 +237,10 @@ fn point_masses(
                 continue;
             };
             // The coordinate system of this frame: its own entry, else the last before it.
-            let c = coords
-                .iter()
-                .rev()
-                .find(|(k, _)| *k <= n)
-                .or(coords.first());
+            let c = match floor.partition_point(|&k| k <= n) {
+                0 => coords.first(),
+                i => coords.get(i - 1),
+            };
             let p = match c {
                 Some((_, c)) => c.world([x, y]),
                 None => [x, -y],

@@ -1,6 +1,7 @@
 //! Integration tests: one binary, shared helpers, one module per capability.
 
 mod budgets;
+mod budgets_files;
 mod budgets_mcap;
 mod cli_fit;
 mod cli_messages;

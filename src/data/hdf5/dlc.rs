@@ -20,10 +20,10 @@
 //! down, t = frame / `--fps`. NaN is missing; a numeric row index gives the frame numbers, image
 //! paths number the rows.
 
-use super::io::{number, numeric, raw, Src, MAX_H5_BYTES, MAX_RATIO};
+use super::io::{number, numeric, raw, Src};
 use super::pickle::unpickle_labels;
 use crate::data::dlc::{Builder, Cells};
-use crate::data::{DataError, Parsed, ReadOptions};
+use crate::data::{DataError, Parsed, ReadOptions, Resource};
 use hdf5_reader::group::Group;
 use hdf5_reader::{Dataset, Datatype, Hdf5File};
 use std::path::Path;
@@ -64,18 +64,14 @@ struct Frame {
     at: String,
 }
 
-/// Read the DataFrame DeepLabCut wrote under `key` in `f`, a file of `file_len` bytes.
+/// Read the DataFrame DeepLabCut wrote under `key` in `f` (the file `src`).
 pub(super) fn read(
     f: &Hdf5File,
     key: &str,
-    file_len: usize,
-    path: &Path,
+    src: &Src,
     opts: &ReadOptions,
 ) -> Result<Parsed, DataError> {
-    let src = Src {
-        path,
-        limit: MAX_H5_BYTES.min(file_len.saturating_mul(MAX_RATIO)),
-    };
+    let path = src.path;
     let bad = |at: &str, field: &str, expected: &str, found: String| {
         DataError::parse(path, at, field, expected, found)
     };
@@ -84,8 +80,8 @@ pub(super) fn read(
         .map_err(|e| bad("the HDF5 file", key, "a group", e.to_string()))?;
     let at = format!("/{key}");
     let frame = match pandas_type(&group).as_deref() {
-        Some("frame_table") => read_table(&group, &format!("{at}/table"), &src)?,
-        Some("frame") => read_fixed(&group, &at, &src)?,
+        Some("frame_table") => read_table(&group, &format!("{at}/table"), src)?,
+        Some("frame") => read_fixed(&group, &at, src)?,
         other => {
             return Err(DataError::Unsupported {
                 path: path.to_owned(),
@@ -230,13 +226,14 @@ fn read_table(group: &Group, at: &str, src: &Src) -> Result<Frame, DataError> {
     let kind = table
         .attribute("values_block_0_kind")
         .map_err(|e| bad("values_block_0_kind", "the column labels", e.to_string()))?;
-    let labels = unpickle_labels(&kind.raw_data).map_err(|found| {
-        bad(
-            "values_block_0_kind",
-            "a protocol-0 pickle of a list of column labels, as PyTables writes",
-            found,
-        )
-    })?;
+    let labels = unpickle_labels(&kind.raw_data, |n| src.charge(Resource::DecodedBytes, n))?
+        .map_err(|found| {
+            bad(
+                "values_block_0_kind",
+                "a protocol-0 pickle of a list of column labels, as PyTables writes",
+                found,
+            )
+        })?;
     if labels.len() != width {
         return Err(bad(
             "values_block_0_kind",
@@ -295,9 +292,11 @@ fn read_fixed(group: &Group, at: &str, src: &Src) -> Result<Frame, DataError> {
             .map_err(|e| bad(name, "a dataset", e.to_string()))
     };
     let block = dataset("block0_values")?;
-    // Column labels: one name per level, indexed by one code per column.
+    // Column labels: one name per level, indexed by one code per column (as many as the
+    // values' declared columns).
     let nlevels = int_attr("block0_items_nlevels").unwrap_or(1.0);
-    let labels = fixed_labels(nlevels, at, src, &bad, &dataset)?;
+    let width = columns(&block);
+    let labels = fixed_labels(nlevels, width, at, src, &bad, &dataset)?;
     let (values, rows) = fixed_values(&block, labels.len(), at, src, &bad)?;
     let frames = fixed_frames(group, rows, at, src, &bad)?;
     Ok(Frame {
@@ -311,29 +310,49 @@ fn read_fixed(group: &Group, at: &str, src: &Src) -> Result<Frame, DataError> {
 
 /// The fixed format's column labels: per level (`nlevels` of them, at most 8) the names
 /// `block0_items_level{i}` indexed by one code per column `block0_items_label{i}`; one level
-/// is the names `block0_items`. `dataset(name)` opens a dataset of the group.
+/// is the names `block0_items`. `dataset(name)` opens a dataset of the group. Every level must
+/// hold `width` codes, one per column of the values (checked from the declared shape, before
+/// any code is read), and the strings the labels come to are charged before they are made.
 fn fixed_labels(
     nlevels: f64,
+    width: usize,
     at: &str,
     src: &Src,
     bad: &impl Fn(&str, &str, String) -> DataError,
     dataset: &impl Fn(&str) -> Result<Dataset, DataError>,
 ) -> Result<Vec<Vec<String>>, DataError> {
+    // What one label string costs besides its text.
+    const STRING: u64 = std::mem::size_of::<String>() as u64;
+    let names = |name: &str| -> Result<Vec<String>, DataError> {
+        let ds = dataset(name)?;
+        src.charge_declared(&ds, at)?;
+        ds.read_strings()
+            .map_err(|e| bad(name, "strings", e.to_string()))
+    };
     if nlevels > 1.0 {
         let mut levels = Vec::new();
         for i in 0..(nlevels as usize).min(8) {
-            let names = dataset(&format!("block0_items_level{i}"))?
-                .read_strings()
-                .map_err(|e| bad(&format!("block0_items_level{i}"), "strings", e.to_string()))?;
+            let names = names(&format!("block0_items_level{i}"))?;
             let codes_ds = dataset(&format!("block0_items_label{i}"))?;
+            let declared: u64 = codes_ds.shape().iter().product();
+            if declared != width as u64 {
+                return Err(bad(
+                    codes_ds.name(),
+                    &format!("{width} codes, one per column of block0_values"),
+                    format!("{declared}"),
+                ));
+            }
+            // Each code becomes a string: their headers are charged before the codes are
+            // read, their text once the codes say which names they are.
+            src.charge(Resource::DecodedBytes, declared.saturating_mul(STRING))?;
             let codes = raw(&codes_ds, at, src)?;
             let step = codes_ds.raw_element_size().unwrap_or(1).max(1);
-            let level: Result<Vec<String>, DataError> = codes
+            let level: Vec<usize> = codes
                 .chunks_exact(step)
                 .map(|c| {
                     number(c, codes_ds.dtype())
-                        .filter(|&k| k >= 0.0)
-                        .and_then(|k| names.get(k as usize).cloned())
+                        .filter(|&k| k >= 0.0 && (k as usize) < names.len())
+                        .map(|k| k as usize)
                         .ok_or_else(|| {
                             bad(
                                 codes_ds.name(),
@@ -342,25 +361,50 @@ fn fixed_labels(
                             )
                         })
                 })
-                .collect();
-            levels.push(level?);
+                .collect::<Result<_, _>>()?;
+            let bytes = level
+                .iter()
+                .fold(0u64, |n, &k| n.saturating_add(names[k].len() as u64));
+            src.charge(Resource::DecodedBytes, bytes)?;
+            levels.push((names, level));
         }
-        let n = levels[0].len();
-        if levels.iter().any(|l| l.len() != n) {
+        let n = levels[0].1.len();
+        if levels.iter().any(|l| l.1.len() != n) {
             return Err(bad(
                 "block0_items_label",
                 "as many codes in every level",
-                format!("{:?}", levels.iter().map(Vec::len).collect::<Vec<_>>()),
+                format!("{:?}", levels.iter().map(|l| l.1.len()).collect::<Vec<_>>()),
             ));
         }
         Ok((0..n)
-            .map(|j| levels.iter().map(|l| l[j].clone()).collect())
+            .map(|j| {
+                levels
+                    .iter()
+                    .map(|(names, codes)| names[codes[j]].clone())
+                    .collect()
+            })
             .collect())
     } else {
-        let names = dataset("block0_items")?
-            .read_strings()
-            .map_err(|e| bad("block0_items", "strings", e.to_string()))?;
+        let names = names("block0_items")?;
         Ok(names.into_iter().map(|n| vec![n]).collect())
+    }
+}
+
+/// Whether `block0_values` is stored rows x columns: pandas writes the block transposed and
+/// says so; older files did not.
+fn transposed(block: &Dataset) -> bool {
+    block
+        .attribute("transposed")
+        .ok()
+        .and_then(|a| a.raw_data.first().copied())
+        .is_some_and(|b| b != 0)
+}
+
+/// How many columns `block0_values` declares (0 when it is not 2-D).
+fn columns(block: &Dataset) -> usize {
+    match (block.shape(), transposed(block)) {
+        ([_, c], true) | ([c, _], false) => *c as usize,
+        _ => 0,
     }
 }
 
@@ -373,12 +417,7 @@ fn fixed_values(
     src: &Src,
     bad: &impl Fn(&str, &str, String) -> DataError,
 ) -> Result<(Vec<f64>, usize), DataError> {
-    // pandas writes the block transposed, rows x columns, and says so; older files did not.
-    let transposed = block
-        .attribute("transposed")
-        .ok()
-        .and_then(|a| a.raw_data.first().copied())
-        .is_some_and(|b| b != 0);
+    let transposed = transposed(block);
     let shape: Vec<usize> = block.shape().iter().map(|&d| d as usize).collect();
     let rows = match (&shape[..], transposed) {
         ([r, c], true) if *c == width => *r,

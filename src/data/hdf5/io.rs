@@ -2,8 +2,9 @@
 //! raw bytes refused past them before they are read, and the numbers in those bytes (integers
 //! and floats of any width and byte order).
 
-use crate::data::DataError;
+use crate::data::{Budget, DataError, Resource};
 use hdf5_reader::{ByteOrder, Dataset, Datatype};
+use std::cell::RefCell;
 use std::path::Path;
 
 /// The most bytes an HDF5 input may be, and may decompress to in one read: far beyond an
@@ -14,12 +15,46 @@ pub(crate) const MAX_H5_BYTES: usize = 1 << 30;
 /// that a small file cannot declare a table it does not hold (DeepLabCut writes uncompressed).
 pub(super) const MAX_RATIO: usize = 1032;
 
-/// The file being read: its name, and the most bytes one dataset may decode to.
+/// The file being read: its name, the most bytes one dataset may decode to, and the file's
+/// budget, charged before anything is decoded.
 pub(super) struct Src<'a> {
     /// The file's name, for errors.
     pub(super) path: &'a Path,
     /// The most bytes one dataset may decode to.
     pub(super) limit: usize,
+    /// What the whole file may spend (every dataset and label together).
+    pub(super) budget: RefCell<Budget>,
+}
+
+impl<'a> Src<'a> {
+    /// The file `path` of `file_len` bytes.
+    pub(super) fn new(path: &'a Path, file_len: usize) -> Self {
+        Src {
+            path,
+            limit: MAX_H5_BYTES.min(file_len.saturating_mul(MAX_RATIO)),
+            budget: RefCell::new(Budget::new(path, file_len as u64)),
+        }
+    }
+
+    /// Spend `n` of `r` from the file's budget, or refuse the file.
+    pub(super) fn charge(&self, r: Resource, n: u64) -> Result<(), DataError> {
+        self.budget.borrow_mut().charge(r, n)
+    }
+
+    /// Charge the bytes `ds` declares (its element count times its element size, whatever its
+    /// filters) before it is decoded: a small file cannot then decode to more than its budget.
+    pub(super) fn charge_declared(&self, ds: &Dataset, at: &str) -> Result<(), DataError> {
+        let len = ds.raw_byte_len().map_err(|e| {
+            DataError::parse(
+                self.path,
+                at,
+                ds.name(),
+                "a readable dataset",
+                e.to_string(),
+            )
+        })?;
+        self.charge(Resource::DecodedBytes, len as u64)
+    }
 }
 
 /// A number stored as an HDF5 integer or float of any size and byte order.
@@ -80,6 +115,7 @@ pub(super) fn raw(ds: &Dataset, at: &str, src: &Src) -> Result<Vec<u8>, DataErro
             format!("{len} bytes declared"),
         ));
     }
+    src.charge(Resource::DecodedBytes, len as u64)?;
     ds.read_raw_bytes()
         .map_err(|e| bad("a readable dataset", e.to_string()))
 }

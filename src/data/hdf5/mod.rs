@@ -56,11 +56,13 @@ pub(crate) fn read(bytes: Vec<u8>, path: &Path, opts: &ReadOptions) -> Result<Pa
     let bad = |field: &str, expected: &str, found: String| {
         DataError::parse(path, "the HDF5 file", field, expected, found)
     };
-    let file_len = bytes.len();
+    // One budget for the whole file: what every dataset and label decodes to is charged
+    // against it before it is decoded.
+    let src = io::Src::new(path, bytes.len());
     let f = Hdf5File::from_vec_with_options(bytes, limits())
         .map_err(|e| bad("file", "an HDF5 file", e.to_string()))?;
     if let Some(key) = dlc::pandas_key(&f) {
-        return dlc::read(&f, &key, file_len, path, opts);
+        return dlc::read(&f, &key, &src, opts);
     }
-    sleap::read(&f, path, opts)
+    sleap::read(&f, &src, opts)
 }

@@ -2,20 +2,38 @@
 //! HDF5 output, `values_block_0_kind`): the pickle is checked to be a list of label tuples and
 //! nothing else, so that no attribute expands without bound, then decoded by `serde-pickle`.
 
+use crate::data::DataError;
 use std::collections::HashMap;
+
+/// What one decoded string costs besides its text: the decoder's value and the label's
+/// `String`, so that many empty strings count too.
+const STRING_COST: u64 = 64;
 
 /// The most column-label strings a pickled label list may expand to (a 20-animal, 50-part
 /// DeepLabCut table has 3,000 columns of 4 labels).
 const MAX_LABEL_STRINGS: usize = 1 << 20;
 
 /// Column labels from the protocol-0 pickle PyTables stores: a list of tuples of strings (or of
-/// strings, for one level). Only that shape is accepted (see [`check_label_pickle`]), then
-/// `serde-pickle` decodes it; `Err` says what was found.
-pub(super) fn unpickle_labels(raw: &[u8]) -> Result<Vec<Vec<String>>, String> {
+/// strings, for one level). Only that shape is accepted (see [`check_label_pickle`]); the bytes
+/// it would decode to (memo references copied) are passed to `charge`, which may refuse the
+/// file (the outer `Err`), before `serde-pickle` decodes it; the inner `Err` says what was
+/// found.
+pub(super) fn unpickle_labels(
+    raw: &[u8],
+    charge: impl FnOnce(u64) -> Result<(), DataError>,
+) -> Result<Result<Vec<Vec<String>>, String>, DataError> {
     // A fixed-length HDF5 string: NUL padded.
     let end = raw.iter().rposition(|&b| b != 0).map_or(0, |i| i + 1);
     let raw = &raw[..end];
-    check_label_pickle(raw)?;
+    match check_label_pickle(raw) {
+        Ok(bytes) => charge(bytes)?,
+        Err(found) => return Ok(Err(found)),
+    }
+    Ok(decode_labels(raw))
+}
+
+/// Decode a label pickle that [`check_label_pickle`] accepted.
+fn decode_labels(raw: &[u8]) -> Result<Vec<Vec<String>>, String> {
     let value =
         serde_pickle::value_from_slice(raw, serde_pickle::DeOptions::new().decode_strings())
             .map_err(|e| e.to_string())?;
@@ -41,12 +59,16 @@ pub(super) fn unpickle_labels(raw: &[u8]) -> Result<Vec<Vec<String>>, String> {
 /// memo reference, new objects optionally memoized with `p`) or a memo reference `g`, followed by
 /// `a`; then `.`. This keeps the nesting at two and memo entries from being copied, and counts
 /// the strings the list expands to (references included), refusing more than
-/// [`MAX_LABEL_STRINGS`]: no pickle can then make the decoder allocate without bound.
-fn check_label_pickle<'a>(raw: &'a [u8]) -> Result<(), String> {
+/// [`MAX_LABEL_STRINGS`]; `Ok` is the bytes they decode to (each reference copies its
+/// entry's), for the caller to charge: no pickle can then make the decoder allocate without
+/// bound.
+fn check_label_pickle<'a>(raw: &'a [u8]) -> Result<u64, String> {
     let mut ops = Ops { raw, at: 0 };
-    // Each memo entry's size in strings: 1 for a scalar, its length for a tuple.
-    let mut memo: HashMap<&'a [u8], usize> = HashMap::new();
-    let put = |ops: &mut Ops<'a>, n: usize, memo: &mut HashMap<&'a [u8], usize>| {
+    // Each memo entry's size: strings (1 for a scalar, its length for a tuple) and the bytes
+    // they decode to.
+    type Size = (usize, u64);
+    let mut memo: HashMap<&'a [u8], Size> = HashMap::new();
+    let put = |ops: &mut Ops<'a>, n: Size, memo: &mut HashMap<&'a [u8], Size>| {
         if ops.peek() == Some(b'p') {
             let (_, id) = ops.next()?;
             memo.insert(id, n);
@@ -59,22 +81,29 @@ fn check_label_pickle<'a>(raw: &'a [u8]) -> Result<(), String> {
     if ops.peek() == Some(b'p') {
         ops.next()?;
     }
-    let mut total = 0usize;
+    let (mut total, mut bytes) = (0usize, 0u64);
+    // A scalar's size: one string of its argument's length.
+    let scalar = |arg: &[u8]| (1, arg.len() as u64 + STRING_COST);
     loop {
         let n = match ops.next()? {
-            (b'.', _) if ops.at == raw.len() => return Ok(()),
+            (b'.', _) if ops.at == raw.len() => return Ok(bytes),
             (b'(', _) => {
-                let mut n = 0;
+                let mut n: Size = (0, STRING_COST);
                 loop {
-                    match ops.next()? {
+                    let part = match ops.next()? {
                         (b't', _) => break,
-                        (b'g', id) if memo.get(id) == Some(&1) => n += 1,
-                        (op, _) if SCALARS.contains(&op) => {
-                            n += 1;
-                            put(&mut ops, 1, &mut memo)?;
+                        (b'g', id) => match memo.get(id) {
+                            Some(&(1, b)) => (1, b),
+                            _ => return Err(ops.unexpected(b'g', "a label part")),
+                        },
+                        (op, arg) if SCALARS.contains(&op) => {
+                            let part = scalar(arg);
+                            put(&mut ops, part, &mut memo)?;
+                            part
                         }
                         (op, _) => return Err(ops.unexpected(op, "a label part")),
-                    }
+                    };
+                    n = (n.0 + 1, n.1.saturating_add(part.1));
                 }
                 put(&mut ops, n, &mut memo)?;
                 n
@@ -82,14 +111,16 @@ fn check_label_pickle<'a>(raw: &'a [u8]) -> Result<(), String> {
             (b'g', id) => *memo
                 .get(id)
                 .ok_or_else(|| format!("a reference to memo {:?} never put", ascii(id)))?,
-            (op, _) if SCALARS.contains(&op) => {
-                put(&mut ops, 1, &mut memo)?;
-                1
+            (op, arg) if SCALARS.contains(&op) => {
+                let n = scalar(arg);
+                put(&mut ops, n, &mut memo)?;
+                n
             }
             (op, _) => return Err(ops.unexpected(op, "a label")),
         };
         ops.expect(b'a')?;
-        total += n;
+        total += n.0;
+        bytes = bytes.saturating_add(n.1);
         if total > MAX_LABEL_STRINGS {
             return Err(format!("more than {MAX_LABEL_STRINGS} label strings"));
         }
@@ -155,18 +186,20 @@ mod tests {
         // As PyTables writes `[("s", "a", "x"), ("s", "a", "y")]` (pickle.dumps(v, 0)).
         let ok = b"(lp0\n(Vs\np1\nVa\np2\nVx\np3\ntp4\na(g1\ng2\nVy\np5\ntp6\na.";
         assert_eq!(
-            unpickle_labels(ok).unwrap(),
+            unpickle_labels(ok, |_| Ok(())).unwrap().unwrap(),
             vec![vec!["s", "a", "x"], vec!["s", "a", "y"]]
         );
         // Python 2's byte strings, NUL padding, one level.
         assert_eq!(
-            unpickle_labels(b"(lp0\nS'a b'\np1\naS'c'\np2\na.\0\0").unwrap(),
+            unpickle_labels(b"(lp0\nS'a b'\np1\naS'c'\np2\na.\0\0", |_| Ok(()))
+                .unwrap()
+                .unwrap(),
             vec![vec!["a b"], vec!["c"]]
         );
         // Strings referenced again, as pickle writes a repeated scorer or bodypart.
         let refs = b"(lp0\n(Vx\np1\ng1\ng1\ntp2\na(g1\nVy\np3\ntp4\na.";
         assert_eq!(
-            unpickle_labels(refs).unwrap(),
+            unpickle_labels(refs, |_| Ok(())).unwrap().unwrap(),
             vec![vec!["x", "x", "x"], vec!["x", "y"]]
         );
         for bad in [
@@ -179,7 +212,11 @@ mod tests {
             b"(lp0\nVx\na.V",                   // past the stop
             b"(lp0\nI1\na.",                    // a number for a label
         ] {
-            assert!(unpickle_labels(bad).is_err(), "{:?}", ascii(bad));
+            assert!(
+                unpickle_labels(bad, |_| Ok(())).unwrap().is_err(),
+                "{:?}",
+                ascii(bad)
+            );
         }
         // A tuple of 1,000 strings referenced 2,000 times: 2 million strings, refused.
         let mut big = b"(lp0\n(".to_vec();
@@ -191,6 +228,25 @@ mod tests {
             big.extend(b"g1\na");
         }
         big.push(b'.');
-        assert!(unpickle_labels(&big).unwrap_err().contains("more than"));
+        assert!(unpickle_labels(&big, |_| Ok(()))
+            .unwrap()
+            .unwrap_err()
+            .contains("more than"));
+        // One long string referenced many times: few strings, many bytes, all counted.
+        let mut wide = b"(lp0\nV".to_vec();
+        wide.extend([b'a'; 1000]);
+        wide.extend(b"\np1\na");
+        for _ in 0..99 {
+            wide.extend(b"g1\na");
+        }
+        wide.push(b'.');
+        let mut charged = 0;
+        unpickle_labels(&wide, |n| {
+            charged = n;
+            Ok(())
+        })
+        .unwrap()
+        .unwrap();
+        assert_eq!(charged, 100 * (1000 + STRING_COST));
     }
 }

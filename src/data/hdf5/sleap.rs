@@ -1,12 +1,15 @@
 //! SLEAP's analysis HDF5 file: `tracks[track][xy][node][frame]`, `node_names`, `track_names`;
 //! pixels, y down, NaN where missing, no frame rate stored.
 
-use crate::data::{DataError, Parsed, ReadOptions, Series};
+use super::io::Src;
+use crate::data::{DataError, Parsed, ReadOptions, Resource, Series};
 use hdf5_reader::Hdf5File;
-use std::path::Path;
 
-/// Read a SLEAP analysis file (`f`, opened from `path`): one series per track and node.
-pub(super) fn read(f: &Hdf5File, path: &Path, opts: &ReadOptions) -> Result<Parsed, DataError> {
+/// Read a SLEAP analysis file (`f`, opened from `src`): one series per track and node. What
+/// the `tracks` shape declares (series, positions, decoded bytes) is charged against the
+/// file's budget before anything is decoded or built.
+pub(super) fn read(f: &Hdf5File, src: &Src, opts: &ReadOptions) -> Result<Parsed, DataError> {
+    let path = src.path;
     let bad = |field: &str, expected: &str, found: String| {
         DataError::parse(path, "the HDF5 file", field, expected, found)
     };
@@ -36,27 +39,39 @@ pub(super) fn read(f: &Hdf5File, path: &Path, opts: &ReadOptions) -> Result<Pars
             format!("shape {shape:?}"),
         ));
     }
+    // Declared sizes, saturated: a shape past u64 is over every limit. First the values as
+    // f64 (whatever the stored type and filters) and their copy, then what they make.
+    let n_series = (n_tracks as u64).saturating_mul(n_nodes as u64);
+    let n_values = n_series.saturating_mul(2).saturating_mul(n_frames as u64);
+    src.charge(Resource::DecodedBytes, n_values.saturating_mul(16))?;
+    src.charge(Resource::Series, n_series)?;
+    src.charge(Resource::Samples, n_series.saturating_mul(n_frames as u64))?;
     let values = tracks
         .read_array::<f64>()
         .map_err(|e| bad("tracks", "64-bit or 32-bit floats", e.to_string()))?;
     let values: Vec<f64> = values.iter().copied().collect();
-    if values.len() != n_tracks * 2 * n_nodes * n_frames {
+    if values.len() as u64 != n_values {
         return Err(bad(
             "tracks",
-            &format!(
-                "{} values for shape {shape:?}",
-                n_tracks * 2 * n_nodes * n_frames
-            ),
+            &format!("{n_values} values for shape {shape:?}"),
             format!("{}", values.len()),
         ));
     }
-    let strings = |name: &str| -> Vec<String> {
-        f.dataset(name)
-            .and_then(|d| d.read_strings())
-            .unwrap_or_default()
+    let strings = |name: &str| -> Result<Vec<String>, DataError> {
+        // Names that cannot be read are left out (nodes are then numbered), as before; names
+        // that can are charged for what they declare.
+        let Some((d, len)) = f
+            .dataset(name)
+            .ok()
+            .and_then(|d| Some((d.raw_byte_len().ok()?, d)).map(|(l, d)| (d, l)))
+        else {
+            return Ok(Vec::new());
+        };
+        src.charge(Resource::DecodedBytes, len as u64)?;
+        Ok(d.read_strings().unwrap_or_default())
     };
-    let nodes = strings("node_names");
-    let track_names = strings("track_names");
+    let nodes = strings("node_names")?;
+    let track_names = strings("track_names")?;
     let fps = opts.fps.ok_or_else(|| DataError::Options {
         path: path.to_owned(),
         message:

@@ -1,7 +1,7 @@
 //! Kinovea's trajectory text export (gnuplot style), read line by line: a `# NAME` line per
 //! trajectory, then its `t x y` rows. Its spreadsheet export (XML) is `data::kinovea_xml`'s.
 
-use super::rows::Clock;
+use super::rows::{read_error, Clock};
 use crate::data::{DataError, Parsed, Series};
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
@@ -15,10 +15,7 @@ pub(super) fn read_kinovea(input: impl Read, path: &Path) -> Result<Parsed, Data
     let mut saw_header = false;
     let reader = BufReader::new(input);
     for (k, line) in reader.split(b'\n').enumerate() {
-        let line = line.map_err(|source| DataError::Io {
-            path: path.to_owned(),
-            source,
-        })?;
+        let line = line.map_err(|e| read_error(path, k as u64 + 1, e))?;
         let line = String::from_utf8_lossy(&line);
         let line = line.trim_start_matches('\u{feff}').trim();
         let at = format!("line {}", k + 1);

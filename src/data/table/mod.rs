@@ -43,6 +43,7 @@ use kinovea::read_kinovea;
 use long::read_long;
 use motive::read_motive;
 use qualisys::read_qualisys;
+use rows::LineCap;
 use sleap::read_sleap_csv;
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
@@ -67,28 +68,31 @@ pub(crate) fn read_from(
     f: Format,
     opts: &ReadOptions,
 ) -> Result<Parsed, DataError> {
+    // Text is read through `LineCap`, so that no line can grow a buffer past its cap; HDF5 and
+    // XML are read whole, within their own byte caps.
+    let text = LineCap::new;
     match f {
-        Format::Wide => read_wide(input, path, opts),
-        Format::Long => read_long(input, path, opts),
+        Format::Wide => read_wide(text(input), path, opts),
+        Format::Long => read_long(text(input), path, opts),
         Format::Tracker => read_tracker_any(input, path),
         Format::DeepLabCut => read_h5_or(input, path, opts, |i| read_dlc(i, path, opts)),
-        Format::Motive => read_motive(input, path, opts),
-        Format::Vicon => read_vicon(input, path, opts),
+        Format::Motive => read_motive(text(input), path, opts),
+        Format::Vicon => read_vicon(text(input), path, opts),
         Format::Sleap => read_h5_or(input, path, opts, |i| read_sleap_csv(i, path, opts)),
-        Format::Qualisys => read_qualisys(input, path, opts),
+        Format::Qualisys => read_qualisys(text(input), path, opts),
         Format::Kinovea => read_kinovea_any(input, path, opts),
-        Format::Trex => read_trex(input, path),
+        Format::Trex => read_trex(text(input), path),
         Format::Mcap => unreachable!("MCAP is not a CSV format"),
     }
 }
 
 /// An HDF5 file (SLEAP's analysis file or DeepLabCut's DataFrame, told apart by content), or
-/// else the CSV that `csv` reads.
+/// else the CSV that `csv` reads (its lines capped).
 fn read_h5_or<R: Read>(
     input: R,
     path: &Path,
     opts: &ReadOptions,
-    csv: impl FnOnce(BufReader<R>) -> Result<Parsed, DataError>,
+    csv: impl FnOnce(LineCap<BufReader<R>>) -> Result<Parsed, DataError>,
 ) -> Result<Parsed, DataError> {
     let mut input = BufReader::new(input);
     let io = |source| DataError::Io {
@@ -103,7 +107,7 @@ fn read_h5_or<R: Read>(
         let bytes = read_h5_bytes(input, path)?;
         return super::hdf5::read(bytes, path, opts);
     }
-    csv(input)
+    csv(LineCap::new(input))
 }
 
 /// The bytes of `input`, at most `max` + 1 of them (one more than a reader takes, so that it can
@@ -156,7 +160,7 @@ fn read_kinovea_any(
         let bytes = read_at_most(input, path, super::kinovea_xml::MAX_XML_BYTES)?;
         return super::kinovea_xml::read(&bytes, path, opts);
     }
-    read_kinovea(input, path)
+    read_kinovea(LineCap::new(input), path)
 }
 
 /// A Tracker export, or (XML) a Tracker project.
@@ -175,5 +179,5 @@ fn read_tracker_any(input: impl Read, path: &Path) -> Result<Parsed, DataError> 
         let bytes = read_at_most(input, path, super::tracker_project::MAX_TRK_BYTES)?;
         return super::tracker_project::read(&bytes, path);
     }
-    read_tracker(input, path)
+    read_tracker(LineCap::new(input), path)
 }

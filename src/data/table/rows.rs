@@ -9,6 +9,98 @@ use csv::StringRecord;
 use std::io::Read;
 use std::path::Path;
 
+/// The longest line a text reader takes (bytes, line end included). The widest real header,
+/// a 20-animal DeepLabCut table of 3,000 columns, is under 100 KB; without a cap one endless
+/// line (`/dev/zero`) grows the csv crate's record, or a line reader's buffer, until memory
+/// runs out.
+pub(crate) const MAX_LINE_BYTES: u64 = 1 << 20;
+
+/// A line longer than [`MAX_LINE_BYTES`], carried in an `io::Error` by [`LineCap`]; the
+/// reader behind it knows which line it was reading.
+#[derive(Debug)]
+pub(crate) struct LineTooLong;
+
+impl std::fmt::Display for LineTooLong {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "a line longer than {MAX_LINE_BYTES} bytes")
+    }
+}
+
+impl std::error::Error for LineTooLong {}
+
+/// A reader that fails with [`LineTooLong`] as soon as a line passes [`MAX_LINE_BYTES`], so
+/// that the parser behind it never holds more than that of one line. It looks only at the
+/// first and last line ends of each read (lines are short), and scans a read whole only when
+/// the read is longer than the cap.
+pub(crate) struct LineCap<R> {
+    inner: R,
+    /// Bytes of the current (unended) line.
+    current: u64,
+}
+
+impl<R: Read> LineCap<R> {
+    /// Cap the lines of `inner`.
+    pub(crate) fn new(inner: R) -> Self {
+        LineCap { inner, current: 0 }
+    }
+}
+
+impl<R: Read> Read for LineCap<R> {
+    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
+        let n = self.inner.read(buf)?;
+        let chunk = &buf[..n];
+        // A line ends at `\n`, or at `\r` as the csv crate also takes it.
+        let end = |b: &u8| *b == b'\n' || *b == b'\r';
+        let too_long = || std::io::Error::other(LineTooLong);
+        let Some(first) = chunk.iter().position(end) else {
+            self.current += n as u64;
+            if self.current > MAX_LINE_BYTES {
+                return Err(too_long());
+            }
+            return Ok(n);
+        };
+        if self.current + first as u64 + 1 > MAX_LINE_BYTES {
+            return Err(too_long());
+        }
+        let last = chunk.iter().rposition(end).unwrap_or(first);
+        // Lines wholly inside the read can be too long only when the read is.
+        if (last - first) as u64 > MAX_LINE_BYTES {
+            let mut start = first + 1;
+            for (i, b) in chunk.iter().enumerate().take(last + 1).skip(first + 1) {
+                if end(b) {
+                    if (i + 1 - start) as u64 > MAX_LINE_BYTES {
+                        return Err(too_long());
+                    }
+                    start = i + 1;
+                }
+            }
+        }
+        self.current = (n - last - 1) as u64;
+        if self.current > MAX_LINE_BYTES {
+            return Err(too_long());
+        }
+        Ok(n)
+    }
+}
+
+/// A read error at line `line` as the file's error: a line over [`MAX_LINE_BYTES`] is a parse
+/// error that names the line and the limit (bad input), anything else an I/O error.
+pub(crate) fn read_error(path: &Path, line: u64, e: std::io::Error) -> DataError {
+    if e.get_ref().is_some_and(|i| i.is::<LineTooLong>()) {
+        return DataError::parse(
+            path,
+            format!("line {line}"),
+            "line",
+            format!("at most {MAX_LINE_BYTES} bytes per line"),
+            "a longer line; refusing to read it",
+        );
+    }
+    DataError::Io {
+        path: path.to_owned(),
+        source: e,
+    }
+}
+
 /// Rows of a delimited file with line numbers and errors that name the file.
 pub(super) struct Rows<R: Read> {
     rdr: csv::Reader<R>,
@@ -19,6 +111,8 @@ pub(super) struct Rows<R: Read> {
     pub(super) line: u64,
     /// Whether a `nan` cell means a missing value (pandas and idtracker.ai write it so).
     pub(super) nan_missing: bool,
+    /// Lines read before these rows (Tracker's head), for a long line's number.
+    pub(super) lines_before: u64,
 }
 
 impl<R: Read> Rows<R> {
@@ -36,6 +130,7 @@ impl<R: Read> Rows<R> {
             path: path.to_owned(),
             line: 0,
             nan_missing: false,
+            lines_before: 0,
         }
     }
 
@@ -49,6 +144,14 @@ impl<R: Read> Rows<R> {
                 Ok(more)
             }
             Err(e) => {
+                if let csv::ErrorKind::Io(io) = e.kind() {
+                    if io.get_ref().is_some_and(|i| i.is::<LineTooLong>()) {
+                        // The record being read, the long line, starts where the last ended.
+                        let line = self.lines_before + self.rdr.position().line();
+                        let long = std::io::Error::other(LineTooLong);
+                        return Err(read_error(&self.path, line, long));
+                    }
+                }
                 let line = e.position().map_or(self.line + 1, |p| p.line());
                 Err(DataError::parse(
                     &self.path,
@@ -362,4 +465,14 @@ impl TimeReader {
 /// The header's cells, lower-cased.
 pub(super) fn lower(h: &[String]) -> Vec<String> {
     h.iter().map(|c| c.to_lowercase()).collect()
+}
+
+/// Each cell's first column: headers are matched through this map, so that matching is linear
+/// in the header however many columns it has.
+pub(crate) fn first_index(cells: &[String]) -> std::collections::HashMap<&str, usize> {
+    let mut at = std::collections::HashMap::with_capacity(cells.len());
+    for (i, c) in cells.iter().enumerate() {
+        at.entry(c.as_str()).or_insert(i);
+    }
+    at
 }

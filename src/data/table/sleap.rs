@@ -2,7 +2,7 @@
 //! track); pixels, y down, frame numbers timed by `--fps`. Its HDF5 analysis file is
 //! `data::hdf5`'s.
 
-use super::rows::{lower, Clock, Rows};
+use super::rows::{first_index, lower, Clock, Rows};
 use crate::data::{DataError, Parsed, ReadOptions, Series};
 use std::collections::HashMap;
 use std::io::Read;
@@ -20,7 +20,8 @@ pub(super) fn read_sleap_csv(
     rows.nan_missing = true;
     let header = rows.header("a SLEAP header track,frame_idx,instance.score,NODE.x,NODE.y,...")?;
     let low = lower(&header);
-    let find = |n: &str| low.iter().position(|c| c == n);
+    let at = first_index(&low);
+    let find = |n: &str| at.get(n).copied();
     let (Some(track_col), Some(frame_col)) = (find("track"), find("frame_idx")) else {
         return Err(rows.err(
             "header",

@@ -2,7 +2,7 @@
 //! (`#multi:`, a name row, then `t x y t x y ...`), delimited by tab, semicolon, comma or space,
 //! with the decimal comma of some locales. Projects (`.trk`, XML) are `data::tracker_project`'s.
 
-use super::rows::{Clock, Rows};
+use super::rows::{read_error, Clock, Rows};
 use crate::data::{DataError, Parsed, Series};
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
@@ -37,7 +37,8 @@ pub(super) fn read_tracker(input: impl Read, path: &Path) -> Result<Parsed, Data
     let header_line = head.lines.len() as u64;
     let groups = track_columns(&head, path, header_line)?;
     let decimal_comma = head.delim != b',';
-    let rows = Rows::new(input, path, head.delim);
+    let mut rows = Rows::new(input, path, head.delim);
+    rows.lines_before = header_line;
     let series = read_tracks(rows, &groups, path, header_line, decimal_comma)?;
     let notes = vec![note(path, &head, &series, decimal_comma)];
     Ok(Parsed {
@@ -71,15 +72,12 @@ type Group = (String, usize, usize, usize);
 /// Read the lines up to the column names (`t x y` in some delimiter): at most three, else an
 /// error that says what was found.
 fn read_head(input: &mut impl BufRead, path: &Path) -> Result<Head, DataError> {
-    let io = |source| DataError::Io {
-        path: path.to_owned(),
-        source,
-    };
+    let io = |e, line: usize| read_error(path, line as u64 + 1, e);
     // Up to three lines before the data: `#multi:`, a name row, the column names.
     let mut head: Vec<String> = Vec::new();
     let (delim, names_row) = loop {
         let mut line = String::new();
-        if input.read_line(&mut line).map_err(io)? == 0 || head.len() == 3 {
+        if input.read_line(&mut line).map_err(|e| io(e, head.len()))? == 0 || head.len() == 3 {
             return Err(if head.iter().all(|l| l.trim().is_empty()) {
                 DataError::Empty {
                     path: path.to_owned(),
@@ -153,22 +151,43 @@ fn track_columns(head: &Head, path: &Path, header_line: u64) -> Result<Vec<Group
         Some(l) if !multi => clean(l).trim().trim_matches('"').to_string(),
         _ => stem.clone(),
     };
+    // Per column, the next y at or after it, the last t and the last named cell at or before
+    // it: one pass each, so that a header of many x columns is read in linear time.
+    let mut next_y = vec![None; cols.len() + 1];
+    for j in (0..cols.len()).rev() {
+        next_y[j] = if cols[j] == "y" {
+            Some(j)
+        } else {
+            next_y[j + 1]
+        };
+    }
+    let mut last_t = vec![None; cols.len()];
+    let mut last_name = vec![None; cols.len()];
+    let (mut t, mut named) = (None, None);
+    for j in 0..cols.len() {
+        last_t[j] = t;
+        if cols[j] == "t" {
+            t = Some(j);
+        }
+        if name_cells.get(j).is_some_and(|n| !n.is_empty()) {
+            named = Some(j);
+        }
+        last_name[j] = named;
+    }
     let mut groups: Vec<Group> = Vec::new();
     for (xc, c) in cols.iter().enumerate() {
         if c != "x" {
             continue;
         }
-        let Some(yc) = (xc + 1..cols.len()).find(|&j| cols[j] == "y") else {
+        let Some(yc) = next_y[xc + 1] else {
             continue;
         };
-        let Some(tc) = (0..xc).rev().find(|&j| cols[j] == "t") else {
+        let Some(tc) = last_t[xc] else {
             continue;
         };
         let name = if multi {
-            (0..=xc.min(name_cells.len().saturating_sub(1)))
-                .rev()
-                .find(|&j| name_cells.get(j).is_some_and(|n| !n.is_empty()))
-                .map(|j| name_cells[j].clone())
+            last_name[xc]
+                .map(|j: usize| name_cells[j].clone())
                 .unwrap_or_else(|| format!("{stem} {}", groups.len() + 1))
         } else if groups.is_empty() {
             single_name.clone()

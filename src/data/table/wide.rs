@@ -2,7 +2,7 @@
 //! wide tables other tools write: Anipose and DeepLabCut 3-D (`NAME_x,NAME_y,NAME_z`, no time
 //! column), idtracker.ai (`x1,y1,x2,y2,...`, `nan` where lost).
 
-use super::rows::{lower, time_column, Clock, Rows, TimeReader, TimeUnit};
+use super::rows::{first_index, lower, time_column, Clock, Rows, TimeReader, TimeUnit};
 use crate::data::{DataError, Parsed, Plane, ReadOptions, Series};
 use std::io::Read;
 use std::path::Path;
@@ -12,7 +12,8 @@ use std::path::Path;
 /// y, z).
 pub(crate) fn wide_markers(header: &[String]) -> Vec<(String, usize, usize, Option<usize>)> {
     let low = lower(header);
-    let find = |want: &str| low.iter().position(|c| c == want);
+    let at = first_index(&low);
+    let find = |want: &str| at.get(want).copied();
     let mut out = Vec::new();
     for (i, h) in low.iter().enumerate() {
         if let Some(stem) = h.strip_suffix("_x") {

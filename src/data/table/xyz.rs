@@ -4,6 +4,7 @@
 
 use super::rows::{Clock, Rows};
 use crate::data::{DataError, Plane, Series};
+use std::collections::HashMap;
 use std::io::Read;
 use std::path::Path;
 
@@ -23,6 +24,7 @@ pub(super) fn group_xyz(
     axis: &[String],
 ) -> Vec<(String, [Option<usize>; 3])> {
     let mut out: Vec<(String, [Option<usize>; 3])> = Vec::new();
+    let mut index: HashMap<String, usize> = HashMap::new();
     for (j, name) in names {
         let slot = match axis.get(j).map(|a| a.trim().to_lowercase()) {
             Some(a) if a == "x" => 0,
@@ -30,13 +32,10 @@ pub(super) fn group_xyz(
             Some(a) if a == "z" => 2,
             _ => continue,
         };
-        let k = match out.iter().position(|(n, _)| *n == name) {
-            Some(k) => k,
-            None => {
-                out.push((name, [None; 3]));
-                out.len() - 1
-            }
-        };
+        let k = *index.entry(name.clone()).or_insert_with(|| {
+            out.push((name, [None; 3]));
+            out.len() - 1
+        });
         out[k].1[slot] = Some(j);
     }
     out
