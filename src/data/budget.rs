@@ -22,7 +22,12 @@
 //!   decoded once;
 //! - metadata entries (MCAP metadata records and channel metadata): at most 10^4 in all;
 //! - TF work (stamps x the depth of the frame chains walked, MCAP `/tf`): at most 10^8, and 64
-//!   per file byte.
+//!   per file byte;
+//! - table cells (the CSV family's rows, header included, counted as the csv crate splits
+//!   them): at most 10^8 whatever the size, so that a file or pipe of any length keeps at most
+//!   5 x 10^7 marker positions (two cells each at least; 1.8 GB resident for a wide CSV at the
+//!   limit) and a bounded number of tracks. A cell takes at least two bytes, so no CSV under
+//!   200 MB reaches it; a 10^6-frame recording of 30 3-D markers has 9 x 10^7.
 
 use super::DataError;
 use std::path::{Path, PathBuf};
@@ -44,10 +49,13 @@ pub enum Resource {
     MetadataEntries,
     /// Frame-chain steps walked to compose transforms (stamps x chain depth).
     TfWork,
+    /// Cells of a delimited text table (CSV-family readers), which bound the positions and
+    /// tracks those readers keep.
+    Cells,
 }
 
 /// Every resource, in the order of [`Budget`]'s counters.
-const ALL: [Resource; 7] = [
+const ALL: [Resource; 8] = [
     Resource::DecodedBytes,
     Resource::Samples,
     Resource::Series,
@@ -55,6 +63,7 @@ const ALL: [Resource; 7] = [
     Resource::Schemas,
     Resource::MetadataEntries,
     Resource::TfWork,
+    Resource::Cells,
 ];
 
 impl Resource {
@@ -68,6 +77,7 @@ impl Resource {
             Resource::Schemas => "schemas",
             Resource::MetadataEntries => "metadata entries",
             Resource::TfWork => "transform-chain steps",
+            Resource::Cells => "table cells",
         }
     }
 
@@ -82,6 +92,7 @@ impl Resource {
             Resource::Schemas => (256, 0, 1, 256),
             Resource::MetadataEntries => (10_000, 0, 1, 10_000),
             Resource::TfWork => (1 << 20, 64, 1, 100_000_000),
+            Resource::Cells => (100_000_000, 0, 1, 100_000_000),
         }
     }
 
@@ -94,7 +105,8 @@ impl Resource {
 #[derive(Clone, Debug)]
 pub struct Budget {
     path: PathBuf,
-    file_bytes: u64,
+    /// The file's size; `None` for a stream read to its end, whose limits are the caps.
+    file_bytes: Option<u64>,
     used: [u64; ALL.len()],
 }
 
@@ -103,7 +115,17 @@ impl Budget {
     pub fn new(path: &Path, file_bytes: u64) -> Self {
         Budget {
             path: path.to_owned(),
-            file_bytes,
+            file_bytes: Some(file_bytes),
+            used: [0; ALL.len()],
+        }
+    }
+
+    /// The budget of an input read as a stream to its end (the CSV family, whose readers keep
+    /// at most a few values per byte and so need no ratio): every limit at its cap.
+    pub fn capped(path: &Path) -> Self {
+        Budget {
+            path: path.to_owned(),
+            file_bytes: None,
             used: [0; ALL.len()],
         }
     }
@@ -111,8 +133,11 @@ impl Budget {
     /// The most of `r` this file may spend.
     pub fn limit(&self, r: Resource) -> u64 {
         let (floor, num, den, cap) = r.rule();
+        let Some(file_bytes) = self.file_bytes else {
+            return cap;
+        };
         floor
-            .saturating_add((self.file_bytes / den).saturating_mul(num))
+            .saturating_add((file_bytes / den).saturating_mul(num))
             .min(cap)
     }
 
@@ -127,11 +152,18 @@ impl Budget {
         let used = self.used[r.index()].saturating_add(n);
         let limit = self.limit(r);
         if used > limit {
+            let (floor, num, _, cap) = r.rule();
+            let basis = match self.file_bytes {
+                Some(bytes) if num > 0 && floor < cap => format!(
+                    " for a file of {bytes} bytes (the limits grow with the file's size up to a fixed cap)"
+                ),
+                _ => " (a fixed limit for every file)".to_string(),
+            };
             return Err(DataError::OverBudget {
                 path: self.path.clone(),
                 what: r.name(),
                 limit,
-                file_bytes: self.file_bytes,
+                basis,
             });
         }
         self.used[r.index()] = used;
@@ -169,5 +201,24 @@ mod tests {
         assert_eq!(b.remaining(Resource::Series), 1);
         b.charge(Resource::Series, 1).unwrap();
         assert!(b.charge(Resource::Series, u64::MAX).is_err());
+    }
+
+    #[test]
+    fn a_stream_has_the_caps_and_its_message_does_not_invent_a_size() {
+        let mut b = Budget::capped(Path::new("pipe"));
+        for r in ALL {
+            assert_eq!(b.limit(r), r.rule().3, "{r:?}");
+        }
+        let e = b
+            .charge(Resource::Cells, 100_000_001)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("100000000 table cells (a fixed limit"), "{e}");
+        let mut sized = Budget::new(Path::new("f"), 10);
+        let e = sized
+            .charge(Resource::Series, 5000)
+            .unwrap_err()
+            .to_string();
+        assert!(e.contains("for a file of 10 bytes"), "{e}");
     }
 }

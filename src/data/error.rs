@@ -9,7 +9,7 @@ use thiserror::Error;
 #[derive(Debug, Error)]
 pub enum DataError {
     /// The file would make a reader spend more than its budget (`budget.rs`).
-    #[error("{path}: over the input budget: more than {limit} {what} for a file of {file_bytes} bytes; refusing to read it (the limits grow with the file's size up to a fixed cap)")]
+    #[error("{path}: over the input budget: more than {limit} {what}{basis}; refusing to read it")]
     OverBudget {
         /// The file.
         path: PathBuf,
@@ -17,8 +17,8 @@ pub enum DataError {
         what: &'static str,
         /// The limit for this file.
         limit: u64,
-        /// The file's size, from which the limit follows.
-        file_bytes: u64,
+        /// Where the limit comes from: the file's size, or a fixed limit for every file.
+        basis: String,
     },
     /// The file could not be opened or read.
     #[error("{path}: cannot read: {source}")]

@@ -317,3 +317,115 @@ fn tracker_project_coordinate_frames_are_found_by_binary_search() {
     let run = read_within(&f, &["--scale", "0.01"], 10.0);
     assert_eq!(run.code, Some(0), "{}", run.stderr);
 }
+
+/// A named pipe in `dir` that a thread fills with `head` and then `row(i)` for i = 0, 1, ...
+/// until the reader closes it: an input with no end and no size, every line of it valid.
+/// Returns the pipe and a function that ends the thread once the run is over.
+fn endless_pipe(
+    dir: &Path,
+    head: &'static str,
+    row: impl Fn(u64) -> String + Send + 'static,
+) -> (PathBuf, impl FnOnce()) {
+    use std::io::Write;
+    let fifo = dir.join("endless.csv");
+    let made = Command::new("mkfifo").arg(&fifo).status().expect("mkfifo");
+    assert!(made.success());
+    let path = fifo.clone();
+    let writer = std::thread::spawn(move || {
+        // Opening blocks until the reader opens; writing fails (EPIPE) once it has closed.
+        let Ok(f) = std::fs::OpenOptions::new().write(true).open(&path) else {
+            return;
+        };
+        let mut w = std::io::BufWriter::with_capacity(1 << 16, f);
+        if w.write_all(head.as_bytes()).is_err() {
+            return;
+        }
+        for i in 0.. {
+            if w.write_all(row(i).as_bytes()).is_err() {
+                return;
+            }
+        }
+    });
+    let fifo_for_end = fifo.clone();
+    let end = move || {
+        // A run that never opened the pipe leaves the writer waiting in open: release it.
+        if !writer.is_finished() {
+            drop(File::open(&fifo_for_end));
+        }
+        writer.join().unwrap();
+    };
+    (fifo, end)
+}
+
+#[test]
+fn an_endless_pipe_of_valid_rows_is_refused_at_the_cell_limit_whatever_the_format() {
+    // Before the table cells were charged, a 1 GB wide CSV of short valid rows (or any pipe
+    // that does not end) aborted at the 4 GiB cap after 14 s.
+    type Row = fn(u64) -> String;
+    // Wide rows (16 to 21 cells) reach the limit in a few million lines.
+    let cases: [(&str, &'static str, Row); 3] = [
+        (
+            "wide",
+            "t,slider_x,slider_y,bob_x,bob_y,a_x,a_y,b_x,b_y,c_x,c_y,d_x,d_y,e_x,e_y,f_x,f_y,g_x,g_y,h_x,h_y\n",
+            |i| format!("{i},0,0,0,1,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0,0\n"),
+        ),
+        (
+            "long",
+            "t,marker,x,y,a,b,c,d,e,f,g,h,i,j,k,l\n",
+            |i| format!("{i},slider,0,0,,,,,,,,,,,,\n{i},bob,0,1,,,,,,,,,,,,\n"),
+        ),
+        (
+            "kinovea",
+            "#Kinovea Trajectory data export\n#T X Y\n# bob\n",
+            |i| format!("{i} 0 1 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0 0\n"),
+        ),
+    ];
+    for (format, head, row) in cases {
+        let dir = tempfile::tempdir().unwrap();
+        let (fifo, end) = endless_pipe(dir.path(), head, row);
+        let fifo_name = fifo.to_str().unwrap().to_string();
+        let run = capped(
+            dir.path(),
+            &[
+                "convert", "--format", format, "--fps", "1", &fifo_name, "out.csv",
+            ],
+        );
+        end();
+        assert_eq!(run.code, Some(2), "{format}: {}", run.stderr);
+        for w in [
+            "endless.csv",
+            "over the input budget",
+            "100000000 table cells",
+        ] {
+            assert!(
+                run.stderr.contains(w),
+                "{format}: {w:?} not in {}",
+                run.stderr
+            );
+        }
+        assert!(!dir.path().join("out.csv").exists());
+        eprintln!("{format}: exit 2 in {:.2} s", run.seconds);
+    }
+}
+
+#[test]
+fn a_new_marker_name_on_every_row_is_refused_at_the_track_limit() {
+    // A long CSV or a SLEAP CSV makes a track for every name its rows bring: 10^5 at most
+    // for a text file, each a name and two growing columns.
+    let dir = tempfile::tempdir().unwrap();
+    let n = 100_001;
+    let mut long = String::from("t,marker,x,y\n");
+    let mut sleap = String::from("track,frame_idx,instance.score,bob.x,bob.y,bob.score\n");
+    for i in 0..n {
+        long.push_str(&format!("0,m{i},0,0\n"));
+        sleap.push_str(&format!("t{i},0,1,0,0,1\n"));
+    }
+    let long = write(dir.path(), "names.csv", long);
+    let sleap = write(dir.path(), "tracks.csv", sleap);
+    refused(&long, &["--format", "long"], &["100000 marker tracks"]);
+    refused(
+        &sleap,
+        &["--format", "sleap", "--fps", "30"],
+        &["100000 marker tracks"],
+    );
+}

@@ -93,6 +93,9 @@ pub(super) fn read(
             })
         }
     };
+    // Every position kept takes at least two of the values (x and y): charged before the
+    // series are built, as the SLEAP reader charges its declared shape.
+    src.charge(Resource::Samples, (frame.values.len() / 2) as u64)?;
     build(frame, path, opts)
 }
 

@@ -2,7 +2,7 @@
 //! trajectory, then its `t x y` rows. Its spreadsheet export (XML) is `data::kinovea_xml`'s.
 
 use super::rows::{read_error, Clock};
-use crate::data::{DataError, Parsed, Series};
+use crate::data::{Budget, DataError, Parsed, Resource, Series};
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
 
@@ -13,6 +13,8 @@ pub(super) fn read_kinovea(input: impl Read, path: &Path) -> Result<Parsed, Data
     let mut series: Vec<Series> = Vec::new();
     let mut clocks: Vec<Clock> = Vec::new();
     let mut saw_header = false;
+    // Lines are capped (`LineCap`), not their number: the tracks and rows kept are charged.
+    let mut budget = Budget::capped(path);
     let reader = BufReader::new(input);
     for (k, line) in reader.split(b'\n').enumerate() {
         let line = line.map_err(|e| read_error(path, k as u64 + 1, e))?;
@@ -27,6 +29,7 @@ pub(super) fn read_kinovea(input: impl Read, path: &Path) -> Result<Parsed, Data
             if c.to_lowercase().starts_with("kinovea") {
                 saw_header = true;
             } else if !c.eq_ignore_ascii_case("t x y") {
+                budget.charge(Resource::Series, 1)?;
                 series.push(Series {
                     name: c.to_string(),
                     ..Series::default()
@@ -54,6 +57,7 @@ pub(super) fn read_kinovea(input: impl Read, path: &Path) -> Result<Parsed, Data
             ));
         };
         let cells: Vec<&str> = line.split_whitespace().collect();
+        budget.charge(Resource::Cells, cells.len() as u64)?;
         let num = |i: usize, field: &str| -> Result<f64, DataError> {
             let raw = cells.get(i).copied().unwrap_or("");
             raw.replace(',', ".")

@@ -2,7 +2,7 @@
 //! [`long_columns`] accepts), metres assumed.
 
 use super::rows::{lower, time_column, Clock, Rows, TimeReader, TimeUnit};
-use crate::data::{DataError, Parsed, ReadOptions, Series};
+use crate::data::{DataError, Parsed, ReadOptions, Resource, Series};
 use std::collections::HashMap;
 use std::io::Read;
 use std::path::Path;
@@ -65,6 +65,7 @@ pub(super) fn read_long(
             _ => match index.get(name) {
                 Some(&k) => k,
                 None => {
+                    rows.charge(Resource::Series, 1)?;
                     index.insert(name.to_string(), series.len());
                     series.push(Series {
                         name: name.to_string(),

@@ -4,7 +4,7 @@
 //! ([`Clock`], also used by DeepLabCut's HDF5 reader through `data::dlc`) and points whole or
 //! missing ([`all_or_none`]).
 
-use crate::data::{DataError, ReadOptions};
+use crate::data::{Budget, DataError, ReadOptions, Resource};
 use csv::StringRecord;
 use std::io::Read;
 use std::path::Path;
@@ -113,6 +113,14 @@ pub(super) struct Rows<R: Read> {
     pub(super) nan_missing: bool,
     /// Lines read before these rows (Tracker's head), for a long line's number.
     pub(super) lines_before: u64,
+    /// The file's budget: the tracks a reader makes from its rows, and the cells read (which
+    /// bound the positions every reader of rows keeps, whatever the length of the file or
+    /// pipe) once they are over their limit.
+    budget: std::cell::RefCell<Budget>,
+    /// Cells read so far and their limit, kept here so that a row costs one addition (the
+    /// budget is charged, and names the limit, once they are over).
+    cells: u64,
+    cells_limit: u64,
 }
 
 impl<R: Read> Rows<R> {
@@ -131,6 +139,9 @@ impl<R: Read> Rows<R> {
             line: 0,
             nan_missing: false,
             lines_before: 0,
+            budget: std::cell::RefCell::new(Budget::capped(path)),
+            cells: 0,
+            cells_limit: Budget::capped(path).limit(Resource::Cells),
         }
     }
 
@@ -140,6 +151,10 @@ impl<R: Read> Rows<R> {
             Ok(more) => {
                 if let Some(p) = self.rec.position() {
                     self.line = p.line();
+                }
+                self.cells += self.rec.len() as u64;
+                if self.cells > self.cells_limit {
+                    self.budget.get_mut().charge(Resource::Cells, self.cells)?;
                 }
                 Ok(more)
             }
@@ -162,6 +177,12 @@ impl<R: Read> Rows<R> {
                 ))
             }
         }
+    }
+
+    /// Spend `n` of `r` from the file's budget (a reader that makes a track per new name in
+    /// its rows charges the tracks here).
+    pub(super) fn charge(&self, r: Resource, n: u64) -> Result<(), DataError> {
+        self.budget.borrow_mut().charge(r, n)
     }
 
     /// Where the current row is: `line N`.

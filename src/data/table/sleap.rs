@@ -3,7 +3,7 @@
 //! `data::hdf5`'s.
 
 use super::rows::{first_index, lower, Clock, Rows};
-use crate::data::{DataError, Parsed, ReadOptions, Series};
+use crate::data::{DataError, Parsed, ReadOptions, Resource, Series};
 use std::collections::HashMap;
 use std::io::Read;
 use std::path::Path;
@@ -67,14 +67,19 @@ pub(super) fn read_sleap_csv(
             } else {
                 format!("{track}/{node}")
             };
-            let k = *index.entry(name.clone()).or_insert_with(|| {
-                series.push(Series {
-                    name: name.clone(),
-                    ..Series::default()
-                });
-                clocks.push(Clock::default());
-                series.len() - 1
-            });
+            let k = match index.get(&name) {
+                Some(&k) => k,
+                None => {
+                    rows.charge(Resource::Series, 1)?;
+                    series.push(Series {
+                        name: name.clone(),
+                        ..Series::default()
+                    });
+                    clocks.push(Clock::default());
+                    index.insert(name.clone(), series.len() - 1);
+                    series.len() - 1
+                }
+            };
             clocks[k].check(path, || format!("{} (marker {name:?})", rows.at()), t)?;
             series[k].times.push(t);
             series[k].points.push(rows.point([*x, *y], &name, false)?);
