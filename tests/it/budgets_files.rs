@@ -12,6 +12,7 @@ use std::time::{Duration, Instant};
 /// What a capped run did.
 struct Run {
     code: Option<i32>,
+    stdout: String,
     stderr: String,
     seconds: f64,
 }
@@ -44,6 +45,7 @@ fn capped(dir: &Path, args: &[&str]) -> Run {
     };
     Run {
         code: status.code(),
+        stdout: std::fs::read_to_string(dir.join("stdout.txt")).unwrap_or_default(),
         stderr: std::fs::read_to_string(err).unwrap_or_default(),
         seconds: start.elapsed().as_secs_f64(),
     }
@@ -427,5 +429,49 @@ fn a_new_marker_name_on_every_row_is_refused_at_the_track_limit() {
         &sleap,
         &["--format", "sleap", "--fps", "30"],
         &["100000 marker tracks"],
+    );
+}
+
+#[test]
+fn motive_joining_of_20000_unlabeled_markers_is_skipped_with_a_warning_not_tried_for_seconds() {
+    // Each track that ends early was compared with every track: 10^4 x 2 x 10^4 comparisons
+    // took 2.2 s for a 5.6 MB file (and the pairs kept grow with their product).
+    let n = 20_000;
+    let names = (0..n).flat_map(|i| vec![format!("Unlabeled {i}"); 3]);
+    let mut text = String::from(
+        "Format Version,1.23,Take Name,t,Capture Frame Rate,100.0,Export Frame Rate,100.0,\
+         Length Units,Millimeters,Coordinate Space,Global\n\n",
+    );
+    text += &format!(",Type,{}\n", vec!["Marker"; 3 * n].join(","));
+    text += &format!(",Name,{}\n", names.collect::<Vec<_>>().join(","));
+    text += &format!(",,{}\n", vec!["Position"; 3 * n].join(","));
+    text += &format!("Frame,Time (Seconds),{}\n", vec!["X,Y,Z"; n].join(","));
+    for f in 0..20 {
+        // The first half is seen in frames 0-9, the second half from frame 11: every track
+        // of the first half ends early and could have a successor.
+        let cells = (0..n).map(|i| match (i < n / 2, f < 10, f > 10) {
+            (true, true, _) | (false, _, true) => format!("{}.0,0,0", (i % (n / 2)) * 1000),
+            _ => ",,".to_string(),
+        });
+        text += &format!(
+            "{f},{},{}\n",
+            f as f64 / 100.0,
+            cells.collect::<Vec<_>>().join(",")
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let f = write(dir.path(), "unlabeled.csv", text);
+    let run = read_within(
+        &f,
+        &["--slider", "Unlabeled 0", "--bob", "Unlabeled 1"],
+        20.0,
+    );
+    assert_eq!(run.code, Some(0), "{}", run.stderr);
+    // convert prints its report, warnings included, on standard output.
+    assert!(
+        run.stdout
+            .contains("warning: Motive: 10000 unlabeled tracks end early among 20000"),
+        "{}",
+        run.stdout
     );
 }

@@ -48,7 +48,7 @@ pub(super) fn read_motive(
         },
         false,
     )?;
-    let (join_notes, joined) = join_renamed_unlabeled(&mut series);
+    let (join_notes, joined, join_warning) = join_renamed_unlabeled(&mut series);
     let time_note = match rate_hz {
         Some(hz) => format!("t = (Frame - first frame) / Export Frame Rate {hz} Hz from the header (the Time column is rounded)"),
         None => "t from the Time column (no Export Frame Rate in the header)".to_string(),
@@ -74,6 +74,7 @@ pub(super) fn read_motive(
         .chain(join_notes)
         .collect(),
         joined,
+        warnings: join_warning.into_iter().collect(),
         ..Parsed::default()
     })
 }
@@ -193,6 +194,10 @@ fn position_markers<R: Read>(
 /// A marker hidden longer than this (seconds) is taken for a new marker when it reappears,
 /// wherever it is.
 const MAX_REAPPEAR_S: f64 = 0.5;
+/// The most comparisons the joining may make (tracks that end early x all tracks): each end
+/// is compared with every track, so a header of 20,000 unlabeled markers would cost seconds
+/// and a pair list of gigabytes; a real take has at most a few hundred.
+const MAX_JOIN_WORK: usize = 10_000_000;
 /// Motive names a marker it has lost and found again anew ("Unlabeled 1036" comes back as
 /// "Unlabeled 1052"): its track is split into a column that ends and one that starts later.
 /// Join such pairs under the first name when the join is unambiguous: the new track starts
@@ -200,8 +205,11 @@ const MAX_REAPPEAR_S: f64 = 0.5;
 /// (its last velocity carried over the gap), nearer to that point than half the distance
 /// from the old track's last position to any other marker then visible; the closest pairs
 /// are joined first, each track at most once at either end. Returns a note per joined
-/// marker and the (later name, kept name) pairs.
-fn join_renamed_unlabeled(series: &mut Vec<Series>) -> (Vec<String>, Vec<(String, String)>) {
+/// marker, the (later name, kept name) pairs, and a warning when there are too many tracks
+/// to try ([`MAX_JOIN_WORK`]).
+fn join_renamed_unlabeled(
+    series: &mut Vec<Series>,
+) -> (Vec<String>, Vec<(String, String)>, Option<String>) {
     let unlabeled = |s: &Series| s.name.to_lowercase().starts_with("unlabeled");
     let spans: Vec<Option<(usize, usize)>> = series
         .iter()
@@ -218,6 +226,15 @@ fn join_renamed_unlabeled(series: &mut Vec<Series>) -> (Vec<String>, Vec<(String
     let starts: Vec<usize> = (0..series.len())
         .filter(|&k| unlabeled(&series[k]) && spans[k].is_some_and(|(s, _)| s > 0))
         .collect();
+    if ends.len().saturating_mul(series.len()) > MAX_JOIN_WORK {
+        let warning = format!(
+            "Motive: {} unlabeled tracks end early among {} tracks: too many to join renamed \
+             markers (over {MAX_JOIN_WORK} comparisons); every track is kept under its own name",
+            ends.len(),
+            series.len()
+        );
+        return (Vec::new(), Vec::new(), Some(warning));
+    }
     let mut pairs = Vec::new();
     for &a in &ends {
         let Some((_, end)) = spans[a] else { continue };
@@ -296,5 +313,5 @@ fn join_renamed_unlabeled(series: &mut Vec<Series>) -> (Vec<String>, Vec<(String
     }
     let mut heads = joins.iter().map(Option::is_none);
     series.retain(|_| heads.next().unwrap_or(true));
-    (notes, joined)
+    (notes, joined, None)
 }
