@@ -22,7 +22,8 @@
 //!   decoded once;
 //! - metadata entries (MCAP metadata records and channel metadata): at most 10^4 in all;
 //! - TF work (stamps x the depth of the frame chains walked, MCAP `/tf`): at most 10^8, and 64
-//!   per file byte;
+//!   per file byte; the transforms kept until they are composed are bounded by the decoded
+//!   bytes (76 bytes of CDR each at least, 80 bytes kept: frame names are kept once);
 //! - table cells (the CSV family's rows, header included, counted as the csv crate splits
 //!   them): at most 10^8 whatever the size, so that a file or pipe of any length keeps at most
 //!   5 x 10^7 marker positions (two cells each at least; 1.8 GB resident for a wide CSV at the

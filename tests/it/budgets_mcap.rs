@@ -226,7 +226,7 @@ fn mcap_channels_sharing_one_large_protobuf_schema_decode_it_once_and_are_counte
 }
 
 #[test]
-fn mcap_a_points_annotation_of_twenty_million_empty_points_is_refused_before_decoding() {
+fn mcap_a_points_annotation_of_eight_million_empty_points_is_refused_before_decoding() {
     let schema = points_schema();
     let pool = prost_reflect::DescriptorPool::decode(&schema[..]).unwrap();
     let points = pool
@@ -237,11 +237,13 @@ fn mcap_a_points_annotation_of_twenty_million_empty_points_is_refused_before_dec
         .number();
     // Each point: the field's key and a length of 0 (a Point2 at its defaults).
     let key = u8::try_from(points << 3 | 2).unwrap();
-    let message: Vec<u8> = [key, 0].repeat(20_000_000);
+    // 16 MB: under the longest message decoded (16 MiB), over the positions a file of this
+    // size may keep.
+    let message: Vec<u8> = [key, 0].repeat(8_000_000);
     let mut buf = Cursor::new(Vec::new());
     {
         let mut w = writer(&mut buf, 1 << 20);
-        // A 40 MB record needs a file of 160 kB (records are at most 256 times the file).
+        // A 16 MB record needs a file of 64 kB (records are at most 256 times the file).
         pad(&mut w, 300_000);
         let s = w
             .add_schema("foxglove.PointsAnnotation", "protobuf", &schema)
@@ -257,6 +259,51 @@ fn mcap_a_points_annotation_of_twenty_million_empty_points_is_refused_before_dec
     std::fs::write(&input, buf.into_inner()).unwrap();
     assert!(std::fs::metadata(&input).unwrap().len() < 1 << 20);
     assert_refused(dir.path(), &input, Resource::Samples);
+}
+
+#[test]
+fn mcap_a_protobuf_message_of_250_mb_of_unknown_fields_is_refused_before_decoding() {
+    // prost-reflect keeps every unknown field: this 1 MB file (a 250 MB FrameTransform of
+    // field 99 set to 0, zstd-compressed) aborted at the 4 GiB cap after 7 s.
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data/markers_foxglove_frametransform.mcap");
+    let bytes = std::fs::read(path).unwrap();
+    let m = mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .next()
+        .unwrap()
+        .unwrap();
+    let schema = m.channel.schema.as_ref().expect("a schema");
+    assert_eq!(schema.name, "foxglove.FrameTransform");
+    let message: Vec<u8> = [0x98, 0x06, 0x00].repeat(250_000_000 / 3);
+    let mut buf = Cursor::new(Vec::new());
+    {
+        let mut w = writer(&mut buf, 1 << 30);
+        pad(&mut w, 1_000_000);
+        let s = w
+            .add_schema(&schema.name, &schema.encoding, &schema.data)
+            .unwrap();
+        let c = w
+            .add_channel(s, "/markers", "protobuf", &BTreeMap::new())
+            .unwrap();
+        w.write_to_known_channel(&header(c, 0), &message).unwrap();
+        w.finish().unwrap();
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let input = dir.path().join("unknown_fields.mcap");
+    std::fs::write(&input, buf.into_inner()).unwrap();
+    assert!(std::fs::metadata(&input).unwrap().len() < 1_100_000);
+    let (run, out) = convert(dir.path(), &input);
+    assert!(run.secs < DEADLINE.as_secs_f64() && !run.killed, "{run:?}");
+    assert_eq!(run.code, Some(2), "{run:?}");
+    assert!(
+        run.stderr.contains("unknown_fields.mcap")
+            && run
+                .stderr
+                .contains("a marker message of at most 16777216 bytes"),
+        "{run:?}"
+    );
+    assert!(!out.exists(), "output left behind");
 }
 
 /// The padding of the JSON reproducer: its file is about 1 MB.

@@ -11,8 +11,11 @@ pub(super) type Stamped = Vec<(i64, Option<[f64; 2]>)>;
 /// One transform of a `/tf` tree: the child frame's pose in its parent frame.
 struct Tf {
     ns: i64,
-    parent: String,
-    child: String,
+    /// The frames, by their number in [`Acc`]'s `frames` (names are kept once: a transform
+    /// then takes 80 bytes, so the transforms a file's decoded-bytes budget allows, at 76
+    /// bytes of CDR each at least, fit in memory).
+    parent: u32,
+    child: u32,
     translation: [f64; 3],
     rotation: [f64; 4],
     /// From `/tf_static`: holds for the whole recording.
@@ -27,6 +30,9 @@ pub(super) struct Acc {
     /// Topic, marker name, samples; in the order markers were first seen.
     pub(super) series: Vec<(String, String, Stamped)>,
     tf: Vec<Tf>,
+    /// The frame names of the transforms, each once, and their numbers.
+    frames: Vec<String>,
+    frame_ids: HashMap<String, u32>,
     /// The series after the one pushed to last.
     next: usize,
     /// The input file's budget.
@@ -42,6 +48,8 @@ impl Acc {
             index: HashMap::new(),
             series: Vec::new(),
             tf: Vec::new(),
+            frames: Vec::new(),
+            frame_ids: HashMap::new(),
             next: 0,
             budget,
             widest: HashMap::new(),
@@ -91,15 +99,31 @@ impl Acc {
         Ok(())
     }
 
+    /// Keep a transform to compose at the end.
     pub(super) fn push_tf(&mut self, t: ros_cdr::TransformStamped, fixed: bool) {
+        // Child first: frames are numbered as the composition always numbered them.
+        let child = self.frame(t.child_frame_id);
+        let parent = self.frame(t.header.frame_id);
         self.tf.push(Tf {
             ns: t.header.stamp.ns(),
-            parent: t.header.frame_id,
-            child: t.child_frame_id,
+            parent,
+            child,
             translation: t.translation,
             rotation: t.rotation,
             fixed,
         });
+    }
+
+    /// The number of the frame `name`, given it if new. Frames are at most one per transform,
+    /// and a transform takes 76 bytes of the decoded-bytes budget at least, so u32 holds them.
+    fn frame(&mut self, name: String) -> u32 {
+        if let Some(&k) = self.frame_ids.get(&name) {
+            return k;
+        }
+        let k = self.frames.len() as u32;
+        self.frames.push(name.clone());
+        self.frame_ids.insert(name, k);
+        k
     }
 
     pub(super) fn is_empty(&self) -> bool {
@@ -180,23 +204,14 @@ struct Composed {
 /// the budget as `TfWork`, the samples as `Samples`.
 pub(super) fn compose_tf(acc: &mut Acc, plane: Option<Plane>) -> Result<Vec<String>, Failed> {
     let tf = std::mem::take(&mut acc.tf);
-    // Frames by number: every child and parent named.
-    let mut ids: HashMap<&str, usize> = HashMap::new();
-    let mut names: Vec<&str> = Vec::new();
-    let mut links: Vec<(usize, usize)> = Vec::with_capacity(tf.len());
-    for t in &tf {
-        let mut pair = [0; 2];
-        for (k, f) in [t.child.as_str(), t.parent.as_str()]
-            .into_iter()
-            .enumerate()
-        {
-            pair[k] = *ids.entry(f).or_insert_with(|| {
-                names.push(f);
-                names.len() - 1
-            });
-        }
-        links.push((pair[0], pair[1]));
-    }
+    // Frames by number (given as the transforms were read): every child and parent named.
+    let frames = std::mem::take(&mut acc.frames);
+    acc.frame_ids = HashMap::new();
+    let names: Vec<&str> = frames.iter().map(String::as_str).collect();
+    let links: Vec<(usize, usize)> = tf
+        .iter()
+        .map(|t| (t.child as usize, t.parent as usize))
+        .collect();
     let n = names.len();
     // Each frame's transform to its parent now: the static ones first.
     let mut current: Vec<Option<Link>> = vec![None; n];

@@ -147,6 +147,14 @@ pub(super) fn decoder_for(
             };
             // The schema data is the FileDescriptorSet the writer compiled against; decoding with
             // it (rather than a built-in copy) follows the file if Foxglove's types grow fields.
+            // prost keeps a struct of a few hundred bytes for each (two-byte) entry of a
+            // FileDescriptorSet: a large one would expand a hundredfold. Foxglove's are a few KB.
+            if schema_data.len() > MAX_SCHEMA_BYTES {
+                return Err(Reject::Invalid(format!(
+                    "its schema {schema_name} is a FileDescriptorSet of {} bytes: at most {MAX_SCHEMA_BYTES}",
+                    schema_data.len()
+                )));
+            }
             let pool = DescriptorPool::decode(schema_data).map_err(|e| {
                 Reject::Invalid(format!(
                     "its schema {schema_name} is not a valid binary FileDescriptorSet ({e})"
@@ -163,6 +171,16 @@ pub(super) fn decoder_for(
     }
 }
 
+/// The longest message a decoder takes (bytes). Decoding expands a message: prost-reflect
+/// keeps every field of a protobuf message, unknown ones included, at about 16 times its wire
+/// size (a 250 MB message of unknown fields in a 1 MB file ran past 4 GiB); serde buffers an
+/// untagged JSON stamp as a tree. A marker frame is at most a few kilobytes, a frame of 10^5
+/// JSON markers about 6 MB.
+pub(super) const MAX_MESSAGE_BYTES: usize = 16 << 20;
+
+/// The largest protobuf schema (a binary FileDescriptorSet) decoded, in bytes.
+pub(super) const MAX_SCHEMA_BYTES: usize = 1 << 20;
+
 /// Decode one message into samples; `Err` is a message for the caller to locate.
 pub(super) fn decode(
     dec: &Decoder,
@@ -173,6 +191,13 @@ pub(super) fn decode(
     acc: &mut Acc,
     pre: Option<PreFrame<'_>>,
 ) -> Result<usize, Failed> {
+    if data.len() > MAX_MESSAGE_BYTES {
+        return Err(format!(
+            "a marker message of at most {MAX_MESSAGE_BYTES} bytes (decoding expands it), found {}",
+            data.len()
+        )
+        .into());
+    }
     match dec {
         Decoder::Json => decode_json(topic, data, log_time, plane, acc, pre),
         Decoder::PointStamped | Decoder::PoseStamped => {
