@@ -696,5 +696,17 @@ fuzz_target!(|f: File| {
         scale: Some(1.0),
         ..ReadOptions::default()
     };
-    let _ = read_recording_bytes(&bytes, std::path::Path::new("fuzz-input"), &opts);
+    // FUZZ_WRITE=PATH: keep the built file (to reproduce an input with the CLI), and print
+    // what reading it gave.
+    let write = std::env::var_os("FUZZ_WRITE");
+    if let Some(path) = &write {
+        std::fs::write(path, &bytes).expect("write FUZZ_WRITE");
+    }
+    let read = read_recording_bytes(&bytes, std::path::Path::new("fuzz-input"), &opts);
+    if write.is_some() {
+        match read {
+            Ok(r) => eprintln!("read: {} frames", r.len()),
+            Err(e) => eprintln!("error: {e}"),
+        }
+    }
 });
