@@ -10,11 +10,11 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 /// What a capped run did.
-struct Run {
-    code: Option<i32>,
-    stdout: String,
-    stderr: String,
-    seconds: f64,
+pub(crate) struct Run {
+    pub(crate) code: Option<i32>,
+    pub(crate) stdout: String,
+    pub(crate) stderr: String,
+    pub(crate) seconds: f64,
 }
 
 /// Run `appell ARGS` in `dir` under a 4 GiB address space, killed past 20 s.
@@ -53,7 +53,7 @@ fn capped(dir: &Path, args: &[&str]) -> Run {
 
 /// `appell convert EXTRA INPUT out.csv` must refuse `input` with exit code 2, naming it and
 /// each of `words` (the limit), leave no output and the input as it was; returns the run.
-fn refused(input: &Path, extra: &[&str], words: &[&str]) -> Run {
+pub(crate) fn refused(input: &Path, extra: &[&str], words: &[&str]) -> Run {
     let dir = tempfile::tempdir().unwrap();
     // Regular files only: /dev/zero has no end to compare.
     let regular = std::fs::metadata(input).is_ok_and(|m| m.is_file());
@@ -78,7 +78,7 @@ fn refused(input: &Path, extra: &[&str], words: &[&str]) -> Run {
 
 /// `appell convert EXTRA INPUT out.csv` on a file that is legitimate: it must end within
 /// `seconds` (exit code 0, or 2 for a file that says what is wrong with it).
-fn read_within(input: &Path, extra: &[&str], seconds: f64) -> Run {
+pub(crate) fn read_within(input: &Path, extra: &[&str], seconds: f64) -> Run {
     let dir = tempfile::tempdir().unwrap();
     let mut args = vec!["convert"];
     args.extend(extra);

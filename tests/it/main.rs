@@ -9,6 +9,7 @@ mod cli_regions;
 mod cli_simulate;
 mod fit;
 mod fit_real;
+mod fuzz_structured;
 mod hardening;
 mod helpers;
 mod joint;
