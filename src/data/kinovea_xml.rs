@@ -148,6 +148,21 @@ fn sheet_rows(doc: &Document) -> Vec<(u32, Vec<String>)> {
 /// Add a track's row (`cells`, at `at`; its x, y and t in `cols`) to `s`: the time as written,
 /// or with `--fps` the row's number after the track's first time; times must increase
 /// (`clock_prev` is the track's last).
+/// A finite number as Kinovea writes it in either export: with the locale's decimal
+/// separator, a comma or a point; `field` at `at` names it in the error.
+pub(crate) fn locale_number(
+    raw: &str,
+    path: &Path,
+    at: &str,
+    field: &str,
+) -> Result<f64, DataError> {
+    raw.replace(',', ".")
+        .parse::<f64>()
+        .ok()
+        .filter(|v| v.is_finite())
+        .ok_or_else(|| DataError::parse(path, at, field, "a finite number", format!("{raw:?}")))
+}
+
 fn read_point(
     cells: &[String],
     [x, y, t]: [usize; 3],
@@ -157,15 +172,8 @@ fn read_point(
     opts: &ReadOptions,
     path: &Path,
 ) -> Result<(), DataError> {
-    let num = |i: usize, field: &str| -> Result<f64, DataError> {
-        let raw = cells.get(i).map(String::as_str).unwrap_or("");
-        raw.replace(',', ".")
-            .parse::<f64>()
-            .ok()
-            .filter(|v| v.is_finite())
-            .ok_or_else(|| {
-                DataError::parse(path, &at, field, "a finite number", format!("{raw:?}"))
-            })
+    let num = |i: usize, field: &str| {
+        locale_number(cells.get(i).map_or("", String::as_str), path, &at, field)
     };
     let raw_t = cells.get(t).map(String::as_str).unwrap_or("");
     let written = time(raw_t).ok_or_else(|| {

@@ -122,10 +122,12 @@ fn noise(n: usize, seed: u64) -> Vec<u8> {
         .collect()
 }
 
-/// The FileDescriptorSet of `foxglove.PointsAnnotation`, as the example file carries it.
-fn points_schema() -> Vec<u8> {
-    let path =
-        Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/data/markers_foxglove_points.mcap");
+/// The FileDescriptorSet of the protobuf type `name` (`foxglove.X`), as the example file
+/// `tests/data/{file}` carries it.
+fn example_schema(file: &str, name: &str) -> Vec<u8> {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("tests/data")
+        .join(file);
     let bytes = std::fs::read(path).unwrap();
     let m = mcap::MessageStream::new(&bytes)
         .unwrap()
@@ -133,8 +135,39 @@ fn points_schema() -> Vec<u8> {
         .unwrap()
         .unwrap();
     let schema = m.channel.schema.as_ref().expect("a schema");
-    assert_eq!(schema.name, "foxglove.PointsAnnotation");
+    assert_eq!(schema.name, name);
     schema.data.to_vec()
+}
+
+/// The FileDescriptorSet of `foxglove.PointsAnnotation`, as the example file carries it.
+fn points_schema() -> Vec<u8> {
+    example_schema("markers_foxglove_points.mcap", "foxglove.PointsAnnotation")
+}
+
+/// `dir/file`: an MCAP of `padding` incompressible bytes and one protobuf `message` of type
+/// `name` (its FileDescriptorSet `schema`) on `topic`, in one zstd chunk.
+fn one_protobuf_message(
+    dir: &Path,
+    file: &str,
+    (name, schema): (&str, &[u8]),
+    topic: &str,
+    message: &[u8],
+    padding: usize,
+) -> PathBuf {
+    let mut buf = Cursor::new(Vec::new());
+    {
+        let mut w = writer(&mut buf, 1 << 30);
+        pad(&mut w, padding);
+        let s = w.add_schema(name, "protobuf", schema).unwrap();
+        let c = w
+            .add_channel(s, topic, "protobuf", &BTreeMap::new())
+            .unwrap();
+        w.write_to_known_channel(&header(c, 0), message).unwrap();
+        w.finish().unwrap();
+    }
+    let input = dir.join(file);
+    std::fs::write(&input, buf.into_inner()).unwrap();
+    input
 }
 
 /// A writer of zstd chunks of about `chunk` bytes into memory.
@@ -240,23 +273,16 @@ fn mcap_a_points_annotation_of_eight_million_empty_points_is_refused_before_deco
     // 16 MB: under the longest message decoded (16 MiB), over the positions a file of this
     // size may keep.
     let message: Vec<u8> = [key, 0].repeat(8_000_000);
-    let mut buf = Cursor::new(Vec::new());
-    {
-        let mut w = writer(&mut buf, 1 << 20);
-        // A 16 MB record needs a file of 64 kB (records are at most 256 times the file).
-        pad(&mut w, 300_000);
-        let s = w
-            .add_schema("foxglove.PointsAnnotation", "protobuf", &schema)
-            .unwrap();
-        let c = w
-            .add_channel(s, "/points", "protobuf", &BTreeMap::new())
-            .unwrap();
-        w.write_to_known_channel(&header(c, 0), &message).unwrap();
-        w.finish().unwrap();
-    }
     let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("points.mcap");
-    std::fs::write(&input, buf.into_inner()).unwrap();
+    // A 16 MB record needs a file of 64 kB (records are at most 256 times the file).
+    let input = one_protobuf_message(
+        dir.path(),
+        "points.mcap",
+        ("foxglove.PointsAnnotation", &schema),
+        "/points",
+        &message,
+        300_000,
+    );
     assert!(std::fs::metadata(&input).unwrap().len() < 1 << 20);
     assert_refused(dir.path(), &input, Resource::Samples);
 }
@@ -265,33 +291,18 @@ fn mcap_a_points_annotation_of_eight_million_empty_points_is_refused_before_deco
 fn mcap_a_protobuf_message_of_250_mb_of_unknown_fields_is_refused_before_decoding() {
     // prost-reflect keeps every unknown field: this 1 MB file (a 250 MB FrameTransform of
     // field 99 set to 0, zstd-compressed) aborted at the 4 GiB cap after 7 s.
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("tests/data/markers_foxglove_frametransform.mcap");
-    let bytes = std::fs::read(path).unwrap();
-    let m = mcap::MessageStream::new(&bytes)
-        .unwrap()
-        .next()
-        .unwrap()
-        .unwrap();
-    let schema = m.channel.schema.as_ref().expect("a schema");
-    assert_eq!(schema.name, "foxglove.FrameTransform");
+    let name = "foxglove.FrameTransform";
+    let schema = example_schema("markers_foxglove_frametransform.mcap", name);
     let message: Vec<u8> = [0x98, 0x06, 0x00].repeat(250_000_000 / 3);
-    let mut buf = Cursor::new(Vec::new());
-    {
-        let mut w = writer(&mut buf, 1 << 30);
-        pad(&mut w, 1_000_000);
-        let s = w
-            .add_schema(&schema.name, &schema.encoding, &schema.data)
-            .unwrap();
-        let c = w
-            .add_channel(s, "/markers", "protobuf", &BTreeMap::new())
-            .unwrap();
-        w.write_to_known_channel(&header(c, 0), &message).unwrap();
-        w.finish().unwrap();
-    }
     let dir = tempfile::tempdir().unwrap();
-    let input = dir.path().join("unknown_fields.mcap");
-    std::fs::write(&input, buf.into_inner()).unwrap();
+    let input = one_protobuf_message(
+        dir.path(),
+        "unknown_fields.mcap",
+        (name, &schema),
+        "/markers",
+        &message,
+        1_000_000,
+    );
     assert!(std::fs::metadata(&input).unwrap().len() < 1_100_000);
     let (run, out) = convert(dir.path(), &input);
     assert!(run.secs < DEADLINE.as_secs_f64() && !run.killed, "{run:?}");

@@ -2,6 +2,7 @@
 //! trajectory, then its `t x y` rows. Its spreadsheet export (XML) is `data::kinovea_xml`'s.
 
 use super::rows::{read_error, Clock};
+use crate::data::kinovea_xml::locale_number;
 use crate::data::{Budget, DataError, Parsed, Resource, Series};
 use std::io::{BufRead, BufReader, Read};
 use std::path::Path;
@@ -58,15 +59,8 @@ pub(super) fn read_kinovea(input: impl Read, path: &Path) -> Result<Parsed, Data
         };
         let cells: Vec<&str> = line.split_whitespace().collect();
         budget.charge(Resource::Cells, cells.len() as u64)?;
-        let num = |i: usize, field: &str| -> Result<f64, DataError> {
-            let raw = cells.get(i).copied().unwrap_or("");
-            raw.replace(',', ".")
-                .parse::<f64>()
-                .ok()
-                .filter(|v| v.is_finite())
-                .ok_or_else(|| {
-                    DataError::parse(path, &at, field, "a finite number", format!("{raw:?}"))
-                })
+        let num = |i: usize, field: &str| {
+            locale_number(cells.get(i).copied().unwrap_or(""), path, &at, field)
         };
         if cells.len() < 3 {
             return Err(DataError::parse(

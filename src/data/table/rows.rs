@@ -126,6 +126,7 @@ pub(super) struct Rows<R: Read> {
 impl<R: Read> Rows<R> {
     /// Rows of `input` split at `delimiter`; `path` names the file in errors.
     pub(super) fn new(input: R, path: &Path, delimiter: u8) -> Self {
+        let budget = Budget::capped(path);
         Rows {
             rdr: csv::ReaderBuilder::new()
                 .has_headers(false)
@@ -139,9 +140,9 @@ impl<R: Read> Rows<R> {
             line: 0,
             nan_missing: false,
             lines_before: 0,
-            budget: std::cell::RefCell::new(Budget::capped(path)),
             cells: 0,
-            cells_limit: Budget::capped(path).limit(Resource::Cells),
+            cells_limit: budget.limit(Resource::Cells),
+            budget: std::cell::RefCell::new(budget),
         }
     }
 
