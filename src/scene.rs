@@ -46,6 +46,17 @@ pub struct RigSpec {
     pub stribeck_velocity: Option<f64>,
     /// Viscous rail friction, N s/m, added to either law (default 0).
     pub viscous_friction: Option<f64>,
+    /// Standard deviation of `rod_length` as measured (m); the fit's default is a ruler's
+    /// 1 mm, 0 takes the value as exact. Scenes and plans simulate the value as given.
+    pub rod_length_sd: Option<f64>,
+    /// Standard deviation of `slider_mass` (kg); default 2 % (at least 0.5 g).
+    pub slider_mass_sd: Option<f64>,
+    /// Standard deviation of `bob_mass` (kg); default 1 % (at least 0.5 g).
+    pub bob_mass_sd: Option<f64>,
+    /// Standard deviation of `rod_mass` (kg); default 1 % (at least 0.5 g).
+    pub rod_mass_sd: Option<f64>,
+    /// Standard deviation of `bob_radius` (m); default 0.5 mm.
+    pub bob_radius_sd: Option<f64>,
 }
 
 impl RigSpec {
@@ -387,6 +398,25 @@ fn check_rig_range(path: &Path, r: &RigSpec) -> Result<(), SceneError> {
         r.rod_length,
     )?;
     check_gravity(path, r.gravity)?;
+    for (key, sd, value) in [
+        ("rig.rod_length_sd", r.rod_length_sd, Some(r.rod_length)),
+        ("rig.slider_mass_sd", r.slider_mass_sd, Some(r.slider_mass)),
+        ("rig.bob_mass_sd", r.bob_mass_sd, r.bob_mass),
+        ("rig.rod_mass_sd", r.rod_mass_sd, r.rod_mass),
+        ("rig.bob_radius_sd", r.bob_radius_sd, r.bob_radius),
+    ] {
+        if let Some(sd) = sd {
+            let value = value.unwrap_or(0.0);
+            // A measurement's error is below its value: a larger one says nothing was measured.
+            check(
+                path,
+                sd.is_finite() && sd >= 0.0 && sd <= 0.5 * value,
+                key,
+                &format!("a standard deviation >= 0 and at most half the value ({value})"),
+                sd,
+            )?;
+        }
+    }
     for (key, mu) in [
         ("rig.mu_kinetic", r.mu_kinetic),
         ("rig.mu_static", r.mu_static),
@@ -556,6 +586,12 @@ impl RigFile {
     /// Read a rig file for fitting: mu values are optional starting guesses (`mu_guess` when
     /// left out).
     pub fn load_for_fit(path: &Path, mu_guess: f64) -> Result<Rig<f64>, SceneError> {
+        Self::load_measured(path, mu_guess).map(|(rig, _)| rig)
+    }
+
+    /// [`RigFile::load_for_fit`] with the `[rig]` section as written (its measurement
+    /// uncertainties: `*_sd` keys).
+    pub fn load_measured(path: &Path, mu_guess: f64) -> Result<(Rig<f64>, RigSpec), SceneError> {
         let file: RigFile = parse_toml(&read_text(path, MAX_TOML_BYTES)?, path)?;
         let rig = file
             .rig
@@ -565,7 +601,7 @@ impl RigFile {
                 message: e.to_string(),
             })?;
         check_rig_range(path, &file.rig)?;
-        Ok(rig)
+        Ok((rig, file.rig))
     }
 
     /// Parse and validate rig-file text; `path` only labels errors.

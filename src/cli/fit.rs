@@ -267,14 +267,18 @@ pub fn run(args: Args) -> Result<(), Failure> {
         .recording
         .resolve()
         .map_err(|e| Failure::Input(anyhow!(e)))?;
-    let rig = RigFile::load_for_fit(&args.rig, 0.3).map_err(|e| Failure::Input(e.into()))?;
-    let settings = settings(&args).map_err(|e| Failure::Input(anyhow!(e)))?;
+    let (rig, spec) =
+        RigFile::load_measured(&args.rig, 0.3).map_err(|e| Failure::Input(e.into()))?;
+    let mut settings = settings(&args).map_err(|e| Failure::Input(anyhow!(e)))?;
     if let Some(p) = &args.plot {
         appell::report::plot::ImageFormat::from_path(p).map_err(|e| Failure::Input(e.into()))?;
     }
     if args.joint {
         return run_joint(&args, &opts, &rig, &settings);
     }
+    // A single recording's fit takes the rig file as the measurement it is (the joint fit
+    // takes it as exact: its releases share one rig, see docs/fit.md).
+    settings.measured = Some(appell::fit::priors::RigMeasurement::from_spec(&spec));
     if args.inputs.len() == 1 && args.inputs[0].is_dir() {
         let files = directory_files(&args.inputs[0], opts.format.is_some())?;
         let bar = ProgressBar::new(files.len() as u64);

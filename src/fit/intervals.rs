@@ -35,20 +35,43 @@ fn intern(label: String) -> &'static str {
     l
 }
 
-/// Widen mu_kinetic's estimate `e` by the spread of the models in play ([`select::model_spread`])
-/// when that spread is worth a tenth of its standard error: the standard error becomes
-/// sqrt(se^2 + spread) and each half-width sqrt(h^2 + 1.96^2 spread).
-pub(super) fn model_uncertainty(e: &mut Estimate, models: &[ModelRow], warnings: &mut Vec<String>) {
+/// Widen mu_kinetic's estimate `e` by the models' uncertainty, the larger of two: the spread
+/// of the models the weights leave in play ([`select::model_spread`]), and the adequate
+/// alternatives ([`select::adequate_spread`], chi-squares scaled by `c`), whose farthest mu
+/// the widened interval reaches (a standard deviation of a 1.96th of that distance). Only
+/// when worth a tenth of the standard error.
+pub(super) fn model_uncertainty(
+    e: &mut Estimate,
+    models: &[ModelRow],
+    c: f64,
+    warnings: &mut Vec<String>,
+) {
     let (var, names) = select::model_spread(models, e.value);
-    if var.is_nan() || var.sqrt() <= 0.1 * e.stderr || names.len() < 2 {
+    let (far, adequate) = select::adequate_spread(models, e.value, c);
+    let by_weight = if var.is_nan() || names.len() < 2 {
+        0.0
+    } else {
+        var.sqrt()
+    };
+    let by_adequacy = far / 1.96;
+    let s = by_weight.max(by_adequacy);
+    if s <= 0.1 * e.stderr {
         return;
     }
-    widen(e, var.sqrt(), "models");
-    warnings.push(format!(
-        "models close in the criterion give different mu_kinetic, and the interval carries their spread (standard deviation {:.2e}): {}",
-        var.sqrt(),
-        names.join(", ")
-    ));
+    widen(e, s, "models");
+    if by_adequacy > by_weight {
+        warnings.push(format!(
+            "other models describe the recording as well as the chosen one and give other mu_kinetic; the interval reaches the farthest ({:.2e} away): {}",
+            far,
+            adequate.join(", ")
+        ));
+    } else {
+        warnings.push(format!(
+            "models close in the criterion give different mu_kinetic, and the interval carries their spread (standard deviation {:.2e}): {}",
+            s,
+            names.join(", ")
+        ));
+    }
 }
 
 /// `e` with its 95% interval cut at the physical bound of `q`: mu_kinetic, pivot damping and

@@ -10,6 +10,7 @@
 //! - `mod.rs`: the settings, the report's types and the driver [`fit`];
 //! - `plausible.rs`: the rig file's rod length compared with the recording's markers;
 //! - `prepare.rs`: the recording checked, each marker's noise, mis-tracked frames dropped;
+//! - `priors.rs`: the rig file as a measurement, the nuisances' plausible ranges;
 //! - `guess.rs`: starting values from the data;
 //! - `base.rs`: the base model from several starts;
 //! - `problem/`: the residual function and its exact normal equations;
@@ -37,6 +38,7 @@ mod outliers;
 mod pendulum;
 mod plausible;
 mod prepare;
+pub mod priors;
 mod problem;
 mod select;
 mod solve;
@@ -114,6 +116,9 @@ pub struct FitSettings {
     /// models are fitted on these first frames and the winner carried over the rest by
     /// doubling the length; its profile intervals are checked at the Wald ends first.
     pub long_prefix: usize,
+    /// The rig file as a measurement: its rod length and mass ratio are fitted with these
+    /// priors (errors in variables). `None`: the rig is taken as exact.
+    pub measured: Option<priors::RigMeasurement>,
 }
 
 impl Default for FitSettings {
@@ -135,6 +140,7 @@ impl Default for FitSettings {
             windows: true,
             with: Vec::new(),
             long_prefix: PREFIX_FRAMES,
+            measured: None,
         }
     }
 }
@@ -153,6 +159,38 @@ pub struct Estimate {
     /// `+block` when widened for correlated residuals and `+windows` when widened to cover
     /// the windows' values, and `+models` when it carries the spread of close models.
     pub interval: &'static str,
+}
+
+/// mu_kinetic's standard error in its parts, each a standard deviation; the total is their
+/// root sum of squares (the reported standard error).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct MuParts {
+    /// From the recording's noise, the rig's measured values held (its correlation in time
+    /// included).
+    pub noise: f64,
+    /// From the rig file's measurement errors the recording cannot correct.
+    pub rig: f64,
+    /// From the model: the spread of adequate and close models, the windows, the path.
+    pub model: f64,
+    /// The whole standard error.
+    pub total: f64,
+}
+
+/// A rig value the fit took as a measurement: what the file says and what the fit found.
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
+pub struct RigValue {
+    /// The parameter (`rod_length`, `equivalent_mass_ratio`).
+    pub param: &'static str,
+    /// The rig file's value.
+    pub file: f64,
+    /// Its standard deviation (stated, or the default).
+    pub sd: f64,
+    /// The fitted value.
+    pub value: f64,
+    /// Its standard error.
+    pub stderr: f64,
+    /// (value - file) / sd: how far the recording moved it, in the file's deviations.
+    pub z: f64,
 }
 
 /// What the recording says about mu_static.
@@ -296,6 +334,15 @@ pub struct FitReport {
     /// The chosen model at its optimum, with its noise scales and row weights (outliers at
     /// zero): what a fit built on this one (the joint fit) starts from.
     pub problem: TrajectoryProblem,
+    /// mu_kinetic's standard error in parts (noise, rig, model).
+    pub mu_parts: Option<MuParts>,
+    /// The rig file's measured keys: key, value, standard deviation, whether the file stated
+    /// it (`false`: the default).
+    pub rig_keys: Vec<(&'static str, f64, f64, bool)>,
+    /// The rig values fitted as measurements.
+    pub rig_values: Vec<RigValue>,
+    /// The chosen model's values no real rig has, a sentence each (the fit is then flagged).
+    pub implausible: Vec<String>,
 }
 
 /// A recording that cannot be fitted.
@@ -334,8 +381,9 @@ pub fn fit(
         warnings,
         moved: false,
     };
+    stages::measured_rig(&mut f, settings);
     let late = residual_outliers(&mut f.problem, &mut f.p, settings, &mut f.iterations, false);
-    let seen = stages::seen(&f, &data.obs, &base)?;
+    let seen = stages::seen(&f, &data.obs)?;
     let (models, nuisances) = stages::nuisances(&mut f, &seen, &base, data.n_frames, settings);
     let (outliers, late) = stages::late_outliers(&mut f, late, data.dropped, settings);
     if !seen.slides {

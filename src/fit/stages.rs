@@ -11,11 +11,15 @@ use super::motion::{motion, slider_moves, Motion};
 use super::outliers::{residual_outliers, ResidualOutliers, RESIDUAL_OUTLIER};
 use super::pendulum::pendulum_found;
 use super::prepare::Prepared;
+use super::priors;
 use super::problem::{idx, Observations, Param, TrajectoryProblem};
 use super::select::{self, ModelRow, Nuisance, SelectOptions};
 use super::solve::{solve, solve_traced};
 use super::uncertainty::{self, Assessment, WindowFit};
-use super::{Adequacy, Estimate, FitError, FitReport, FitSettings, StaticMode, StaticResult, Work};
+use super::{
+    Adequacy, Estimate, FitError, FitReport, FitSettings, MuParts, RigValue, StaticMode,
+    StaticResult, Work,
+};
 use crate::model::{FrictionLaw, Rig};
 use crate::sim::EventKind;
 use nalgebra::{DMatrix, DVector};
@@ -39,27 +43,64 @@ pub(super) struct Seen {
     pub slides: bool,
     /// The raw slider track's range when it moves by more than its noise explains.
     pub raw_moves: Option<f64>,
-    /// A stick-to-slide onset: in the fitted motion, or from the data.
-    pub onset: bool,
+}
+
+/// The rig file as a measurement and the nuisances' plausible ranges ([`super::priors`]):
+/// every nuisance gets its range's prior, and with a measured rig the rod length and the mass
+/// ratio are freed with the measurement's priors and the base model refitted (the data
+/// correct what they can; mu's interval carries the rest). `--fit-rod-length` frees the rod
+/// without a prior.
+pub(super) fn measured_rig(f: &mut Fitting, settings: &FitSettings) {
+    let problem = &mut f.problem;
+    let times = &problem.observations().times;
+    let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+    steps.sort_by(f64::total_cmp);
+    let frame = steps.get(steps.len() / 2).copied().unwrap_or(1e-3);
+    let ranges = priors::plausible_ranges(&problem.rig, frame);
+    let mut all = priors::nuisance_priors(&ranges);
+    let mut freed = false;
+    if let Some(m) = &settings.measured {
+        for pr in m.priors() {
+            if pr.param == Param::RodLength && settings.fit_rod_length {
+                continue;
+            }
+            all.push(pr);
+            if !problem.free.contains(&pr.param) {
+                problem.free.push(pr.param);
+                freed = true;
+            }
+        }
+    }
+    let file_ratio = settings
+        .measured
+        .as_ref()
+        .map_or(problem.rig.mass_ratio(), |m| m.mass_ratio.0);
+    problem.priors = Arc::new(all);
+    problem.plausible = Arc::new(priors::Plausibility {
+        ranges,
+        file_ratio,
+    });
+    f.p = problem.values();
+    if freed {
+        if let Ok((q, _, it)) = solve(problem, f.p.clone(), settings.max_iters) {
+            f.iterations += it;
+            problem.set_values(&q);
+            f.p = q;
+        }
+        f.moved = true;
+    }
 }
 
 /// Does the fitted motion slide? A slide shorter than the slider's noise is not seen;
 /// a raw track that clearly moves while no fit slides is a failed fit, said as such.
-pub(super) fn seen(f: &Fitting, obs: &Observations, base: &Base) -> Result<Seen, FitError> {
+pub(super) fn seen(f: &Fitting, obs: &Observations) -> Result<Seen, FitError> {
     let motion = motion(&f.problem)?;
     let (lo, hi) = motion.range;
     let slides = motion.slides && hi - lo > 3.0 * f.problem.sigma[0];
-    let onset = motion
-        .sol
-        .events
-        .iter()
-        .any(|e| e.kind == EventKind::Slip && e.t > 0.0)
-        || base.mu_s_data.is_some();
     Ok(Seen {
         raw_moves: slider_moves(obs, f.problem.sigma[0]),
         motion,
         slides,
-        onset,
     })
 }
 
@@ -78,10 +119,12 @@ pub(super) fn nuisances(
     let chi2 = f.problem.chi2(&f.p).unwrap_or(f64::INFINITY);
     let mu_k = f.p[0];
     let opts = SelectOptions {
-        // The friction laws, where an onset can show them (the selection offers them in a
-        // round whose model misfits, or always when the onsets show mu_static above
-        // mu_kinetic).
-        friction_candidates: settings.mu_static == StaticMode::Auto && seen.onset,
+        // The friction laws: offered in every round whose model misfits, and in every round
+        // when the onsets show mu_static above mu_kinetic. No gate on the data keeps them
+        // out: a release from rest whose base model slips at once shows no onset, yet its
+        // static coefficient is the misfit (a threshold has no gradient at its start, so no
+        // score test can ask for it either).
+        friction_candidates: settings.mu_static == StaticMode::Auto,
         static_evidence: base.static_evidence == Some(true),
         mu_static_start: base.mu_s_data.unwrap_or(1.15 * mu_k).max(1.05 * mu_k),
         // No cap decides the answer: the criterion stops the selection (every candidate is
@@ -226,6 +269,9 @@ pub(super) struct Estimates {
     pub scale: f64,
     /// mu_kinetic's index when it is identifiable.
     pub mu_index: Option<usize>,
+    /// The share of mu_kinetic's variance that the rig's measured values carry (their priors'
+    /// width and correlation with mu): 1 - var(mu | rig values held) / var(mu).
+    pub rig_fraction: f64,
 }
 
 /// Standard errors (Jacobian, block covariance) and mu_kinetic's profile interval,
@@ -297,6 +343,7 @@ pub(super) fn estimates(
             ),
         }
     }
+    let rig_fraction = mu_index.map_or(0.0, |i| rig_fraction(problem, &a.cov, i));
     Ok(Estimates {
         a,
         params,
@@ -304,7 +351,33 @@ pub(super) fn estimates(
         correlation,
         scale,
         mu_index,
+        rig_fraction,
     })
+}
+
+/// The share of parameter `i`'s variance carried by the rig's measured values (the free
+/// parameters with a measurement's prior: rod length, mass ratio): 1 - the variance with them
+/// held over the variance with them free, from the covariance `cov` (the Schur complement).
+fn rig_fraction(problem: &TrajectoryProblem, cov: &DMatrix<f64>, i: usize) -> f64 {
+    let rig: Vec<usize> = problem
+        .free
+        .iter()
+        .enumerate()
+        .filter(|(_, q)| matches!(q, Param::RodLength | Param::MassRatio))
+        .filter(|(_, q)| problem.prior_on(**q).is_some())
+        .map(|(j, _)| j)
+        .collect();
+    let total = cov[(i, i)];
+    if rig.is_empty() || !(total > 0.0) {
+        return 0.0;
+    }
+    let s = DMatrix::from_fn(rig.len(), rig.len(), |a, b| cov[(rig[a], rig[b])]);
+    let c = DVector::from_fn(rig.len(), |a, _| cov[(i, rig[a])]);
+    let Some(inv) = s.try_inverse() else {
+        return 0.0;
+    };
+    let held = total - (c.transpose() * inv * &c)[(0, 0)];
+    (1.0 - held / total).clamp(0.0, 1.0)
 }
 
 /// What the adequacy stage found.
@@ -316,6 +389,8 @@ pub(super) struct Verdict {
     pub lag1: f64,
     /// The one plain sentence when the model limits the result.
     pub limited: Option<String>,
+    /// The chosen model's values no real rig has, a sentence each ([`priors::implausible`]).
+    pub implausible: Vec<String>,
     /// Why the fit failed although it ran.
     pub failed: Option<String>,
     pub noise_free: bool,
@@ -346,10 +421,14 @@ pub(super) fn adequacy(
     let windows_p = uncertainty::window_consistency(&windows);
     let block_ratio = mu_index.map_or(1.0, |i| a.se_block[i] / a.se[i]);
     let runs_p = uncertainty::runs_p_value(problem, a.r.as_slice());
+    // A value no real rig has is evidence of misfit as much as a failed test: the model
+    // explains the recording with something the rig does not have.
+    let implausible = priors::implausible(problem);
     let misfit = a.p_value < 1e-3
         || block_ratio > 1.5
         || windows_p.is_some_and(|p| p < 0.01)
-        || runs_p < RUNS_P;
+        || runs_p < RUNS_P
+        || !implausible.is_empty();
     if let Some(i) = mu_index {
         let e = &mut est.params[i].1;
         if windows_p.is_some_and(|p| p < 0.01) {
@@ -357,7 +436,7 @@ pub(super) fn adequacy(
         }
         // Models close in the criterion that give another mu_kinetic: their spread joins the
         // interval (model uncertainty), and the report names them.
-        model_uncertainty(e, models, &mut f.warnings);
+        model_uncertainty(e, models, est.scale, &mut f.warnings);
         // A model that still misfits is one more nuisance away from another mu: the interval
         // keeps room for as much as mu moved along the selection's path.
         if misfit {
@@ -401,7 +480,18 @@ pub(super) fn adequacy(
             ));
         }
     }
+    if !implausible.is_empty() {
+        let s = format!(
+            "The fit needs what no real rig has, so the result is limited by the model, not by the noise: {}; mu_kinetic may carry an effect the model lacks.",
+            implausible.join("; ")
+        );
+        limited = Some(match limited {
+            Some(l) => format!("{s} {l}"),
+            None => s,
+        });
+    }
     Verdict {
+        implausible,
         lag1: uncertainty::lag1(problem, a.r.as_slice()),
         windows,
         windows_p,
@@ -676,8 +766,47 @@ pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
         noise_free: v.noise_free,
     };
     let pendulum = pendulum_found(&problem, &est.params, &est.correlation, rig_guess);
+    let mu_parts = est.mu_index.map(|i| {
+        let total = est.params[i].1.stderr;
+        let base = est.se[i].min(total);
+        MuParts {
+            noise: base * (1.0 - est.rig_fraction).sqrt(),
+            rig: base * est.rig_fraction.sqrt(),
+            model: (total * total - base * base).max(0.0).sqrt(),
+            total,
+        }
+    });
+    let rig_values: Vec<RigValue> = est
+        .params
+        .iter()
+        .filter_map(|(q, e)| {
+            let pr = problem.prior_on(*q)?;
+            matches!(q, Param::RodLength | Param::MassRatio).then(|| RigValue {
+                param: q.name(),
+                file: pr.centre,
+                sd: pr.sd,
+                value: e.value,
+                stderr: e.stderr,
+                z: (e.value - pr.centre) / pr.sd,
+            })
+        })
+        .collect();
+    let mut warnings = f.warnings;
+    for r in rig_values.iter().filter(|r| r.z.abs() > 3.0) {
+        warnings.push(format!(
+            "the recording puts {} at {:.6} +- {:.1e}, {:.1} of the rig file's deviations from its {:.6} +- {:.1e}: check the rig file (the fit used the recording's value)",
+            r.param, r.value, r.stderr, r.z, r.file, r.sd
+        ));
+    }
     let c = &problem.counters;
     FitReport {
+        mu_parts,
+        rig_keys: settings
+            .measured
+            .as_ref()
+            .map_or_else(Vec::new, |m| m.keys.clone()),
+        rig_values,
+        implausible: v.implausible,
         mu_kinetic: est.mu_index.map(|i| est.params[i].1),
         params: est.params,
         start_values,
@@ -710,7 +839,7 @@ pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
             jacobian_evals: c.jacobians.load(Ordering::Relaxed),
         },
         stop_reason,
-        warnings: f.warnings,
+        warnings,
         pendulum,
         failed: v.failed,
         problem,

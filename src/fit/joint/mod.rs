@@ -161,7 +161,12 @@ pub fn fit_joint(
     let mut shared = shared::shared_fit(&model.problem, &model.p, &kept)?;
     let mut rows = releases::release_rows(&model.problem, &kept, settings);
     let mut mu = shared.estimates[shared.mu_index].1;
-    model_uncertainty(&mut mu, &model.models, &mut warnings);
+    model_uncertainty(
+        &mut mu,
+        &model.models,
+        shared.reduced_chi2.max(1.0),
+        &mut warnings,
+    );
     let agreed = agreement::agreement(&model.problem, &mut rows, &mut mu, settings);
     if select::misfits(&model.problem, shared.chi2) {
         warnings.push(format!(

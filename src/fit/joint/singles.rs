@@ -165,6 +165,9 @@ fn start_part(
         .collect();
     let mut part = single.clone();
     part.rig = rig;
+    // The joint problem sums its parts' normal equations: a part's prior would count once per
+    // release on a shared parameter, so the joint fit has none.
+    part.priors = Default::default();
     part.camera = Default::default();
     part.free = free;
     part.tie_static = true;

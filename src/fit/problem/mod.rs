@@ -11,6 +11,7 @@ mod param;
 pub use normal::MAX_FREE;
 pub use param::Param;
 
+use crate::fit::priors::{Plausibility, Prior};
 use crate::model::{observed_markers, Camera, Rig, Scalar, State};
 use crate::sim::{simulate_each, Options, Request, Sample, SimError};
 use argmin::core::Error;
@@ -91,6 +92,13 @@ pub struct TrajectoryProblem {
     layout: Arc<Layout>,
     /// Evaluations of this problem and its clones, for the report.
     pub counters: Arc<Counters>,
+    /// Gaussian priors on parameters (the rig file's measurements, the nuisances' plausible
+    /// ranges): each free one adds ((value - centre) / sd)^2 to the chi-square, its cost and
+    /// normal equations (a pseudo-observation); one not free adds nothing.
+    pub priors: Arc<Vec<Prior>>,
+    /// The nuisances' plausible ranges and the rig file's mass ratio, to judge a fitted
+    /// model's values ([`crate::fit::priors::implausible`]).
+    pub plausible: Arc<Plausibility>,
 }
 
 /// How often a fit evaluated its residuals and its Jacobian (shared by a problem's clones).
@@ -143,7 +151,32 @@ impl TrajectoryProblem {
                 n_rows,
             }),
             counters: Arc::new(Counters::default()),
+            priors: Arc::new(Vec::new()),
+            plausible: Arc::new(Plausibility::default()),
         }
+    }
+
+    /// The prior on `q` when it acts: a rigid pendulum's equivalent mass ratio (its length
+    /// free) is not the masses' ratio, so the masses' prior leaves it.
+    pub fn prior_on(&self, q: Param) -> Option<&Prior> {
+        if q == Param::MassRatio && self.free.contains(&Param::PendulumLength) {
+            return None;
+        }
+        self.priors.iter().find(|pr| pr.param == q)
+    }
+
+    /// Each free parameter with a prior at `p`: its index, standardised distance from the
+    /// centre and the prior's standard deviation.
+    pub fn prior_rows<'a>(&'a self, p: &'a [f64]) -> impl Iterator<Item = (usize, f64, f64)> + 'a {
+        self.free.iter().enumerate().filter_map(move |(i, &q)| {
+            self.prior_on(q)
+                .map(|pr| (i, (p[i] - pr.centre) / pr.sd, pr.sd))
+        })
+    }
+
+    /// The priors' share of the chi-square at `p`.
+    pub fn prior_chi2(&self, p: &[f64]) -> f64 {
+        self.prior_rows(p).map(|(_, r, _)| r * r).sum()
     }
 
     /// The same model, values and settings over other observations (every row weight one;
@@ -152,6 +185,8 @@ impl TrajectoryProblem {
         let mut pr =
             TrajectoryProblem::new(obs, self.rig, self.initial, self.free.clone(), self.options);
         pr.camera = self.camera;
+        pr.priors = self.priors.clone();
+        pr.plausible = self.plausible.clone();
         pr.tie_static = self.tie_static;
         pr.sigma = self.sigma;
         pr.counters = self.counters.clone();
@@ -392,10 +427,11 @@ impl TrajectoryProblem {
         Ok(DVector::from_vec(r))
     }
 
-    /// The weighted sum of squares at `p`, summed as the simulation runs (nothing stored).
+    /// The weighted sum of squares at `p`, summed as the simulation runs (nothing stored),
+    /// with the priors' terms ([`Self::prior_chi2`]).
     pub fn chi2(&self, p: &DVector<f64>) -> Result<f64, Error> {
         self.counters.residuals.fetch_add(1, Ordering::Relaxed);
-        let mut ss = 0.0;
+        let mut ss = self.prior_chi2(p.as_slice());
         self.for_each_residual(p.as_slice(), |row, _, marker, d: f64| {
             let v = d * (self.row_weight(row) / self.sigma[marker]);
             ss += v * v;

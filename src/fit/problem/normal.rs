@@ -13,11 +13,11 @@ use num_dual::{Derivative, DualSVec64};
 use std::sync::atomic::Ordering;
 
 /// The most parameters a fit frees at once (the dual-number Jacobian is built for each count).
-pub const MAX_FREE: usize = 10;
+pub const MAX_FREE: usize = 12;
 
 /// Run `$body` with the const `$n` set to the dual width for `$k` free parameters, or give
 /// an error beyond [`MAX_FREE`]. Each width is a full copy of the simulator in the binary:
-/// widths 3, 4, 5, 6, 8 and 10 serve every size (a few derivative slots stay unused) and keep
+/// widths 3, 4, 5, 6, 8, 10 and 12 serve every size (a few derivative slots stay unused) and keep
 /// the build time down.
 macro_rules! by_width {
     ($k:expr, $n:ident => $body:expr) => {
@@ -44,6 +44,10 @@ macro_rules! by_width {
             }
             9 | 10 => {
                 const $n: usize = 10;
+                $body
+            }
+            11 | 12 => {
+                const $n: usize = 12;
                 $body
             }
             n => {
@@ -117,6 +121,14 @@ impl TrajectoryProblem {
             }
         })?;
         flush(&mut g, &mut meat);
+        // The priors, one pseudo-observation each: in the block sums too, as an independent
+        // observation of its own.
+        for (a, r, sd) in self.prior_rows(p.as_slice()) {
+            ss += r * r;
+            jtr[a] += r / sd;
+            jtj[a][a] += 1.0 / (sd * sd);
+            meat[a][a] += 1.0 / (sd * sd);
+        }
         let sym = |m: &[[f64; N]; N]| DMatrix::from_fn(k, k, |a, b| m[a.max(b)][a.min(b)]);
         Ok(Normal {
             cost: 0.5 * ss,
@@ -128,7 +140,7 @@ impl TrajectoryProblem {
 
     /// Residuals and the whole Jacobian (rows x parameters) at `p`, by the same dual-number
     /// run as the normal equations: for tests and small problems only (the fit never holds
-    /// the Jacobian).
+    /// the Jacobian). The data's rows only: the priors are no rows here.
     pub fn jacobian(&self, p: &DVector<f64>) -> Result<(DVector<f64>, DMatrix<f64>), Error> {
         fn dense<const N: usize>(
             pr: &TrajectoryProblem,
@@ -249,6 +261,21 @@ impl TrajectoryProblem {
                 }
             },
         )?;
+        // The priors: the free parameters' at p, and the extra camera parameters' at their
+        // values (a score test's candidate pays its prior's curvature).
+        for (a, r, sd) in self.prior_rows(p.as_slice()) {
+            ss += r * r;
+            jtr[a] += r / sd;
+            jtj[a][a] += 1.0 / (sd * sd);
+        }
+        for (j, &q) in extra.iter().enumerate() {
+            if let Some(pr) = self.prior_on(q) {
+                let r = (values[j] - pr.centre) / pr.sd;
+                ss += r * r;
+                jtr[k + j] += r / pr.sd;
+                jtj[k + j][k + j] += 1.0 / (pr.sd * pr.sd);
+            }
+        }
         let kk = k + m;
         Ok(Normal {
             cost: 0.5 * ss,

@@ -48,6 +48,11 @@ pub trait Candidate: LeastSquares + Clone + Send + Sync + 'static {
     fn static_near_tie(&self) -> Self;
     /// Predicted chi-square drop of each screened candidate at `p` (the score test).
     fn score_drops(&self, p: &DVector<f64>, candidates: &[Nuisance]) -> Vec<(Nuisance, f64)>;
+    /// Whether its current values hold one no real rig has ([`crate::fit::priors`]): such a
+    /// model is no adequate description, whatever its criterion.
+    fn implausible(&self) -> bool {
+        false
+    }
 }
 
 impl Candidate for TrajectoryProblem {
@@ -102,6 +107,9 @@ impl Candidate for TrajectoryProblem {
     }
     fn score_drops(&self, p: &DVector<f64>, candidates: &[Nuisance]) -> Vec<(Nuisance, f64)> {
         score_drops(self, p, candidates)
+    }
+    fn implausible(&self) -> bool {
+        !crate::fit::priors::implausible(self).is_empty()
     }
 }
 

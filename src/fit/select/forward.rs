@@ -52,6 +52,7 @@ impl Criterion {
             failed: None,
             weight: 0.0,
             path: false,
+            implausible: m.implausible(),
         }
     }
 }

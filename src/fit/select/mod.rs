@@ -19,7 +19,7 @@ pub use candidate::Candidate;
 pub use forward::forward;
 pub use nuisance::Nuisance;
 pub use score::score_drops_by;
-pub use weights::{model_spread, model_weights};
+pub use weights::{adequate_spread, model_spread, model_weights};
 
 use nalgebra::DVector;
 
@@ -47,6 +47,9 @@ pub struct ModelRow {
     pub weight: f64,
     /// Whether the selection passed through it: the base model and each model it took.
     pub path: bool,
+    /// Whether its values hold one no real rig has (a nuisance beyond its plausible range):
+    /// it is then no adequate description, and carries no weight in mu's model uncertainty.
+    pub implausible: bool,
 }
 
 /// The outcome of forward selection: the chosen problem and optimum, the nuisances it holds

@@ -3,7 +3,7 @@
 
 use super::ModelRow;
 
-/// Each converged model's weight w_i = exp(-dBIC_i / (2 c)) / sum, the Bayesian information
+/// Each converged, plausible model's weight w_i = exp(-dBIC_i / (2 c)) / sum, the Bayesian information
 /// criterion's approximation to the posterior probability of the model (Burnham and Anderson,
 /// "Model selection and multimodel inference", 6.4), with the chi-squares divided by the
 /// chosen model's reduced chi-square `c` (at least 1: their quasi-likelihood correction for
@@ -17,7 +17,11 @@ pub fn model_weights(rows: &mut [ModelRow], c: f64) {
         r.weight = 0.0;
         let mut set: Vec<&str> = r.name.split('+').collect();
         set.sort_unstable();
-        if r.failed.is_some() || !r.delta_bic.is_finite() || !seen.insert(set.join("+")) {
+        if r.failed.is_some()
+            || (r.implausible && !r.chosen)
+            || !r.delta_bic.is_finite()
+            || !seen.insert(set.join("+"))
+        {
             continue;
         }
         r.weight = (-0.5 * r.delta_bic / c).exp();
@@ -53,9 +57,46 @@ pub fn model_spread(rows: &[ModelRow], mu: f64) -> (f64, Vec<String>) {
     (var, names)
 }
 
+/// The models that describe the recording as well as the chosen one: converged, plausible,
+/// no more parameters than it, and a chi-square (divided by the chosen one's reduced
+/// chi-square `c` when above 1) no further above the chosen's than a likelihood-ratio test at
+/// 1 % allows for the parameters they lack (one, for as many). Two explanations that fit
+/// alike (a marker off the rod's line and a rail tilt) are both adequate, whatever the
+/// criterion's small preference: mu's interval must hold both. Returns the largest distance
+/// of their mu_kinetic from the chosen model's `mu`, and their names.
+pub fn adequate_spread(rows: &[ModelRow], mu: f64, c: f64) -> (f64, Vec<String>) {
+    use statrs::distribution::{ChiSquared, ContinuousCDF};
+    let Some(chosen) = rows.iter().find(|r| r.chosen) else {
+        return (0.0, Vec::new());
+    };
+    let (k, chi2) = (chosen.free.len(), chosen.chi2);
+    let mut far = 0.0f64;
+    let mut names = Vec::new();
+    for r in rows {
+        if r.chosen
+            || r.failed.is_some()
+            || r.implausible
+            || !r.mu_kinetic.is_finite()
+            || r.free.len() > k
+        {
+            continue;
+        }
+        let df = (k - r.free.len()).max(1) as f64;
+        let limit = ChiSquared::new(df).map_or(f64::INFINITY, |d| d.inverse_cdf(0.99));
+        if (r.chi2 - chi2) / c.max(1.0) <= limit {
+            let d = (r.mu_kinetic - mu).abs();
+            if d > 0.0 {
+                names.push(format!("{} (mu_kinetic {:.6})", r.name, r.mu_kinetic));
+            }
+            far = far.max(d);
+        }
+    }
+    (far, names)
+}
+
 #[cfg(test)]
 mod tests {
-    use super::{model_spread, model_weights, ModelRow};
+    use super::{adequate_spread, model_spread, model_weights, ModelRow};
 
     fn row(name: &str, delta_bic: f64, mu: f64, chosen: bool) -> ModelRow {
         ModelRow {
@@ -69,6 +110,7 @@ mod tests {
             failed: None,
             weight: 0.0,
             path: false,
+            implausible: false,
         }
     }
 
@@ -101,5 +143,35 @@ mod tests {
         assert!(names.iter().any(|n| n.starts_with("rail_tilt ")));
         model_weights(&mut rows, 2.0);
         assert!((rows[0].weight / rows[1].weight - (-2.5f64).exp()).abs() < 1e-12);
+    }
+
+    /// Adequate alternatives: as many parameters and a chi-square within the 1 % point of a
+    /// one-degree likelihood-ratio test (6.63) count, whatever their weight; a worse one, an
+    /// implausible one, or a larger model (which the weights hold) do not.
+    #[test]
+    fn adequate_alternatives_bound_the_model_spread() {
+        let with = |name: &str, k: usize, chi2: f64, mu: f64, chosen: bool| ModelRow {
+            free: vec!["p"; k],
+            chi2,
+            ..row(name, 0.0, mu, chosen)
+        };
+        let mut rows = vec![
+            with("rail_tilt", 6, 1000.0, 0.25, true),
+            with("bob_marker_across", 6, 1006.0, 0.26, false),
+            with("camera_scale", 6, 1007.0, 0.30, false),
+            with("rail_tilt+marker_lag", 7, 999.0, 0.40, false),
+            ModelRow {
+                implausible: true,
+                ..with("rigid_pendulum", 6, 990.0, 0.50, false)
+            },
+        ];
+        let (far, names) = adequate_spread(&rows, 0.25, 1.0);
+        assert!((far - 0.01).abs() < 1e-12, "{far}");
+        assert_eq!(names.len(), 1);
+        // Under a misfit of reduced chi-square 2 the differences count half.
+        let (far, _) = adequate_spread(&rows, 0.25, 2.0);
+        assert!((far - 0.05).abs() < 1e-12, "{far}");
+        rows[0].chosen = false;
+        assert_eq!(adequate_spread(&rows, 0.25, 1.0).0, 0.0);
     }
 }

@@ -134,9 +134,17 @@ pub fn fit_json(rep: &FitReport) -> Value {
         "warnings": rep.warnings,
         "failed": rep.failed,
         "pendulum": rep.pendulum,
+        "implausible": rep.implausible,
+        "rig_measured": {
+            "keys": rep.rig_keys.iter().map(|(k, v, sd, stated)| json!({"key": k, "value": v, "sd": sd, "stated": stated})).collect::<Vec<_>>(),
+            "fitted": rep.rig_values,
+        },
     });
     if let (Value::Object(m), Value::Object(extra)) = (&mut v, more) {
         m.extend(extra);
+    }
+    if let (Some(parts), true) = (rep.mu_parts, rep.mu_kinetic.is_some()) {
+        v["mu_kinetic"]["parts"] = json!(parts);
     }
     if rep.mu_kinetic.is_some() && rep.failed.is_none() {
         v["shared_covariance"] = rig_covariance(rep);

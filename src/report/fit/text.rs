@@ -40,6 +40,7 @@ pub fn fit_text(rep: &FitReport) -> String {
     }
     statistics(&mut s, rep);
     variables(&mut s, rep);
+    uncertainty(&mut s, rep);
     if let Some(p) = &rep.pendulum {
         pendulum_text(&mut s, p);
     }
@@ -51,6 +52,39 @@ pub fn fit_text(rep: &FitReport) -> String {
         let _ = writeln!(s, "warning: {w}");
     }
     s
+}
+
+/// [[Uncertainty of mu_kinetic]]: its standard error in parts, and [[Rig as measured]]: the
+/// rig file's measured values with their deviations, and what the recording made of them.
+fn uncertainty(s: &mut String, rep: &FitReport) {
+    if let Some(p) = &rep.mu_parts {
+        let _ = writeln!(
+            s,
+            "[[Uncertainty of mu_kinetic]] standard error {:.2e} = noise {:.2e} (+) rig {:.2e} (+) model {:.2e} (in quadrature)",
+            p.total, p.noise, p.rig, p.model
+        );
+    }
+    if rep.rig_keys.is_empty() {
+        return;
+    }
+    let _ = writeln!(
+        s,
+        "[[Rig as measured]] value +- standard deviation (stated in the rig file, or the default of a ruler and a kitchen scale)"
+    );
+    for (key, v, sd, stated) in &rep.rig_keys {
+        let _ = writeln!(
+            s,
+            "    {key:<20} {v:>12.6} +- {sd:.2e} ({})",
+            if *stated { "stated" } else { "default" }
+        );
+    }
+    for r in &rep.rig_values {
+        let _ = writeln!(
+            s,
+            "    fitted {:<20} {:>12.6} +- {:.2e}, {:+.1} deviations from the file's {:.6}",
+            r.param, r.value, r.stderr, r.z, r.file
+        );
+    }
 }
 
 /// [[Fit statistics]]: the method and its work, the data, the noise and the chi-square.

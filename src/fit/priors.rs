@@ -1,0 +1,384 @@
+//! The rig file as a measurement and the nuisances' plausible ranges.
+//!
+//! A lab measures its rod with a ruler and its masses with a scale: the fit treats the rod
+//! length and the mass ratio as parameters with Gaussian priors from those measurements
+//! (errors in variables), so the data correct what they can (the marker distance measures the
+//! rod) and mu's interval carries what they leave (a heavy slider cannot tell the mass ratio
+//! from mu). Each camera and rig nuisance has a plausible range a lab would recognise (a
+//! levelled rail, a marker on the bob, a lag below a frame); its prior has a standard deviation
+//! of half that range, so a nuisance pays in the criterion for leaving it, and a chosen value
+//! beyond it is evidence that the model misses something: the fit says so and names it.
+//! `docs/fit.md` ("The rig file is a measurement") gives every default and range with its
+//! reason.
+
+use super::problem::{Param, TrajectoryProblem};
+use crate::model::{PendulumKeys, Rig};
+use crate::scene::RigSpec;
+
+/// A Gaussian prior on a free parameter: `((value - centre) / sd)^2` joins the chi-square as
+/// one pseudo-observation.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Prior {
+    /// The parameter it is on.
+    pub param: Param,
+    /// Its centre (the measured value, or a nuisance's neutral value).
+    pub centre: f64,
+    /// Its standard deviation (> 0).
+    pub sd: f64,
+}
+
+/// Default standard deviation of a rod length measured with a ruler (m): 0.5 mm divisions,
+/// and the pivot axis and the bob's centre are not marked (RIGS.md: 0.5-1 mm).
+pub const DEFAULT_ROD_LENGTH_SD: f64 = 1e-3;
+/// Default relative standard deviation of the slider's mass: a kitchen scale's 1-2 % of a
+/// 50-100 g part, and screws or a pivot pin weighed apart or forgotten.
+pub const DEFAULT_SLIDER_MASS_REL: f64 = 0.02;
+/// Default relative standard deviation of the bob's and the rod's mass (a kitchen scale).
+pub const DEFAULT_BOB_MASS_REL: f64 = 0.01;
+/// The smallest default mass standard deviation (kg): half a kitchen scale's 1 g step.
+pub const DEFAULT_MASS_FLOOR: f64 = 5e-4;
+/// Default standard deviation of a bob radius (m): calipers, or a nominal size typed in.
+pub const DEFAULT_BOB_RADIUS_SD: f64 = 5e-4;
+
+/// The measured rig: the standard deviation of each measured value (stated in the rig file or
+/// the default), and the priors they give the fit.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RigMeasurement {
+    /// Rod length (m) and its standard deviation.
+    pub rod_length: (f64, f64),
+    /// The mass ratio the dynamics use (m1 / m2, or a given rigid pendulum's r') and its
+    /// standard deviation propagated from the masses'.
+    pub mass_ratio: (f64, f64),
+    /// Each measured key with its value, standard deviation and whether the file stated the
+    /// deviation (`false`: the default), for the report.
+    pub keys: Vec<(&'static str, f64, f64, bool)>,
+}
+
+impl RigMeasurement {
+    /// The measurement a rig file's `[rig]` describes: its `*_sd` keys, or the defaults of a
+    /// ruler and a kitchen scale.
+    pub fn from_spec(spec: &RigSpec) -> RigMeasurement {
+        let mass_sd = |v: f64, rel: f64| (v * rel).max(DEFAULT_MASS_FLOOR.min(0.5 * v));
+        let mut keys = Vec::new();
+        let mut key = |name: &'static str, v: Option<f64>, sd: Option<f64>, default: f64| {
+            let v = v?;
+            keys.push((name, v, sd.unwrap_or(default), sd.is_some()));
+            Some(sd.unwrap_or(default))
+        };
+        let rod_sd = key(
+            "rod_length",
+            Some(spec.rod_length),
+            spec.rod_length_sd,
+            DEFAULT_ROD_LENGTH_SD,
+        )
+        .unwrap_or(DEFAULT_ROD_LENGTH_SD);
+        let m1_sd = key(
+            "slider_mass",
+            Some(spec.slider_mass),
+            spec.slider_mass_sd,
+            mass_sd(spec.slider_mass, DEFAULT_SLIDER_MASS_REL),
+        )
+        .unwrap_or(0.0);
+        let m2_sd = spec.bob_mass.and_then(|m| {
+            key(
+                "bob_mass",
+                Some(m),
+                spec.bob_mass_sd,
+                mass_sd(m, DEFAULT_BOB_MASS_REL),
+            )
+        });
+        let rod_mass_sd = spec.rod_mass.filter(|&m| m > 0.0).and_then(|m| {
+            key(
+                "rod_mass",
+                Some(m),
+                spec.rod_mass_sd,
+                mass_sd(m, DEFAULT_BOB_MASS_REL),
+            )
+        });
+        let radius_sd = spec.bob_radius.filter(|&a| a > 0.0).and_then(|a| {
+            key(
+                "bob_radius",
+                Some(a),
+                spec.bob_radius_sd,
+                DEFAULT_BOB_RADIUS_SD,
+            )
+        });
+        // The mass ratio the dynamics use, and its deviation by the delta method (central
+        // differences through the same rig builder the fit's rig came from).
+        let ratio = |m1: f64, m2: Option<f64>, m_r: Option<f64>, a: Option<f64>| -> f64 {
+            let keys = PendulumKeys {
+                bob_mass: m2,
+                rod_mass: m_r,
+                bob_radius: a,
+                ..spec.pendulum_keys()
+            };
+            keys.rig(m1, spec.rod_length, spec.gravity, 0.3, None)
+                .map_or(f64::NAN, |r| r.mass_ratio())
+        };
+        let (m1, m2, m_r, a) = (spec.slider_mass, spec.bob_mass, spec.rod_mass, spec.bob_radius);
+        let centre = ratio(m1, m2, m_r, a);
+        let mut var = 0.0;
+        let mut term = |plus: f64, minus: f64| {
+            if plus.is_finite() && minus.is_finite() {
+                var += (0.5 * (plus - minus)).powi(2);
+            }
+        };
+        term(ratio(m1 + m1_sd, m2, m_r, a), ratio(m1 - m1_sd, m2, m_r, a));
+        if let (Some(m2), Some(sd)) = (m2, m2_sd) {
+            term(
+                ratio(m1, Some(m2 + sd), m_r, a),
+                ratio(m1, Some(m2 - sd), m_r, a),
+            );
+        }
+        if let (Some(m), Some(sd)) = (m_r, rod_mass_sd) {
+            term(
+                ratio(m1, m2, Some(m + sd), a),
+                ratio(m1, m2, Some((m - sd).max(0.0)), a),
+            );
+        }
+        if let (Some(r), Some(sd)) = (a, radius_sd) {
+            term(
+                ratio(m1, m2, m_r, Some(r + sd)),
+                ratio(m1, m2, m_r, Some((r - sd).max(0.0))),
+            );
+        }
+        RigMeasurement {
+            rod_length: (spec.rod_length, rod_sd),
+            mass_ratio: (centre, var.sqrt()),
+            keys,
+        }
+    }
+
+    /// An exact rig: no prior, nothing freed (the rig file's values taken as they are).
+    pub fn exact(rig: &Rig<f64>) -> RigMeasurement {
+        RigMeasurement {
+            rod_length: (rig.marker_length, 0.0),
+            mass_ratio: (rig.mass_ratio(), 0.0),
+            keys: Vec::new(),
+        }
+    }
+
+    /// The priors of the rig's measured values: the rod length and the mass ratio, each only
+    /// when its deviation is above zero (a value stated exact stays fixed).
+    pub fn priors(&self) -> Vec<Prior> {
+        [
+            (Param::RodLength, self.rod_length),
+            (Param::MassRatio, self.mass_ratio),
+        ]
+        .into_iter()
+        .filter(|(_, (c, sd))| c.is_finite() && sd.is_finite() && *sd > 0.0)
+        .map(|(param, (centre, sd))| Prior { param, centre, sd })
+        .collect()
+    }
+}
+
+/// A nuisance parameter's plausible range: within `bound` of its neutral value, with the
+/// reason a lab would give and what to check when a fit needs more.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Plausible {
+    /// The parameter.
+    pub param: Param,
+    /// Its neutral value (the rig file's, or zero).
+    pub centre: f64,
+    /// How far from it a real rig goes.
+    pub bound: f64,
+    /// What to check when the fit needs more (one phrase).
+    pub check: &'static str,
+}
+
+/// Plausible rail tilt (rad): 0.6 deg, 10 mm/m, over three times an unlevelled table top's
+/// 1-3 mm/m; a 1 deg tilt is visible by eye (RIGS.md, "The rail").
+pub const TILT_BOUND: f64 = 0.6 * std::f64::consts::PI / 180.0;
+/// Plausible camera scale error: 2 % (a scale from a ruler in view or the rod is good to
+/// 0.1-0.3 %; a pixel scale typed from a short reference, to a percent or two).
+pub const SCALE_BOUND: f64 = 0.02;
+/// Plausible marker offset (m): a marker stuck beside the rod axis or the pivot is off by at
+/// most its own size, 5-15 mm across.
+pub const MARKER_BOUND: f64 = 0.008;
+/// Plausible pivot damping as a logarithmic decrement of small swings: 0.05 (10 % of the
+/// energy per period; a bearing loses 0.1-3 %).
+pub const DAMPING_DECREMENT_BOUND: f64 = 0.05;
+
+/// The plausible ranges of the camera and rig nuisances for `rig` over frames `frame` seconds
+/// apart. The friction law's own parameters (mu_static, Stribeck, viscous friction) have none:
+/// the rail's friction is what the lab measures.
+pub fn plausible_ranges(rig: &Rig<f64>, frame: f64) -> Vec<Plausible> {
+    // The damping coefficient of the bound's decrement: c = 2 J delta / T for small swings,
+    // J = m_e L^2 the equivalent pendulum's inertia, T = 2 pi sqrt(L / g).
+    let l = rig.rod_length;
+    let period = 2.0 * std::f64::consts::PI * (l / rig.gravity).sqrt();
+    let damping = 2.0 * rig.bob_mass * l * l * DAMPING_DECREMENT_BOUND / period;
+    let p = |param, centre, bound, check| Plausible {
+        param,
+        centre,
+        bound,
+        check,
+    };
+    vec![
+        p(
+            Param::RailTilt,
+            rig.rail_tilt,
+            TILT_BOUND,
+            "level the rail (or state its tilt as rail_tilt_deg), or the friction may differ by direction",
+        ),
+        p(
+            Param::ScaleError,
+            0.0,
+            SCALE_BOUND,
+            "check the camera's scale (--scale) and the rod length, or lens distortion",
+        ),
+        p(
+            Param::BobAlong,
+            0.0,
+            MARKER_BOUND,
+            "check where the bob's marker sits and the rod length",
+        ),
+        p(
+            Param::BobAcross,
+            0.0,
+            MARKER_BOUND,
+            "check where the bob's marker sits, or the rail's tilt",
+        ),
+        p(
+            Param::SliderDx,
+            0.0,
+            MARKER_BOUND,
+            "check where the slider's marker sits",
+        ),
+        p(
+            Param::SliderDy,
+            0.0,
+            MARKER_BOUND,
+            "check where the slider's marker sits",
+        ),
+        p(
+            Param::Lag,
+            0.0,
+            frame.max(1e-6),
+            "check the two tracks' frame times (a lag beyond a frame is no rounding)",
+        ),
+        p(
+            Param::PivotDamping,
+            rig.pivot_damping,
+            damping.max(1e-12),
+            "check the pivot (a bearing loses a few percent per swing), or air drag on the bob",
+        ),
+    ]
+}
+
+/// The priors of the plausible ranges: each a Gaussian of standard deviation half its bound.
+pub fn nuisance_priors(ranges: &[Plausible]) -> Vec<Prior> {
+    ranges
+        .iter()
+        .map(|r| Prior {
+            param: r.param,
+            centre: r.centre,
+            sd: 0.5 * r.bound,
+        })
+        .collect()
+}
+
+/// What a fitted model's values are judged against: the nuisances' plausible ranges and the
+/// rig file's mass ratio m1 / m2 (a rigid correction's implied rod mass reads the masses from
+/// it). Empty: nothing is judged.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct Plausibility {
+    /// The ranges.
+    pub ranges: Vec<Plausible>,
+    /// The rig file's mass ratio (NaN: not known, no rod mass implied).
+    pub file_ratio: f64,
+}
+
+/// The values of `problem`'s model no real rig has: a sentence each that names it and what
+/// to check.
+pub fn implausible(problem: &TrajectoryProblem) -> Vec<String> {
+    let mut out = Vec::new();
+    let file_ratio = problem.plausible.file_ratio;
+    for r in &problem.plausible.ranges {
+        if !problem.free.contains(&r.param) {
+            continue;
+        }
+        let v = problem.get(r.param);
+        if (v - r.centre).abs() > r.bound {
+            let (shown, bound) = match r.param {
+                Param::RailTilt => (
+                    format!("{:.2} deg", v.to_degrees()),
+                    format!("{:.1} deg", r.bound.to_degrees()),
+                ),
+                Param::ScaleError => (
+                    format!("{:.2} %", 100.0 * v),
+                    format!("{:.0} %", 100.0 * r.bound),
+                ),
+                Param::Lag => (
+                    format!("{:.2} ms", 1e3 * v),
+                    format!("one frame, {:.2} ms", 1e3 * r.bound),
+                ),
+                Param::PivotDamping => (
+                    format!("{v:.2e} N m s"),
+                    format!(
+                        "{:.2e} N m s, a decrement of {DAMPING_DECREMENT_BOUND}",
+                        r.bound
+                    ),
+                ),
+                _ => (
+                    format!("{:.1} mm", 1e3 * v),
+                    format!("{:.0} mm", 1e3 * r.bound),
+                ),
+            };
+            out.push(format!(
+                "{} = {shown} is beyond what a real rig has ({bound}): {}",
+                r.param.name(),
+                r.check
+            ));
+        }
+    }
+    if let Some(s) = rigid_implausible(problem, file_ratio) {
+        out.push(s);
+    }
+    out
+}
+
+/// The largest bob radius a rigid correction may imply (m): bob spheres are 1-3 cm.
+pub const BOB_RADIUS_BOUND: f64 = 0.05;
+
+/// A rigid pendulum found by the data (`rigid_pendulum`) that no rod and bob give: its
+/// equivalent length L outside [0.64 l, l + 0.4 a_max^2 / l] (a bare uniform rod has 2l/3, a
+/// sphere of radius a adds 0.4 a^2 / l), or, where the mass ratio tells it, an implied rod mass
+/// below zero or above the bob's.
+fn rigid_implausible(problem: &TrajectoryProblem, file_ratio: f64) -> Option<String> {
+    if !problem.free.contains(&Param::PendulumLength) || problem.rig.pendulum.is_some() {
+        return None;
+    }
+    let l = problem.rig.marker_length;
+    let big_l = problem.get(Param::PendulumLength);
+    let r = problem.get(Param::MassRatio);
+    let a_max = BOB_RADIUS_BOUND.min(0.5 * l);
+    let (lo, hi) = (0.64 * l, l + 0.4 * a_max * a_max / l);
+    let what = "the pendulum: state it (rod_mass = 0 and bob_radius = 0 for a thread, or the rod's mass and the bob's radius)";
+    if big_l < lo || big_l > hi {
+        return Some(format!(
+            "rigid_pendulum: an equivalent length of {:.1} mm on a {:.1} mm rod is no rod and bob a lab builds ({:.1}-{:.1} mm): check {what}",
+            1e3 * big_l,
+            1e3 * l,
+            1e3 * lo,
+            1e3 * hi
+        ));
+    }
+    // The rod mass behind (L, r') with the rig file's masses (total m1 + m2 + m_r, a uniform
+    // rod to the bob's centre): (m1 + m2 + m_r) L = (1 + r') (m2 + m_r / 2) l.
+    let total = problem.rig.slider_mass + problem.rig.bob_mass;
+    let m2 = total / (1.0 + file_ratio);
+    let m1 = total - m2;
+    let den = big_l - 0.5 * (1.0 + r) * l;
+    if file_ratio.is_finite() && den.abs() > 0.05 * l {
+        let m_r = ((1.0 + r) * m2 * l - (m1 + m2) * big_l) / den;
+        if m_r < -0.05 * m2 || m_r > m2 {
+            return Some(format!(
+                "rigid_pendulum: its length and mass ratio imply a rod of {:.1} g on a {:.1} g bob, which no pendulum has: check {what}, and the masses",
+                1e3 * m_r,
+                1e3 * m2
+            ));
+        }
+    }
+    None
+}
