@@ -174,9 +174,80 @@ def size_key(c):
     return f"{c['kind']} mass {e['delta_pct']:+g} % ({c['flavour']})"
 
 
+BOOLS = ("covered", "within3", "flagged", "confident_wrong")
+FLOATS = ("truth", "mu", "se", "lo", "hi", "halfwidth", "cpu_s", "wall_s") + tuple(
+    f"se_{k}" for k in PARTS)
+
+
+def read_tsv(path):
+    with open(path) as fh:
+        lines = fh.read().splitlines()
+    head = lines[0].split("\t")
+    rows = []
+    for ln in lines[1:]:
+        r = dict(zip(head, ln.split("\t")))
+        for k in BOOLS:
+            r[k] = r.get(k) == "True"
+        for k in FLOATS:
+            r[k] = float(r[k]) if r.get(k) else None
+        rows.append(r)
+    return rows
+
+
+def matrix(rows):
+    """Confident-wrong / flagged / covered of n, per error size (rows) and rig (columns)."""
+    rigs = []
+    for r in rows:
+        if r["rig"] not in rigs:
+            rigs.append(r["rig"])
+    cells, sizes = {}, []
+    for r in rows:
+        if r["size"] not in sizes:
+            sizes.append(r["size"])
+        c = cells.setdefault((r["size"], r["rig"]), [0, 0, 0, 0])
+        c[0] += 1
+        c[1] += r["confident_wrong"]
+        c[2] += r["flagged"]
+        c[3] += r["covered"]
+    lines = ["### confident-wrong / flagged / covered of n, per error size and rig", "",
+             "| error | " + " | ".join(rigs) + " |", "|---|" + "---|" * len(rigs)]
+    for sz in sizes:
+        lines.append(f"| {sz} | " + " | ".join(
+            (lambda c: f"{c[1]} / {c[2]} / {c[3]} of {c[0]}" if c else "-")(cells.get((sz, rg)))
+            for rg in rigs) + " |")
+    return lines + [""]
+
+
+def report(rows, header):
+    show_parts = any(r["se_total"] is not None for r in rows)
+
+    def grouped(key, order=None):
+        g = {}
+        for r in rows:
+            g.setdefault(key(r), []).append(r)
+        keys = list(g) if order is None else order(g)
+        return [(k, g[k]) for k in keys]
+
+    out = [f"{header}  cases: {len(rows)}", ""]
+    out += table("per group (rig x error kind x flavour; effect x rig)", "group",
+                 grouped(lambda r: r["group"]), show_parts)
+    out += table("per error size (all rigs and seeds)", "error",
+                 grouped(lambda r: r["size"]), show_parts)
+    out += table("per kind x flavour (all rigs, sizes and seeds)", "kind / flavour",
+                 grouped(lambda r: f"{r['kind']} / {r['flavour']}"), show_parts)
+    out += table("all", "all", [("all", rows)], show_parts)
+    out += matrix(rows)
+    cw = [r for r in rows if r["confident_wrong"]]
+    out.append(f"confident-wrong: {len(cw)}")
+    for r in cw:
+        out.append(f"  {r['id']}: mu {r['mu']:.5f} se {r['se']:.2e} truth {r['truth']:.5f} "
+                   f"({(r['mu'] - r['truth']) / r['se']:+.1f} SE) nuisances [{r['nuisances']}]")
+    return out
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("--appell", required=True, help="path of the appell binary")
+    ap.add_argument("--appell", help="path of the appell binary")
     ap.add_argument("--manifest", default="/tmp/measured/manifest.json")
     ap.add_argument("--only", default="", help="comma list of group patterns (fnmatch)")
     ap.add_argument("--quick", action="store_true", help="only the manifest's quick cases")
@@ -184,7 +255,12 @@ def main(argv=None):
     ap.add_argument("--extra", default="", help="extra arguments for `appell fit` (one string)")
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--timeout", type=float, default=120.0)
+    ap.add_argument("--from-tsv", help="tabulate the rows of an earlier --tsv instead of running")
     args = ap.parse_args(argv)
+    if args.from_tsv:
+        rows = read_tsv(args.from_tsv)
+        print("\n".join(report(rows, f"rows: {args.from_tsv}")))
+        return 0
 
     base = os.path.dirname(os.path.abspath(args.manifest))
     with open(args.manifest) as fh:
@@ -197,6 +273,8 @@ def main(argv=None):
     if not cases:
         raise SystemExit("no cases selected")
     extra = shlex.split(args.extra)
+    if not args.appell:
+        raise SystemExit("--appell is required (or --from-tsv)")
     appell = os.path.abspath(args.appell)
 
     rows = [None] * len(cases)
@@ -236,30 +314,8 @@ def main(argv=None):
                                    str(r[c]).replace("\t", " ").replace("\n", " ")
                                    for c in cols) + "\n")
 
-    show_parts = any(r["se_total"] is not None for r in rows)
-
-    def grouped(key, order=None):
-        g = {}
-        for r in rows:
-            g.setdefault(key(r), []).append(r)
-        keys = list(g) if order is None else order(g)
-        return [(k, g[k]) for k in keys]
-
-    out = [f"appell: {appell}  manifest: {args.manifest}  cases: {len(rows)}"
-           + (f"  extra: {args.extra}" if args.extra else ""), ""]
-    out += table("per group (rig x error kind x flavour; effect x rig)", "group",
-                 grouped(lambda r: r["group"]), show_parts)
-    out += table("per error size (all rigs and seeds)", "error",
-                 grouped(lambda r: r["size"]), show_parts)
-    out += table("per kind x flavour (all rigs, sizes and seeds)", "kind / flavour",
-                 grouped(lambda r: f"{r['kind']} / {r['flavour']}"), show_parts)
-    out += table("all", "all", [("all", rows)], show_parts)
-    cw = [r for r in rows if r["confident_wrong"]]
-    out.append(f"confident-wrong: {len(cw)}")
-    for r in cw:
-        out.append(f"  {r['id']}: mu {r['mu']:.5f} se {r['se']:.2e} truth {r['truth']:.5f} "
-                   f"({(r['mu'] - r['truth']) / r['se']:+.1f} SE) nuisances [{r['nuisances']}]")
-    print("\n".join(out))
+    print("\n".join(report(rows, f"appell: {appell}  manifest: {args.manifest}"
+                                  + (f"  extra: {args.extra}" if args.extra else ""))))
     return 0
 
 
