@@ -55,7 +55,8 @@ Effects (no nuisance of the fit describes them; Newton-Euler rows, y DOWN as PHY
            image spans the markers' bounding box (clean run, y up) padded by 10 % of its
            height above and below; a marker in frame i is sampled at t_i + T f, f = (y_top -
            y) / (y_top - y_bottom) its row fraction, solved by fixed-point iteration (the bob's
-           height depends on the sampled time; the slider's f is constant, about 0.08); times
+           height depends on the sampled time; the slider's f is constant: 0.08, or 0.35 on
+           the light rig, whose bob rises above the rail); times
            written are the nominal i / 1000. Simulated to 2.012 s.
   sag      a sagging rail: height (y up) k x^2, lowest at x = 0 (in PHYSICS' y-down frame
            y_rail(x) = -k x^2), k = 0.5 mm / (0.4 m)^2 = 0.003125 1/m (an 0.8 m rail between
