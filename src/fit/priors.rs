@@ -115,7 +115,12 @@ impl RigMeasurement {
             keys.rig(m1, spec.rod_length, spec.gravity, 0.3, None)
                 .map_or(f64::NAN, |r| r.mass_ratio())
         };
-        let (m1, m2, m_r, a) = (spec.slider_mass, spec.bob_mass, spec.rod_mass, spec.bob_radius);
+        let (m1, m2, m_r, a) = (
+            spec.slider_mass,
+            spec.bob_mass,
+            spec.rod_mass,
+            spec.bob_radius,
+        );
         let centre = ratio(m1, m2, m_r, a);
         let mut var = 0.0;
         let mut term = |plus: f64, minus: f64| {

@@ -76,10 +76,7 @@ pub(super) fn measured_rig(f: &mut Fitting, settings: &FitSettings) {
         .as_ref()
         .map_or(problem.rig.mass_ratio(), |m| m.mass_ratio.0);
     problem.priors = Arc::new(all);
-    problem.plausible = Arc::new(priors::Plausibility {
-        ranges,
-        file_ratio,
-    });
+    problem.plausible = Arc::new(priors::Plausibility { ranges, file_ratio });
     f.p = problem.values();
     if freed {
         if let Ok((q, _, it)) = solve(problem, f.p.clone(), settings.max_iters) {
@@ -421,14 +418,14 @@ pub(super) fn adequacy(
     let windows_p = uncertainty::window_consistency(&windows);
     let block_ratio = mu_index.map_or(1.0, |i| a.se_block[i] / a.se[i]);
     let runs_p = uncertainty::runs_p_value(problem, a.r.as_slice());
-    // A value no real rig has is evidence of misfit as much as a failed test: the model
-    // explains the recording with something the rig does not have.
+    // A value no real rig has is evidence that the model explains the recording with
+    // something the rig does not have: it flags the fit (below). It does not widen the
+    // interval: a real rig can have it (a worn pivot), and then the model is right.
     let implausible = priors::implausible(problem);
     let misfit = a.p_value < 1e-3
         || block_ratio > 1.5
         || windows_p.is_some_and(|p| p < 0.01)
-        || runs_p < RUNS_P
-        || !implausible.is_empty();
+        || runs_p < RUNS_P;
     if let Some(i) = mu_index {
         let e = &mut est.params[i].1;
         if windows_p.is_some_and(|p| p < 0.01) {

@@ -11,15 +11,15 @@ use appell::model::{observed_markers, Camera, Rig, State};
 use appell::sim::{simulate, Options, Request};
 
 /// The shared example's rig (FORMATS.md): m1 = 0.5, m2 = 0.2, l = 0.3, mu = 0.12.
-fn example_rig(mu: f64) -> Rig<f64> {
+pub(crate) fn example_rig(mu: f64) -> Rig<f64> {
     Rig::new(0.5, 0.2, 0.3, 9.81, mu, None).unwrap()
 }
 
 /// Released from rest 0.9 rad from the downward vertical, like the shipped example.
-const Y0: State<f64> = [0.0, std::f64::consts::FRAC_PI_2 - 0.9, 0.0, 0.0];
+pub(crate) const Y0: State<f64> = [0.0, std::f64::consts::FRAC_PI_2 - 0.9, 0.0, 0.0];
 
 /// A recording of `rig` seen through `camera`: `rate` Hz for `duration` s, noise `sigma` m.
-fn record(
+pub(crate) fn record(
     rig: &Rig<f64>,
     camera: &Camera<f64>,
     y0: State<f64>,

@@ -13,6 +13,7 @@ mod fuzz_structured;
 mod hardening;
 mod helpers;
 mod joint;
+mod measured;
 mod misspec;
 mod outputs;
 mod paradox;
