@@ -365,7 +365,7 @@ fn rig_fraction(problem: &TrajectoryProblem, cov: &DMatrix<f64>, i: usize) -> f6
         .map(|(j, _)| j)
         .collect();
     let total = cov[(i, i)];
-    if rig.is_empty() || !(total > 0.0) {
+    if rig.is_empty() || total.is_nan() || total <= 0.0 {
         return 0.0;
     }
     let s = DMatrix::from_fn(rig.len(), rig.len(), |a, b| cov[(rig[a], rig[b])]);
