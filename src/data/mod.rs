@@ -137,6 +137,10 @@ pub fn read_recording(paths: &[PathBuf], opts: &ReadOptions) -> Result<Recording
     Ok(rec)
 }
 
+/// The words of the note that says two tracks were taken as the slider and the bob in the
+/// order of their files (their names do not say which is which).
+pub const FILE_ORDER_NOTE: &str = "read in file order";
+
 /// Two files of one track each (Tracker's single-track exports) whose names do not say which
 /// is which: the first file is the slider, the second the bob, with a notice. Names that do say
 /// (`slider`, `bob`) or the `--slider`/`--bob` flags take precedence.
@@ -158,7 +162,7 @@ fn by_file_order(parsed: &mut Parsed, per_file: &[(PathBuf, usize)], opts: &Read
         return;
     }
     parsed.notes.push(format!(
-        "the tracks {:?} ({}) and {:?} ({}) do not say which marker they are: read in file order, the first as the slider, the second as the bob (--slider/--bob NAME to choose)",
+        "the tracks {:?} ({}) and {:?} ({}) do not say which marker they are: {FILE_ORDER_NOTE}, the first as the slider, the second as the bob (--slider/--bob NAME to choose)",
         parsed.series[0].name,
         per_file[0].0.display(),
         parsed.series[1].name,

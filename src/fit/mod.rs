@@ -8,6 +8,8 @@
 //!
 //! The folder's files:
 //! - `mod.rs`: the settings, the report's types and the driver [`fit`];
+//! - `checks.rs`: what was recorded, before fitting: the slider and the bob not swapped, their
+//!   distance a rod's;
 //! - `plausible.rs`: the rig file's rod length compared with the recording's markers;
 //! - `prepare.rs`: the recording checked, each marker's noise, mis-tracked frames dropped;
 //! - `guess.rs`: starting values from the data;
@@ -27,6 +29,7 @@
 
 mod adequacy;
 mod base;
+pub mod checks;
 pub mod guess;
 mod intervals;
 pub mod joint;
@@ -44,9 +47,10 @@ mod stages;
 mod uncertainty;
 
 pub use adequacy::is_noise_free;
+pub use checks::{check_recording, RecordingCheck};
 pub use noise::NoiseEstimate;
 pub use pendulum::{PendulumFound, ValueSe};
-pub use plausible::{check_rod_length, ROD_LENGTH_FACTOR};
+pub use plausible::{check_rod_length, ROD_LENGTH_TOLERANCE};
 pub use problem::{Counters, Observations, Param, TrajectoryProblem, MAX_FREE};
 pub use select::{ModelRow, Nuisance};
 pub use uncertainty::WindowFit;
