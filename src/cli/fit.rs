@@ -223,6 +223,12 @@ pub(super) fn read_for_rig(
     rig: &Rig<f64>,
 ) -> Result<Observations, Failure> {
     let rec = read_recording(paths, opts).map_err(|e| Failure::Input(e.into()))?;
+    for note in &rec.provenance.notes {
+        if note.starts_with(appell::data::TIMES_JOINED_NOTE) {
+            let files: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+            eprintln!("note: {}: {note}", files.join(" + "));
+        }
+    }
     check_recording(&rec).map_err(|e| Failure::Input(e.into()))?;
     check_rod_length(rig_path, rig, &rec).map_err(|e| Failure::Input(e.into()))?;
     Ok(Observations::from(&rec))
