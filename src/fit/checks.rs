@@ -155,6 +155,36 @@ pub fn check_recording(rec: &Recording) -> Result<(), RecordingCheck> {
     check_rigid(rec)
 }
 
+/// The plain sentence for a recording whose slider never moves beyond its noise: mu_kinetic
+/// is not identifiable (no slide shows it); what the stuck motion says is that the rail held
+/// the slider against the largest friction ratio |F/N| the fitted stuck pendulum demanded, a
+/// lower bound on mu_static.
+pub(super) fn never_slides(
+    obs: &super::Observations,
+    slider_noise: f64,
+    mu_static: &super::StaticResult,
+) -> String {
+    let mut x: Vec<f64> = obs.slider.iter().flatten().map(|p| p[0]).collect();
+    let range = if x.len() >= 10 {
+        x.sort_by(f64::total_cmp);
+        format!(
+            "its track spans {:.2e} m along the rail between the 2nd and 98th percentiles, within ten noise deviations of {slider_noise:.2e} m",
+            x[x.len() * 98 / 100] - x[x.len() * 2 / 100]
+        )
+    } else {
+        format!("within ten noise deviations of {slider_noise:.2e} m")
+    };
+    let bound = match mu_static {
+        super::StaticResult::LowerBound(r) => format!(
+            "; while it stuck, the rail held it against a friction force of up to {r:.4} times the normal force (the stuck pendulum fitted to the bob's track), so mu_static >= {r:.4}"
+        ),
+        _ => String::new(),
+    };
+    format!(
+        "mu is not identifiable from this recording: the slider never slides ({range}), so no slide shows mu_kinetic{bound}."
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::off_line_spread;

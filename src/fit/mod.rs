@@ -297,6 +297,9 @@ pub struct FitReport {
     /// Why the fit failed although it ran (mu_kinetic pinned at zero with the friction
     /// carried by another term): the value is then not a friction coefficient.
     pub failed: Option<String>,
+    /// Why mu was not measured although the fit ran: the slider never moves beyond its noise
+    /// (one plain sentence, with the lower bound on mu_static the stuck motion needs).
+    pub not_identifiable: Option<String>,
     /// The chosen model at its optimum, with its noise scales and row weights (outliers at
     /// zero): what a fit built on this one (the joint fit) starts from.
     pub problem: TrajectoryProblem,
@@ -368,7 +371,9 @@ pub fn fit(
     );
     stages::starts_agree(&mut f, &base, &est);
     let identifiable = slides;
-    Ok(stages::report(
+    let not_identifiable = (!slides && seen.raw_moves.is_none())
+        .then(|| checks::never_slides(&data.obs, data.sigma[0], &mu_static));
+    let mut report = stages::report(
         f,
         stages::Parts {
             data,
@@ -385,5 +390,7 @@ pub fn fit(
             identifiable,
             stop_reason,
         },
-    ))
+    );
+    report.not_identifiable = not_identifiable;
+    Ok(report)
 }

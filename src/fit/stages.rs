@@ -713,6 +713,7 @@ pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
         warnings: f.warnings,
         pendulum,
         failed: v.failed,
+        not_identifiable: None,
         problem,
     }
 }
