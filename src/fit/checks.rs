@@ -19,6 +19,15 @@ pub const SWAP_RATIO: f64 = 4.0;
 /// 0.2 mm, the noise, on 0.3 m rods), and a pendulum that hardly swings says nothing either way.
 pub const SWAP_SHARE: f64 = 0.01;
 
+/// The share of frames (with both markers) in which the bob must sit above the slider by more
+/// than half the median distance (more than 30 degrees above the rail's horizontal) for the
+/// recording to be called upside down or swapped: a pendulum hangs below its pivot, passes below
+/// it on every swing, and can stay above it only for a moment (the shipped recordings: the bob
+/// above the slider's height at all in at most 5.4 % of the frames, at most 0.1435 m above it on
+/// a 0.30 m rod, so more than half the distance in none). This is what tells a pendulum at rest,
+/// whose tracks are two points, the right way up.
+pub const ABOVE_SHARE: f64 = 0.98;
+
 /// A recording that is not what the fit needs, found before fitting.
 #[derive(Debug, Error)]
 #[error("{files}: {message}")]
@@ -79,9 +88,11 @@ fn files(rec: &Recording) -> String {
 /// The slider and the bob the right way round: refused when the track read as the slider lies
 /// off its own best line by more than [`SWAP_RATIO`] times the bob's and by more than
 /// [`SWAP_SHARE`] of the median marker distance (the bob then runs along a line while the
-/// "slider" swings: they are swapped). The message names the flags that read them the right
-/// way round. A recording that cannot tell (too few positions, a pendulum that hardly swings)
-/// passes.
+/// "slider" swings: they are swapped). Also refused: the bob above the slider by more than half
+/// their distance in over [`ABOVE_SHARE`] of the frames (a pendulum hangs below its pivot), as
+/// upside down (the slider on its line, the bob swinging) or, when the tracks cannot tell (a
+/// pendulum at rest), as upside down or swapped. The message names the flags that fix it. A
+/// recording that cannot tell either way (too few positions) passes.
 pub fn check_labels(rec: &Recording) -> Result<(), RecordingCheck> {
     let (Some(slider), Some(bob), Some(g)) = (
         off_line_spread(&rec.slider),
@@ -90,15 +101,73 @@ pub fn check_labels(rec: &Recording) -> Result<(), RecordingCheck> {
     ) else {
         return Ok(());
     };
-    if !(slider > SWAP_RATIO * bob && slider > SWAP_SHARE * g.median) {
+    let swapped = slider > SWAP_RATIO * bob && slider > SWAP_SHARE * g.median;
+    let labelled = bob > SWAP_RATIO * slider && bob > SWAP_SHARE * g.median;
+    let above = bob_above(rec, g.median);
+    if !swapped && !above {
         return Ok(());
     }
+    let p = &rec.provenance;
+    let flip = if p.calibration.y_flipped {
+        "--y-up (the file's y points up)"
+    } else {
+        "--y-down (the file's y points down)"
+    };
+    if !swapped {
+        let share = 100.0 * ABOVE_SHARE;
+        let (what, fix) = if labelled {
+            (
+                "the recording is upside down",
+                format!("read it with {flip}"),
+            )
+        } else {
+            (
+                "the recording is upside down or its slider and bob are swapped",
+                format!(
+                    "read it with {flip}, or the markers the other way round ({})",
+                    swap_fix(rec)
+                ),
+            )
+        };
+        return Err(RecordingCheck {
+            files: files(rec),
+            message: format!(
+                "{what}: the bob ({:?}) sits more than half the marker distance ({:.4} m) above the slider ({:?}) in over {share} % of the frames, where a pendulum hangs below its pivot; {fix}",
+                p.bob_name, g.median, p.slider_name
+            ),
+        });
+    }
+    let fix = swap_fix(rec);
+    Err(RecordingCheck {
+        files: files(rec),
+        message: format!(
+            "the slider and the bob look swapped: the track read as the slider ({:?}) lies off its best straight line by {slider:.3e} m (robust spread) and the bob's ({:?}) by {bob:.3e} m, but a slider runs along the rail and the bob swings on a circle of {:.4} m about it; {fix}",
+            p.slider_name, p.bob_name, g.median
+        ),
+    })
+}
+
+/// Whether the bob sits above the slider by more than half the median distance in more than
+/// [`ABOVE_SHARE`] of the frames with both markers.
+fn bob_above(rec: &Recording, median: f64) -> bool {
+    let (mut above, mut both) = (0usize, 0usize);
+    for (s, b) in rec.slider.iter().zip(&rec.bob) {
+        if let (Some(s), Some(b)) = (s, b) {
+            both += 1;
+            above += usize::from(b[1] - s[1] > 0.5 * median);
+        }
+    }
+    both >= 10 && above as f64 > ABOVE_SHARE * both as f64
+}
+
+/// The flags (or the file order) that read a recording's two markers the other way round.
+fn swap_fix(rec: &Recording) -> String {
     let p = &rec.provenance;
     let by_file_order = p.sources.len() == 2
         && p.notes
             .iter()
             .any(|n| n.contains(crate::data::FILE_ORDER_NOTE));
-    let fix = if by_file_order {
+    if by_file_order {
         format!(
             "give the two files the other way round, the slider's first: {} {} (as a release of fit --joint: --release {},{})",
             p.sources[1].display(),
@@ -111,14 +180,7 @@ pub fn check_labels(rec: &Recording) -> Result<(), RecordingCheck> {
             "read them the other way round with --slider {:?} --bob {:?}",
             p.bob_name, p.slider_name
         )
-    };
-    Err(RecordingCheck {
-        files: files(rec),
-        message: format!(
-            "the slider and the bob look swapped: the track read as the slider ({:?}) lies off its best straight line by {slider:.3e} m (robust spread) and the bob's ({:?}) by {bob:.3e} m, but a slider runs along the rail and the bob swings on a circle of {:.4} m about it; {fix}",
-            p.slider_name, p.bob_name, g.median
-        ),
-    })
+    }
 }
 
 /// The slider-bob distance as constant as a rod's ([`crate::data::Geometry::rigid`]: a robust
