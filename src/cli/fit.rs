@@ -7,7 +7,8 @@ use anyhow::anyhow;
 use appell::data::{read_recording, ReadOptions};
 use appell::fit::joint::{fit_joint, JointError, JointSettings, Release};
 use appell::fit::{
-    check_rod_length, fit, FitReport, FitSettings, Loss, Nuisance, Observations, StaticMode,
+    check_recording, check_rod_length, fit, FitReport, FitSettings, Loss, Nuisance, Observations,
+    StaticMode,
 };
 use appell::model::Rig;
 use appell::report::fit::{fit_json, fit_text, FitFigure};
@@ -212,8 +213,9 @@ pub(super) fn directory_files(dir: &Path, format_given: bool) -> Result<Vec<Path
 /// A recording's observations and fit, or why not.
 type Fitted = Result<(Observations, FitReport), Failure>;
 
-/// A recording read and compared with the rig file before any fitting work: a rod length its
-/// markers contradict is bad input naming the rig file (`fit`, `fit --joint`, `bench --joint`).
+/// A recording read and checked before any fitting work: its slider and bob swapped, a
+/// distance no rod keeps (not this rig) and a rod length its markers contradict are bad input
+/// naming the file and the fix (`fit`, `fit --joint`, `bench --joint`).
 pub(super) fn read_for_rig(
     paths: &[PathBuf],
     opts: &ReadOptions,
@@ -221,6 +223,13 @@ pub(super) fn read_for_rig(
     rig: &Rig<f64>,
 ) -> Result<Observations, Failure> {
     let rec = read_recording(paths, opts).map_err(|e| Failure::Input(e.into()))?;
+    for note in &rec.provenance.notes {
+        if note.starts_with(appell::data::TIMES_JOINED_NOTE) {
+            let files: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+            eprintln!("note: {}: {note}", files.join(" + "));
+        }
+    }
+    check_recording(&rec).map_err(|e| Failure::Input(e.into()))?;
     check_rod_length(rig_path, rig, &rec).map_err(|e| Failure::Input(e.into()))?;
     Ok(Observations::from(&rec))
 }

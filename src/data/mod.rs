@@ -137,6 +137,10 @@ pub fn read_recording(paths: &[PathBuf], opts: &ReadOptions) -> Result<Recording
     Ok(rec)
 }
 
+/// The words of the note that says two tracks were taken as the slider and the bob in the
+/// order of their files (their names do not say which is which).
+pub const FILE_ORDER_NOTE: &str = "read in file order";
+
 /// Two files of one track each (Tracker's single-track exports) whose names do not say which
 /// is which: the first file is the slider, the second the bob, with a notice. Names that do say
 /// (`slider`, `bob`) or the `--slider`/`--bob` flags take precedence.
@@ -158,7 +162,7 @@ fn by_file_order(parsed: &mut Parsed, per_file: &[(PathBuf, usize)], opts: &Read
         return;
     }
     parsed.notes.push(format!(
-        "the tracks {:?} ({}) and {:?} ({}) do not say which marker they are: read in file order, the first as the slider, the second as the bob (--slider/--bob NAME to choose)",
+        "the tracks {:?} ({}) and {:?} ({}) do not say which marker they are: {FILE_ORDER_NOTE}, the first as the slider, the second as the bob (--slider/--bob NAME to choose)",
         parsed.series[0].name,
         per_file[0].0.display(),
         parsed.series[1].name,
@@ -229,6 +233,12 @@ fn assemble(
     let a = std::mem::take(&mut parsed.series[si]);
     let b = std::mem::take(&mut parsed.series[bi]);
     let (slider_name, bob_name) = (a.name.clone(), b.name.clone());
+    let mut b = b;
+    if format == Format::Tracker {
+        if let Some(note) = join_rounded_times(&a, &mut b) {
+            parsed.notes.push(note);
+        }
+    }
     let (times, slider, bob) = align(a, b);
     if times.is_empty() {
         return Err(DataError::NoFrames {
@@ -345,6 +355,56 @@ fn select(
                 .join(", "),
         }),
     }
+}
+
+/// The words that begin the note of [`join_rounded_times`] (`fit` repeats it on stderr).
+pub const TIMES_JOINED_NOTE: &str = "frame times joined";
+
+/// The median step between a series' increasing times (`None` with fewer than two).
+fn frame_step(times: &[f64]) -> Option<f64> {
+    let mut steps: Vec<f64> = times
+        .windows(2)
+        .map(|w| w[1] - w[0])
+        .filter(|d| *d > 0.0)
+        .collect();
+    (!steps.is_empty()).then(|| calibrate::median(&mut steps))
+}
+
+/// Two tracks of one video exported apart (Tracker) share its frame times, but each file rounds
+/// them its own way (0.03333333333333212 and 0.03333333333332848): each of `b`'s times within
+/// less than half a frame of one of `a`'s, and not equal to it, takes `a`'s time, so the two
+/// markers of a frame meet in one frame. Times that would then not increase are left alone.
+/// Returns a note saying how many were joined and by how much they differed, when any were.
+fn join_rounded_times(a: &Series, b: &mut Series) -> Option<String> {
+    let frame = frame_step(&a.times)?.min(frame_step(&b.times)?);
+    let half = 0.5 * frame;
+    let (mut i, mut joined, mut largest) = (0, 0usize, 0.0f64);
+    for k in 0..b.times.len() {
+        let t = b.times[k];
+        while i + 1 < a.times.len() && a.times[i + 1] <= t {
+            i += 1;
+        }
+        // The nearest of a's times: a.times[i] (at or before t, or the first) or the next one.
+        let nearest = [Some(i), (i + 1 < a.times.len()).then_some(i + 1)]
+            .into_iter()
+            .flatten()
+            .map(|j| a.times[j])
+            .min_by(|x, y| (x - t).abs().total_cmp(&(y - t).abs()))?;
+        let d = (nearest - t).abs();
+        let increases = (k == 0 || b.times[k - 1] < nearest)
+            && b.times.get(k + 1).is_none_or(|next| nearest < *next);
+        if d > 0.0 && d < half && increases {
+            b.times[k] = nearest;
+            joined += 1;
+            largest = largest.max(d);
+        }
+    }
+    (joined > 0).then(|| {
+        format!(
+            "{TIMES_JOINED_NOTE}: {joined} of {:?}'s frame times differ from {:?}'s by less than half a frame (at most {largest:.3e} s of a {frame:.6e} s frame): the exports' rounding of one video's times, so each was joined to the frame it belongs to",
+            b.name, a.name
+        )
+    })
 }
 
 /// Merge two series with increasing times into common frames: the union of their times, each

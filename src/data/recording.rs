@@ -117,8 +117,35 @@ pub struct Geometry {
     pub reference: f64,
     /// Frames whose distance is far from the reference (indices into the recording).
     pub outliers: Vec<usize>,
-    /// The tolerance that made a frame an outlier (metres).
+    /// The tolerance that made a frame an outlier (metres): five robust standard deviations
+    /// of the distance, but never below 2 % nor above 5 % of the reference (a distance that
+    /// scatters more is not a rod's, [`Geometry::rigid`], and its frames are not excused).
     pub tolerance: f64,
+    /// Robust spread of the distance (metres): 1.4826 times its median absolute deviation.
+    pub spread: f64,
+    /// The distance's noise from frame to frame (metres), from its third differences over
+    /// consecutive frames with both markers (smooth changes cancel); 0 with too few frames.
+    pub noise: f64,
+}
+
+impl Geometry {
+    /// The share of the median distance a rigid rod's markers may spread by, besides the
+    /// noise: the camera (lens distortion, 0.1-2 %), the markers off the pivot and the bob's
+    /// centre (a few mm, which the swing turns into a varying distance) and a stretching thread.
+    pub const RIGID_SHARE: f64 = 0.05;
+    /// Noise deviations the spread may hold besides [`Geometry::RIGID_SHARE`].
+    pub const RIGID_NOISE: f64 = 5.0;
+
+    /// The largest spread a rigid rod's markers show: five noise deviations plus 5 % of the
+    /// median distance.
+    pub fn rigid_limit(&self) -> f64 {
+        Self::RIGID_NOISE * self.noise + Self::RIGID_SHARE * self.median
+    }
+
+    /// The distance is as constant as a rod's: its robust spread within [`Self::rigid_limit`].
+    pub fn rigid(&self) -> bool {
+        self.spread <= self.rigid_limit()
+    }
 }
 
 /// Where a recording came from and what was inferred while reading it.
@@ -254,6 +281,14 @@ impl Recording {
                 g.tolerance,
                 g.reference
             );
+            if !g.rigid() {
+                s += &format!(
+                    "rod: the distance is not constant: robust spread {:.3e} m (1.4826 MAD), beyond the {:.3e} m a rigid rod's markers show (5 noise deviations of {:.2e} m plus 5 % of the median): not this rig, or the markers are not the slider and the bob\n",
+                    g.spread,
+                    g.rigid_limit(),
+                    g.noise
+                );
+            }
         }
         if !p.metadata.is_empty() {
             let kv: Vec<String> = p.metadata.iter().map(|(k, v)| format!("{k}={v}")).collect();

@@ -8,6 +8,8 @@
 //!
 //! The folder's files:
 //! - `mod.rs`: the settings, the report's types and the driver [`fit`];
+//! - `checks.rs`: what was recorded, before fitting: the slider and the bob not swapped, their
+//!   distance a rod's;
 //! - `plausible.rs`: the rig file's rod length compared with the recording's markers;
 //! - `prepare.rs`: the recording checked, each marker's noise, mis-tracked frames dropped;
 //! - `priors.rs`: the rig file as a measurement, the nuisances' plausible ranges;
@@ -28,6 +30,7 @@
 
 mod adequacy;
 mod base;
+pub mod checks;
 pub mod guess;
 mod intervals;
 pub mod joint;
@@ -46,9 +49,10 @@ mod stages;
 mod uncertainty;
 
 pub use adequacy::is_noise_free;
+pub use checks::{check_recording, RecordingCheck};
 pub use noise::NoiseEstimate;
 pub use pendulum::{PendulumFound, ValueSe};
-pub use plausible::{check_rod_length, ROD_LENGTH_FACTOR};
+pub use plausible::{check_rod_length, ROD_LENGTH_TOLERANCE};
 pub use problem::{Counters, Observations, Param, TrajectoryProblem, MAX_FREE};
 pub use select::{ModelRow, Nuisance};
 pub use uncertainty::WindowFit;
@@ -331,6 +335,9 @@ pub struct FitReport {
     /// Why the fit failed although it ran (mu_kinetic pinned at zero with the friction
     /// carried by another term): the value is then not a friction coefficient.
     pub failed: Option<String>,
+    /// Why mu was not measured although the fit ran: the slider never moves beyond its noise
+    /// (one plain sentence, with the lower bound on mu_static the stuck motion needs).
+    pub not_identifiable: Option<String>,
     /// The chosen model at its optimum, with its noise scales and row weights (outliers at
     /// zero): what a fit built on this one (the joint fit) starts from.
     pub problem: TrajectoryProblem,
@@ -412,7 +419,9 @@ pub fn fit(
     );
     stages::starts_agree(&mut f, &base, &est);
     let identifiable = slides;
-    Ok(stages::report(
+    let not_identifiable = (!slides && seen.raw_moves.is_none())
+        .then(|| checks::never_slides(&data.obs, data.sigma[0], &mu_static));
+    let mut report = stages::report(
         f,
         stages::Parts {
             data,
@@ -429,5 +438,7 @@ pub fn fit(
             identifiable,
             stop_reason,
         },
-    ))
+    );
+    report.not_identifiable = not_identifiable;
+    Ok(report)
 }

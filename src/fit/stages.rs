@@ -839,6 +839,7 @@ pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
         warnings,
         pendulum,
         failed: v.failed,
+        not_identifiable: None,
         problem,
     }
 }

@@ -18,6 +18,7 @@ mod misspec;
 mod outputs;
 mod paradox;
 mod plan;
+mod prefit_checks;
 mod real_files;
 mod real_rigs;
 mod recordings;

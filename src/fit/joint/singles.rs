@@ -64,6 +64,7 @@ pub(super) fn fit_singles<'a>(
                 let why = rep
                     .failed
                     .clone()
+                    .or_else(|| rep.not_identifiable.clone())
                     .unwrap_or_else(|| "its motion does not identify mu_kinetic".into());
                 if !joint.keep_going {
                     return Err(JointError::Release {

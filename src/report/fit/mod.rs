@@ -133,6 +133,7 @@ pub fn fit_json(rep: &FitReport) -> Value {
         "starts": rep.starts,
         "warnings": rep.warnings,
         "failed": rep.failed,
+        "not_identifiable": rep.not_identifiable,
         "pendulum": rep.pendulum,
         "implausible": rep.implausible,
         "rig_measured": {

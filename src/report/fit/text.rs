@@ -35,6 +35,9 @@ fn pendulum_text(s: &mut String, p: &crate::fit::PendulumFound) {
 /// comparison, the noise, the windows and the adequacy verdict.
 pub fn fit_text(rep: &FitReport) -> String {
     let mut s = String::new();
+    if let Some(sentence) = &rep.not_identifiable {
+        let _ = writeln!(s, "{sentence}\n");
+    }
     if let Some(sentence) = &rep.adequacy.limited_by_model {
         let _ = writeln!(s, "{sentence}\n");
     }
