@@ -49,11 +49,11 @@ pub struct RigSpec {
     /// Standard deviation of `rod_length` as measured (m); the fit's default is a ruler's
     /// 1 mm, 0 takes the value as exact. Scenes and plans simulate the value as given.
     pub rod_length_sd: Option<f64>,
-    /// Standard deviation of `slider_mass` (kg); default 2 % (at least 0.5 g).
+    /// Standard deviation of `slider_mass` (kg); default 3 % (at least 0.5 g).
     pub slider_mass_sd: Option<f64>,
-    /// Standard deviation of `bob_mass` (kg); default 1 % (at least 0.5 g).
+    /// Standard deviation of `bob_mass` (kg); default 2 % (at least 0.5 g).
     pub bob_mass_sd: Option<f64>,
-    /// Standard deviation of `rod_mass` (kg); default 1 % (at least 0.5 g).
+    /// Standard deviation of `rod_mass` (kg); default 2 % (at least 0.5 g).
     pub rod_mass_sd: Option<f64>,
     /// Standard deviation of `bob_radius` (m); default 0.5 mm.
     pub bob_radius_sd: Option<f64>,

@@ -380,6 +380,8 @@ pub fn fit(
 ) -> Result<FitReport, FitError> {
     let data = prepare::prepare(obs, settings)?;
     let mut warnings = Vec::new();
+    let started = priors::start_from_markers(&data.obs, rig_guess, settings.measured.as_ref());
+    let rig_guess = &started;
     let base = base::fit(&data.obs, rig_guess, data.sigma, settings, &mut warnings)?;
     let mut f = stages::Fitting {
         problem: base.problem.clone(),

@@ -31,10 +31,11 @@ pub struct Prior {
 /// and the pivot axis and the bob's centre are not marked (RIGS.md: 0.5-1 mm).
 pub const DEFAULT_ROD_LENGTH_SD: f64 = 1e-3;
 /// Default relative standard deviation of the slider's mass: a kitchen scale's 1-2 % of a
-/// 50-100 g part, and screws or a pivot pin weighed apart or forgotten.
-pub const DEFAULT_SLIDER_MASS_REL: f64 = 0.02;
-/// Default relative standard deviation of the bob's and the rod's mass (a kitchen scale).
-pub const DEFAULT_BOB_MASS_REL: f64 = 0.01;
+/// 50-100 g part, and screws, bearings or a pivot pin weighed apart or forgotten (2-10 %).
+pub const DEFAULT_SLIDER_MASS_REL: f64 = 0.03;
+/// Default relative standard deviation of the bob's and the rod's mass: a kitchen scale's
+/// 0.5-1 g, 1-2 % of a 50-100 g part.
+pub const DEFAULT_BOB_MASS_REL: f64 = 0.02;
 /// The smallest default mass standard deviation (kg): half a kitchen scale's 1 g step.
 pub const DEFAULT_MASS_FLOOR: f64 = 5e-4;
 /// Default standard deviation of a bob radius (m): calipers, or a nominal size typed in.
@@ -175,6 +176,45 @@ impl RigMeasurement {
         .map(|(param, (centre, sd))| Prior { param, centre, sd })
         .collect()
     }
+}
+
+/// The rig to start from: with a measured rod, its length at the recording's median
+/// slider-bob marker distance when that lies within 5 of the measurement's deviations of the
+/// file's value (the markers measure the rod to micrometres; a base model fitted on a rod a
+/// ruler's error off takes friction nuisances for the wrong geometry and can end in another
+/// optimum). A rigid pendulum's equivalent length moves in proportion. Only the start: the
+/// prior stays centred on the file's value.
+pub fn start_from_markers(
+    obs: &super::Observations,
+    rig: &Rig<f64>,
+    measured: Option<&RigMeasurement>,
+) -> Rig<f64> {
+    let Some((file, sd)) = measured.map(|m| m.rod_length).filter(|(_, sd)| *sd > 0.0) else {
+        return *rig;
+    };
+    let mut d: Vec<f64> = obs
+        .slider
+        .iter()
+        .zip(&obs.bob)
+        .filter_map(|(s, b)| {
+            let (s, b) = ((*s)?, (*b)?);
+            Some((b[0] - s[0]).hypot(b[1] - s[1]))
+        })
+        .filter(|d| d.is_finite())
+        .collect();
+    if d.len() < 10 {
+        return *rig;
+    }
+    d.sort_by(f64::total_cmp);
+    let median = d[d.len() / 2];
+    if (median - file).abs() > 5.0 * sd {
+        return *rig;
+    }
+    let mut out = *rig;
+    let ratio = rig.rod_length / rig.marker_length;
+    out.marker_length = median;
+    out.rod_length = median * ratio;
+    out
 }
 
 /// A nuisance parameter's plausible range: within `bound` of its neutral value, with the
