@@ -12,7 +12,7 @@ use super::outliers::{residual_outliers, ResidualOutliers, RESIDUAL_OUTLIER};
 use super::pendulum::pendulum_found;
 use super::prepare::Prepared;
 use super::priors;
-use super::problem::{idx, Observations, Param, TrajectoryProblem};
+use super::problem::{idx, Observations, Param, TrajectoryProblem, MAX_FREE};
 use super::select::{self, ModelRow, Nuisance, SelectOptions};
 use super::solve::{solve, solve_traced};
 use super::uncertainty::{self, Assessment, WindowFit};
@@ -422,10 +422,15 @@ pub(super) fn adequacy(
     // something the rig does not have: it flags the fit (below). It does not widen the
     // interval: a real rig can have it (a worn pivot), and then the model is right.
     let implausible = priors::implausible(problem);
+    // The selection stopped for want of room (every free parameter the dual numbers allow
+    // taken) while its model still misfits by the selection's own rule: what is left of the
+    // misfit was never given a chance to be explained.
+    let capped = problem.free.len() >= MAX_FREE && select::misfits(problem, a.chi2);
     let misfit = a.p_value < 1e-3
         || block_ratio > 1.5
         || windows_p.is_some_and(|p| p < 0.01)
-        || runs_p < RUNS_P;
+        || runs_p < RUNS_P
+        || capped;
     if let Some(i) = mu_index {
         let e = &mut est.params[i].1;
         if windows_p.is_some_and(|p| p < 0.01) {
@@ -476,6 +481,16 @@ pub(super) fn adequacy(
                 e.value
             ));
         }
+    }
+    if capped {
+        let s = format!(
+            "The result is limited by the model: it took every free parameter the fit allows ({MAX_FREE}) and still misfits (chi-square {:.0} for {:.0} degrees of freedom, beyond 5 standard deviations of its distribution), so an effect it lacks may be in mu_kinetic.",
+            a.chi2, a.dof
+        );
+        limited = Some(match limited {
+            Some(l) => format!("{s} {l}"),
+            None => s,
+        });
     }
     if !implausible.is_empty() {
         let s = format!(
