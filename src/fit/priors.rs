@@ -427,3 +427,115 @@ fn rigid_implausible(problem: &TrajectoryProblem, file_ratio: f64) -> Option<Str
     }
     None
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fit::Observations;
+    use crate::sim::Options;
+    use std::sync::Arc;
+
+    fn spec(text: &str) -> RigSpec {
+        let file: crate::scene::RigFile = toml::from_str(text).unwrap();
+        file.rig
+    }
+
+    /// A point rig's mass ratio r = m1 / m2 carries (sd_r / r)^2 = (sd1 / m1)^2 + (sd2 / m2)^2
+    /// (first order), the defaults are the documented ones, and a stated 0 is no prior.
+    #[test]
+    fn the_mass_ratio_carries_both_masses_errors() {
+        let s = spec("[rig]\nslider_mass = 0.35\nslider_mass_sd = 0.007\nbob_mass = 0.1\nbob_mass_sd = 0.003\nrod_length = 0.3\ngravity = 9.81\n");
+        let m = RigMeasurement::from_spec(&s);
+        let (r, sd) = m.mass_ratio;
+        assert!((r - 3.5).abs() < 1e-12);
+        let want = 3.5 * (0.02f64.powi(2) + 0.03f64.powi(2)).sqrt();
+        assert!((sd - want).abs() < 2e-3 * want, "{sd} against {want}");
+        let d = RigMeasurement::from_spec(&spec(
+            "[rig]\nslider_mass = 0.35\nbob_mass = 0.1\nrod_length = 0.3\ngravity = 9.81\n",
+        ));
+        assert_eq!(d.rod_length, (0.3, DEFAULT_ROD_LENGTH_SD));
+        let want = 3.5 * (DEFAULT_SLIDER_MASS_REL.powi(2) + DEFAULT_BOB_MASS_REL.powi(2)).sqrt();
+        assert!((d.mass_ratio.1 - want).abs() < 2e-3 * want);
+        assert!(d.keys.iter().all(|k| !k.3));
+        let exact = RigMeasurement::from_spec(&spec("[rig]\nslider_mass = 0.35\nslider_mass_sd = 0\nbob_mass = 0.1\nbob_mass_sd = 0\nrod_length = 0.3\nrod_length_sd = 0\ngravity = 9.81\n"));
+        assert!(exact.priors().is_empty());
+    }
+
+    fn problem(free: Vec<Param>) -> TrajectoryProblem {
+        let obs = Arc::new(Observations {
+            times: vec![0.0, 0.001],
+            slider: vec![Some([0.0, 0.0]); 2],
+            bob: vec![Some([0.3, 0.0]); 2],
+        });
+        let rig = Rig::new(0.35, 0.1, 0.3, 9.81, 0.25, None).unwrap();
+        let mut p = TrajectoryProblem::new(obs, rig, [0.0; 4], free, Options::default());
+        p.plausible = Arc::new(Plausibility {
+            ranges: plausible_ranges(&rig, 1e-3),
+            file_ratio: 3.5,
+        });
+        p
+    }
+
+    /// A tilt beyond 0.6 deg, a lag beyond a frame and an equivalent length no rod and bob
+    /// give are named; values inside their ranges, and parameters not free, are not.
+    #[test]
+    fn values_beyond_their_ranges_are_named() {
+        let mut p = problem(vec![Param::MuKinetic, Param::RailTilt, Param::Lag]);
+        p.rig.rail_tilt = 0.3f64.to_radians();
+        p.camera.lag = 5e-4;
+        assert!(implausible(&p).is_empty());
+        p.rig.rail_tilt = 1.0f64.to_radians();
+        p.camera.lag = 2e-3;
+        let said = implausible(&p);
+        assert_eq!(said.len(), 2, "{said:?}");
+        assert!(said[0].starts_with("rail_tilt = 1.00 deg"));
+        assert!(said[1].starts_with("marker_lag"));
+        p.free = vec![Param::MuKinetic];
+        assert!(implausible(&p).is_empty());
+        let mut rigid = problem(vec![Param::PendulumLength, Param::MassRatio]);
+        rigid.rig.rod_length = 0.5 * 0.3;
+        assert!(implausible(&rigid)[0].starts_with("rigid_pendulum"));
+        // A uniform rod of 22.2 g on the 100 g bob: L = 0.29 m and r' = 3.108 (the same
+        // total mass of rig file parts, 0.45 kg, split at r').
+        rigid.rig.rod_length = 0.29;
+        rigid.rig.bob_mass = 0.45 / (1.0 + 3.108);
+        rigid.rig.slider_mass = 0.45 - rigid.rig.bob_mass;
+        assert!(implausible(&rigid).is_empty(), "{:?}", implausible(&rigid));
+        // The same length with the point rig's r' = 3.5 needs a rod of negative mass.
+        rigid.rig.bob_mass = 0.1;
+        rigid.rig.slider_mass = 0.35;
+        assert!(implausible(&rigid)[0].contains("imply a rod of -11.7 g"));
+    }
+
+    /// The rod starts at the markers' median distance when it lies within 5 deviations of the
+    /// file's value, and at the file's value otherwise or without a measurement.
+    #[test]
+    fn the_rod_starts_where_the_markers_put_it() {
+        let obs = Observations {
+            times: (0..20).map(|k| k as f64 * 1e-3).collect(),
+            slider: vec![Some([0.0, 0.0]); 20],
+            bob: (0..20)
+                .map(|k| Some([0.0, -0.302 - 1e-5 * k as f64]))
+                .collect(),
+        };
+        let rig = Rig::new(0.35, 0.1, 0.3, 9.81, 0.25, None).unwrap();
+        let m = RigMeasurement::exact(&rig);
+        assert_eq!(start_from_markers(&obs, &rig, Some(&m)).marker_length, 0.3);
+        let measured = RigMeasurement {
+            rod_length: (0.3, 1e-3),
+            ..m.clone()
+        };
+        let started = start_from_markers(&obs, &rig, Some(&measured));
+        assert!((started.marker_length - 0.3021).abs() < 1e-12);
+        assert_eq!(started.rod_length, started.marker_length);
+        let narrow = RigMeasurement {
+            rod_length: (0.3, 1e-4),
+            ..m
+        };
+        assert_eq!(
+            start_from_markers(&obs, &rig, Some(&narrow)).marker_length,
+            0.3
+        );
+        assert_eq!(start_from_markers(&obs, &rig, None).marker_length, 0.3);
+    }
+}
