@@ -282,12 +282,12 @@ pub fn run(args: Args) -> Result<(), Failure> {
     if let Some(p) = &args.plot {
         appell::report::plot::ImageFormat::from_path(p).map_err(|e| Failure::Input(e.into()))?;
     }
+    // The rig file is the measurement it is: its rod length and mass ratio are fitted with
+    // its deviations as priors (docs/fit.md, "The rig file is a measurement").
+    settings.measured = Some(appell::fit::priors::RigMeasurement::from_spec(&spec));
     if args.joint {
         return run_joint(&args, &opts, &rig, &settings);
     }
-    // A single recording's fit takes the rig file as the measurement it is (the joint fit
-    // takes it as exact: its releases share one rig, see docs/fit.md).
-    settings.measured = Some(appell::fit::priors::RigMeasurement::from_spec(&spec));
     if args.inputs.len() == 1 && args.inputs[0].is_dir() {
         let files = directory_files(&args.inputs[0], opts.format.is_some())?;
         let bar = ProgressBar::new(files.len() as u64);

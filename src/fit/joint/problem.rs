@@ -40,7 +40,7 @@ impl JointProblem {
                 }
             }
         }
-        for part in &mut parts {
+        for (k, part) in parts.iter_mut().enumerate() {
             let own: Vec<Param> = part
                 .free
                 .iter()
@@ -48,6 +48,23 @@ impl JointProblem {
                 .filter(|&q| !is_shared(q, same_camera))
                 .collect();
             part.free = shared.iter().copied().chain(own).collect();
+            // The joint normal equations are the parts' summed: a prior on a shared parameter
+            // (the rig's measured values, a tilt's range) is the first release's alone, so it
+            // counts once; each release keeps the priors of its own parameters.
+            if k > 0
+                && part
+                    .priors
+                    .iter()
+                    .any(|pr| is_shared(pr.param, same_camera))
+            {
+                let own: Vec<_> = part
+                    .priors
+                    .iter()
+                    .copied()
+                    .filter(|pr| !is_shared(pr.param, same_camera))
+                    .collect();
+                part.priors = std::sync::Arc::new(own);
+            }
         }
         JointProblem {
             parts,

@@ -153,6 +153,8 @@ fn start_part(
     let mut rig = *rig_guess;
     rig.mu_kinetic = mu0;
     rig.mu_static = mu0;
+    // The rod the single fit found (a rigid pendulum's equivalent length in proportion).
+    rig.rod_length *= single.rig.marker_length / rig_guess.marker_length;
     rig.marker_length = single.rig.marker_length;
     let free: Vec<Param> = single
         .free
@@ -162,13 +164,14 @@ fn start_part(
             q.is_state()
                 || *q == Param::MuKinetic
                 || (*q == Param::RodLength && settings.fit_rod_length)
+                // The rig file as a measurement: its rod and mass ratio, with their priors
+                // (the joint problem counts a shared prior once).
+                || (matches!(q, Param::RodLength | Param::MassRatio)
+                    && single.prior_on(*q).is_some())
         })
         .collect();
     let mut part = single.clone();
     part.rig = rig;
-    // The joint problem sums its parts' normal equations: a part's prior would count once per
-    // release on a shared parameter, so the joint fit has none.
-    part.priors = Default::default();
     part.camera = Default::default();
     part.free = free;
     part.tie_static = true;

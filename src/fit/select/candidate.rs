@@ -53,6 +53,17 @@ pub trait Candidate: LeastSquares + Clone + Send + Sync + 'static {
     fn implausible(&self) -> bool {
         false
     }
+    /// The model with the rig's measured values held at their current values (`None` when
+    /// none is free): a candidate fitted while the model misfits first settles its nuisance
+    /// with them held, so that they do not take up the misfit on the way.
+    fn rig_held(&self) -> Option<Self> {
+        None
+    }
+    /// This model (its free parameters, priors and weights) at `other`'s values.
+    fn adopt(&self, other: &Self) -> Self {
+        let _ = other;
+        self.clone()
+    }
 }
 
 impl Candidate for TrajectoryProblem {
@@ -111,6 +122,24 @@ impl Candidate for TrajectoryProblem {
     fn implausible(&self) -> bool {
         !crate::fit::priors::implausible(self).is_empty()
     }
+    fn rig_held(&self) -> Option<Self> {
+        let measured = |q: &Param| {
+            matches!(q, Param::RodLength | Param::MassRatio) && self.prior_on(*q).is_some()
+        };
+        if !self.free.iter().any(measured) {
+            return None;
+        }
+        let mut held = self.clone();
+        held.free.retain(|q| !measured(q));
+        Some(held)
+    }
+    fn adopt(&self, other: &Self) -> Self {
+        let mut m = self.clone();
+        m.rig = other.rig;
+        m.initial = other.initial;
+        m.camera = other.camera;
+        m
+    }
 }
 
 /// `m` restarted from the data's initial state and mu_kinetic (parameters the start does
@@ -124,6 +153,18 @@ fn restarted(m: &TrajectoryProblem, (y0, mu0): (State<f64>, f64)) -> TrajectoryP
             *v = guess;
         }
     }
+    // The rig's measured values back at the rig file's: freed while the model misfitted, they
+    // may have taken part of its compromise.
+    let mut v = f.values();
+    for (i, &q) in f.free.iter().enumerate() {
+        if let Some(pr) = f
+            .prior_on(q)
+            .filter(|_| matches!(q, Param::RodLength | Param::MassRatio))
+        {
+            v[i] = pr.centre;
+        }
+    }
+    f.set_values(&v);
     f.rig.mu_kinetic = mu0;
     if f.free.contains(&Param::MuStatic) {
         // Just above the tie: a mu_static chosen while the model misfitted is part of the
