@@ -24,11 +24,13 @@ fn solve_starts<M: Candidate>(m: &M, fresh: Option<&M::Start>, max_iters: u64) -
     let f = m.restarted(start);
     let b = solve_candidate(&f, f.values(), max_iters);
     let mut best = better(a, b);
-    // Under misfit, a third start: the restart with the rig's measured values held until the
-    // nuisance has settled, then released (freed from the first, they can take up the misfit
-    // on the way: a one-slide release on a tilted rail put its mass ratio 11 % off the
-    // scale's value, a local optimum 16 chi-square units above this one).
-    if let Some(held) = f.rig_held() {
+    // Under misfit, when the best fit moved a measured rig value beyond 3 of its deviations, a
+    // third start: the restart with the rig's values held until the nuisance has settled, then
+    // released (freed from the first, they can take up the misfit on the way: a one-slide
+    // release on a tilted rail put its mass ratio 11 % off the scale's value, a local optimum
+    // 16 chi-square units above this one).
+    let moved = best.as_ref().is_ok_and(|(p, _, _)| m.rig_moved(p));
+    if let Some(held) = f.rig_held().filter(|_| moved) {
         if let Ok((q, _, it)) = solve_candidate(&held, held.values(), max_iters) {
             let mut settled = held.clone();
             settled.set_values(&q);

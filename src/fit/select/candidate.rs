@@ -64,6 +64,12 @@ pub trait Candidate: LeastSquares + Clone + Send + Sync + 'static {
         let _ = other;
         self.clone()
     }
+    /// Whether a measured rig value stands more than 3 of its deviations from the rig file's
+    /// at `p`: the sign that it may have taken up a misfit.
+    fn rig_moved(&self, p: &DVector<f64>) -> bool {
+        let _ = p;
+        false
+    }
 }
 
 impl Candidate for TrajectoryProblem {
@@ -132,6 +138,11 @@ impl Candidate for TrajectoryProblem {
         let mut held = self.clone();
         held.free.retain(|q| !measured(q));
         Some(held)
+    }
+    fn rig_moved(&self, p: &DVector<f64>) -> bool {
+        self.prior_rows(p.as_slice()).any(|(i, z, _)| {
+            matches!(self.free[i], Param::RodLength | Param::MassRatio) && z.abs() > 3.0
+        })
     }
     fn adopt(&self, other: &Self) -> Self {
         let mut m = self.clone();
