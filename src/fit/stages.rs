@@ -54,8 +54,11 @@ pub(super) fn measured_rig(f: &mut Fitting, settings: &FitSettings) {
     let problem = &mut f.problem;
     let times = &problem.observations().times;
     let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
-    steps.sort_by(f64::total_cmp);
-    let frame = steps.get(steps.len() / 2).copied().unwrap_or(1e-3);
+    let frame = if steps.is_empty() {
+        1e-3
+    } else {
+        crate::data::calibrate::median(&mut steps)
+    };
     let ranges = priors::plausible_ranges(&problem.rig, frame);
     let mut all = priors::nuisance_priors(&ranges);
     let mut freed = false;
