@@ -4,7 +4,7 @@
 //! estimates, the adequacy and its widenings, mu_static's result and the report. Each stage says what it reads and returns;
 //! the driver only orders them.
 
-use super::adequacy::{adequacy_sentence, is_noise_free, marker_rms, RUNS_P};
+use super::adequacy::{adequacy_sentence, is_noise_free, marker_rms, RUNS_P, WINDOWS_P};
 use super::base::Base;
 use super::intervals::{model_uncertainty, pinned_friction, widen, within_bounds};
 use super::motion::{motion, slider_moves, Motion};
@@ -431,12 +431,12 @@ pub(super) fn adequacy(
     let capped = problem.free.len() >= MAX_FREE && select::misfits(problem, a.chi2);
     let misfit = a.p_value < 1e-3
         || block_ratio > 1.5
-        || windows_p.is_some_and(|p| p < 0.01)
+        || windows_p.is_some_and(|p| p < WINDOWS_P)
         || runs_p < RUNS_P
         || capped;
     if let Some(i) = mu_index {
         let e = &mut est.params[i].1;
-        if windows_p.is_some_and(|p| p < 0.01) {
+        if windows_p.is_some_and(|p| p < WINDOWS_P) {
             widen(e, uncertainty::window_spread(&windows, e.value), "windows");
         }
         // Models close in the criterion that give another mu_kinetic: their spread joins the

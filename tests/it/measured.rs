@@ -98,8 +98,11 @@ fn rig_file_errors_are_corrected_or_carried() {
     assert!(bad.is_empty(), "{bad:#?}");
 }
 
-/// Four effects no nuisance describes, on the equal-mass rig: within 3 standard errors of the
-/// truth (the slid-weighted friction ratio for load-dependent friction) or flagged.
+/// Four effects no nuisance describes, on the equal-mass rig, and the two recordings of the
+/// full sweep that a 1 % gate on the slides' agreement let through 9.3 and 5.4 standard errors
+/// off (a pin's friction on the equal rig, load-dependent friction on the heavy one; their
+/// slides disagree at p = 0.017 and 0.016): within 3 standard errors of the truth (the
+/// slid-weighted friction ratio for load-dependent friction) or flagged.
 #[test]
 fn effects_no_nuisance_describes_are_flagged_or_right() {
     let m = manifest();
@@ -109,7 +112,7 @@ fn effects_no_nuisance_describes_are_flagged_or_right() {
         .iter()
         .filter(|c| c["kind"] == "effect")
         .collect();
-    assert_eq!(cases.len(), 4);
+    assert_eq!(cases.len(), 6);
     for c in cases {
         let dir = repo("tests/data/measured");
         let rep = fit_measured(

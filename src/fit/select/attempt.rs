@@ -23,24 +23,38 @@ fn solve_starts<M: Candidate>(m: &M, fresh: Option<&M::Start>, max_iters: u64) -
     };
     let f = m.restarted(start);
     let b = solve_candidate(&f, f.values(), max_iters);
-    let mut best = better(a, b);
-    // Under misfit, when the best fit moved a measured rig value beyond 3 of its deviations, a
-    // third start: the restart with the rig's values held until the nuisance has settled, then
-    // released (freed from the first, they can take up the misfit on the way: a one-slide
-    // release on a tilted rail put its mass ratio 11 % off the scale's value, a local optimum
-    // 16 chi-square units above this one).
-    let moved = best.as_ref().is_ok_and(|(p, _, _)| m.rig_moved(p));
-    if let Some(held) = f.rig_held().filter(|_| moved) {
-        if let Ok((q, _, it)) = solve_candidate(&held, held.values(), max_iters) {
-            let mut settled = held.clone();
-            settled.set_values(&q);
-            let full = m.adopt(&settled);
-            let c =
-                solve_candidate(&full, full.values(), max_iters).map(|(p, c, i)| (p, c, i + it));
-            best = better(best, c);
-        }
+    better(a, b)
+}
+
+/// Under misfit, when a candidate's best fit `got` moved a measured rig value beyond 3 of its
+/// deviations, one more start: the restart from `fresh` with the rig's values held until the
+/// nuisance has settled, then released (freed from the first, they can take up the misfit on
+/// the way: a one-slide release on a tilted rail put its mass ratio 11 % off the scale's
+/// value, a local optimum 16 chi-square units above this one). The lower cost wins.
+pub(super) fn held_rig_start<M: Candidate>(
+    m: &M,
+    fresh: &M::Start,
+    got: (DVector<f64>, f64, u64),
+    max_iters: u64,
+) -> (DVector<f64>, f64, u64) {
+    if !m.rig_moved(&got.0) {
+        return got;
     }
-    best
+    let Some(held) = m.restarted(fresh).rig_held() else {
+        return got;
+    };
+    let Ok((q, _, it)) = solve_candidate(&held, held.values(), max_iters) else {
+        return got;
+    };
+    let mut settled = held.clone();
+    settled.set_values(&q);
+    let full = m.adopt(&settled);
+    let (p, cost, iters) = got;
+    match solve_candidate(&full, full.values(), max_iters) {
+        Ok((q, c, i)) if c < cost => (q, c, iters + it + i),
+        Ok((_, _, i)) => (p, cost, iters + it + i),
+        Err(_) => (p, cost, iters + it),
+    }
 }
 
 /// The lower-cost of two solves (the iterations of both counted).
