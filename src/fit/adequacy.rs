@@ -61,14 +61,14 @@ pub fn is_noise_free(sigma: [f64; 2], rms: f64, scale: f64, rtol: f64, reduced_c
 
 /// Below this p-value the runs test says the residuals are not noise (four streams of
 /// thousands of signs: a smooth miss of 3/4 of the noise is enough, whatever noise was measured).
-pub(super) const RUNS_P: f64 = 1e-4;
+pub const RUNS_P: f64 = 1e-4;
 
 /// Below this p-value the slides, fitted one by one, disagree on mu_kinetic. Looser than the
 /// other tests: with four to six slides the test has little power, and an effect the model
 /// lacks (a pin's dry friction at the pivot, friction growing slower than the load) showed in
 /// it at p = 0.016-0.017 while mu sat 5-9 standard errors off (issue 34's sweep); a 4 % false
 /// alarm on a good recording only widens its interval.
-pub(super) const WINDOWS_P: f64 = 0.05;
+pub const WINDOWS_P: f64 = 0.05;
 
 /// The one plain sentence when the model limits the result: chi-square fails against the
 /// measured noise (p < 0.001), the residuals are correlated enough to widen the errors by half,

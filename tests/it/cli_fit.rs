@@ -108,12 +108,12 @@ fn directory_gives_one_json_line_per_recording_and_a_figure() {
     assert!(text.starts_with("<svg") && text.contains("fitted - observed"));
     // The key numbers are on the figure: the fitted mu (the report's value) and the model.
     let report = String::from_utf8_lossy(&out.stdout);
-    let mu = report
+    // The variables table's row (the one-line answer above it rounds the value).
+    let mu: f64 = report
         .lines()
-        .find_map(|l| l.trim().strip_prefix("mu_kinetic"))
-        .and_then(|rest| rest.split_whitespace().next())
-        .expect("mu_kinetic line in the report");
-    let mu: f64 = mu.parse().unwrap();
+        .filter_map(|l| l.trim().strip_prefix("mu_kinetic"))
+        .find_map(|rest| rest.split_whitespace().next()?.parse().ok())
+        .expect("mu_kinetic row in the report");
     assert!(
         text.contains(&format!("mu_kinetic = {mu:.6}")),
         "figure lacks mu_kinetic = {mu:.6}"
@@ -170,4 +170,58 @@ fn directory_reads_hdf5_recordings_too() {
     );
     assert!(!all.contains("no recordings"), "{all}");
     assert!(all.contains(name), "{all}");
+}
+
+/// The report opens with its answer in one line: mu with the digits its uncertainty carries and
+/// the verdict; the JSON's `answer` is the same line. A well-specified recording reads "model
+/// adequate", one with four effects at once "limited by the model" naming the implausible
+/// nuisances, and neither line may claim what the other does.
+#[test]
+fn the_report_opens_with_a_one_line_answer() {
+    let cases = [
+        (
+            "data/example_recording.mcap",
+            "configs/rig_example.toml",
+            true,
+        ),
+        (
+            "tests/data/misspec/four_paper.csv",
+            "tests/data/misspec/paper_measured.toml",
+            false,
+        ),
+    ];
+    for (file, rig, adequate) in cases {
+        let text = appell(&["fit", &path(file), "--rig", &path(rig)]);
+        assert!(text.status.success(), "{file}");
+        let text = String::from_utf8(text.stdout).unwrap();
+        let first = text.lines().next().unwrap();
+        let json = appell(&["fit", &path(file), "--rig", &path(rig), "--json"]);
+        let v: serde_json::Value = serde_json::from_slice(&json.stdout).unwrap();
+        assert_eq!(v["answer"], first, "{file}");
+        assert!(first.starts_with("mu_kinetic = "), "{file}: {first}");
+        // The value printed is the fitted one, rounded where its standard error puts it.
+        let printed: f64 = first["mu_kinetic = ".len()..]
+            .split(' ')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        let mu = v["mu_kinetic"]["value"].as_f64().unwrap();
+        let se = v["mu_kinetic"]["stderr"].as_f64().unwrap();
+        assert!((printed - mu).abs() <= 0.1 * se, "{file}: {first} vs {mu}");
+        assert_eq!(
+            first.ends_with("model adequate"),
+            adequate,
+            "{file}: {first}"
+        );
+        assert_eq!(first.contains("limited by the model"), !adequate, "{file}");
+        assert_eq!(
+            v["limited_by_model"].is_null(),
+            adequate,
+            "{file}: the line and the verdict disagree"
+        );
+        if !adequate {
+            assert!(first.contains("needs rail_tilt"), "{file}: {first}");
+        }
+    }
 }

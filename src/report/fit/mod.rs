@@ -3,9 +3,11 @@
 //! `text.rs` writes the readable report, `figure.rs` draws the figure; this file writes the
 //! JSON object.
 
+mod answer;
 mod figure;
 mod text;
 
+pub use answer::{answer, value_pm};
 pub use figure::FitFigure;
 pub use text::fit_text;
 
@@ -85,6 +87,7 @@ pub fn fit_json(rep: &FitReport) -> Value {
     };
     let a = &rep.adequacy;
     let mut v = json!({
+        "answer": answer(rep),
         "mu_kinetic": rep.mu_kinetic.as_ref().map(estimate_json),
         "mu_static": mu_static,
         "initial": {

@@ -35,6 +35,7 @@ fn pendulum_text(s: &mut String, p: &crate::fit::PendulumFound) {
 /// comparison, the noise, the windows and the adequacy verdict.
 pub fn fit_text(rep: &FitReport) -> String {
     let mut s = String::new();
+    let _ = writeln!(s, "{}\n", super::answer(rep));
     if let Some(sentence) = &rep.not_identifiable {
         let _ = writeln!(s, "{sentence}\n");
     }

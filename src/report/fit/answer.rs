@@ -1,0 +1,109 @@
+//! The one-line answer that opens a fit's report (and the JSON's `answer`): mu_kinetic with
+//! as many digits as its uncertainty carries, and the verdict in a few words, so that a lab
+//! reads the result before the tables that back it.
+
+use crate::fit::{FitReport, RUNS_P, WINDOWS_P};
+
+/// `value +- se` rounded where the uncertainty puts it: the standard error to two significant
+/// digits and the value to the same decimal place (0.2499917541986817 +- 5.35e-6 reads
+/// `0.2499918 +- 0.0000054`). Without a usable error, six significant digits.
+pub fn value_pm(value: f64, se: f64) -> String {
+    match decimals(se) {
+        Some(d) => format!("{value:.d$} +- {se:.d$}"),
+        None => format!("{value:.6}"),
+    }
+}
+
+/// Decimal places that show a standard error to two significant digits (at most 12); `None`
+/// for an error that is zero or not finite.
+fn decimals(se: f64) -> Option<usize> {
+    if !(se.is_finite() && se > 0.0) {
+        return None;
+    }
+    let d = 1.0 - se.log10().floor();
+    Some(d.clamp(0.0, 12.0) as usize)
+}
+
+/// The one-line answer: `mu_kinetic = V +- E (95 %: LO to HI), model adequate`, or `...,
+/// limited by the model: WHY; WHAT TO TRY`, or why there is no value.
+pub fn answer(rep: &FitReport) -> String {
+    if let Some(why) = &rep.not_identifiable {
+        return format!("mu_kinetic not identifiable: {why}");
+    }
+    let Some(mu) = &rep.mu_kinetic else {
+        return "mu_kinetic not measured (see below)".to_owned();
+    };
+    if let Some(why) = &rep.failed {
+        return format!("mu_kinetic not measured, the fit failed: {why}");
+    }
+    if rep.adequacy.noise_free {
+        return format!(
+            "mu_kinetic = {:.10} (a noise-free recording: no interval is meaningful)",
+            mu.value
+        );
+    }
+    let d = decimals(mu.stderr).unwrap_or(6);
+    let head = format!(
+        "mu_kinetic = {} (95 %: {:.d$} to {:.d$})",
+        value_pm(mu.value, mu.stderr),
+        mu.ci95[0],
+        mu.ci95[1]
+    );
+    if rep.adequacy.limited_by_model.is_none() {
+        return format!("{head}, model adequate");
+    }
+    let a = &rep.adequacy;
+    let mut why: Vec<String> = rep
+        .implausible
+        .iter()
+        .map(|s| {
+            let what = s.split(" is beyond").next().unwrap_or(s);
+            format!("needs {what}")
+        })
+        .collect();
+    if a.p_value < 1e-3 {
+        why.push(format!(
+            "misfits (reduced chi-square {:.2})",
+            a.reduced_chi2
+        ));
+    }
+    if a.block_se_ratio > 1.5 {
+        why.push("residuals correlated in time".to_owned());
+    }
+    if a.runs_p_value < RUNS_P {
+        why.push("residuals keep their sign over long stretches".to_owned());
+    }
+    if let Some(p) = a.windows_p_value.filter(|p| *p < WINDOWS_P) {
+        why.push(format!("the slides disagree on mu (p = {p:.1e})"));
+    }
+    if why.is_empty() {
+        why.push("an effect the model lacks (see below)".to_owned());
+    }
+    let try_this = if rep.implausible.is_empty() {
+        "the interval is widened for it; --plot FIT.svg shows where the model misses"
+    } else {
+        "check on the rig what it names (below)"
+    };
+    format!(
+        "{head}, limited by the model: {}; {try_this}",
+        why.join(", ")
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn digits_follow_the_uncertainty() {
+        assert_eq!(
+            value_pm(0.2499917541986817, 0.000005351765541894624),
+            "0.2499918 +- 0.0000054"
+        );
+        assert_eq!(value_pm(0.11992163, 4.932e-5), "0.119922 +- 0.000049");
+        assert_eq!(value_pm(0.2517570, 0.0424), "0.252 +- 0.042");
+        assert_eq!(value_pm(0.127, 7.1), "0.1 +- 7.1");
+        assert_eq!(value_pm(0.12, 0.0), "0.120000");
+        assert_eq!(value_pm(0.12, f64::NAN), "0.120000");
+    }
+}
