@@ -4,6 +4,7 @@
 use super::problem::TrajectoryProblem;
 use super::uncertainty;
 use super::Estimate;
+use crate::report::p_is;
 
 /// Per-marker RMS of raw residuals (weight-zero rows left out), with a degrees-of-freedom
 /// correction, and the overall RMS.
@@ -84,8 +85,11 @@ pub(super) fn adequacy_sentence(
     let mut why = Vec::new();
     if a.p_value < 1e-3 {
         why.push(format!(
-            "chi-square is {:.0} for {:.0} degrees of freedom against the noise measured from the tracks (reduced {:.2}, p = {:.1e})",
-            a.chi2, a.dof, a.reduced_chi2, a.p_value
+            "chi-square is {:.0} for {:.0} degrees of freedom against the noise measured from the tracks (reduced {:.2}, {})",
+            a.chi2,
+            a.dof,
+            a.reduced_chi2,
+            p_is(a.p_value)
         ));
     }
     if block_ratio > 1.5 {
@@ -95,12 +99,14 @@ pub(super) fn adequacy_sentence(
     }
     if runs_p < RUNS_P {
         why.push(format!(
-            "the residuals keep their sign over long stretches (runs test p = {runs_p:.1e})"
+            "the residuals keep their sign over long stretches (runs test {})",
+            p_is(runs_p)
         ));
     }
     if let Some(pw) = windows_p.filter(|p| *p < WINDOWS_P) {
         why.push(format!(
-            "the recording's slides, fitted one by one, disagree on mu_kinetic (p = {pw:.1e})"
+            "the recording's slides, fitted one by one, disagree on mu_kinetic ({})",
+            p_is(pw)
         ));
     }
     if why.is_empty() {

@@ -647,19 +647,17 @@ fn static_upper_limit(
     .map(|ci| ci[1]);
     match upper {
         Some(u) => {
-            let from = if prefix_limit {
-                format!(" (from the first {} frames)", settings.long_prefix)
-            } else {
-                String::new()
-            };
-            f.warnings.push(format!(
-                "mu_static fits at its bound mu_static = mu_kinetic; the data allow up to {u:.5}{from}"
-            ));
+            // No warning: Coulomb's law with one coefficient is what the data say, and the
+            // report's mu_static row gives the limit.
             StaticResult::Estimated(Estimate {
                 value: mu,
                 stderr: (u - mu) / 1.96,
                 ci95: [mu, u],
-                interval: "profile (one-sided)",
+                interval: if prefix_limit {
+                    "profile (one-sided, on the first frames)"
+                } else {
+                    "profile (one-sided)"
+                },
             })
         }
         None => {

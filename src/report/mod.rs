@@ -8,3 +8,47 @@ pub mod regions;
 mod simulate;
 
 pub use simulate::{simulation_json, timeline, write_trajectory_csv};
+
+/// A p-value as a report says it: `p = 0.226` from 0.001 up, `p = 3.0e-9` below, and
+/// `p < 1e-16` below what double precision resolves (never `p = 0.0e0`).
+pub fn p_is(p: f64) -> String {
+    if p.is_nan() {
+        "p = -".to_owned()
+    } else if p < 1e-16 {
+        "p < 1e-16".to_owned()
+    } else if p < 1e-3 {
+        format!("p = {p:.1e}")
+    } else {
+        format!("p = {p:.3}")
+    }
+}
+
+/// A standard error as a percentage of its value with two significant digits (`0.0014%`,
+/// `0.12%`, `3.4%`, `210%`; never `0.00%`), `-` for a value of zero.
+pub fn percent_of(se: f64, value: f64) -> String {
+    let pc = 100.0 * se / value.abs();
+    if !pc.is_finite() {
+        return "-".to_owned();
+    }
+    if pc <= 0.0 {
+        return "0%".to_owned();
+    }
+    let d = (1.0 - pc.log10().floor()).clamp(0.0, 10.0) as usize;
+    format!("{pc:.d$}%")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn p_values_and_percentages_read_as_numbers() {
+        assert_eq!(p_is(0.2261), "p = 0.226");
+        assert_eq!(p_is(3.0e-9), "p = 3.0e-9");
+        assert_eq!(p_is(0.0), "p < 1e-16");
+        assert_eq!(percent_of(4.194e-6, 0.30000335), "0.0014%");
+        assert_eq!(percent_of(4.932e-5, 0.11992163), "0.041%");
+        assert_eq!(percent_of(2.701e-4, -0.000616), "44%");
+        assert_eq!(percent_of(1e-3, 0.0), "-");
+    }
+}

@@ -57,14 +57,15 @@ pub fn timeline(scene: &Scene, sol: &Solution<f64>) -> String {
     let st = sol.stats;
     let _ = writeln!(
         s,
-        "{}: rtol {:e}, atol {:e}; {} steps, {} rejected, {} rhs evaluations, {} events",
+        "{}: rtol {:e}, atol {:e}; {} steps, {} rejected, {} rhs evaluations, {} event{}",
         scene.options.method.name(),
         scene.options.rtol,
         scene.options.atol,
         st.steps,
         st.rejected,
         st.rhs_evals,
-        st.events
+        st.events,
+        if st.events == 1 { "" } else { "s" }
     );
     s
 }

@@ -74,7 +74,10 @@ pub fn answer(rep: &FitReport) -> String {
         why.push("residuals keep their sign over long stretches".to_owned());
     }
     if let Some(p) = a.windows_p_value.filter(|p| *p < WINDOWS_P) {
-        why.push(format!("the slides disagree on mu (p = {p:.1e})"));
+        why.push(format!(
+            "the slides disagree on mu ({})",
+            crate::report::p_is(p)
+        ));
     }
     if why.is_empty() {
         why.push("an effect the model lacks (see below)".to_owned());

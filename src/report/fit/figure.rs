@@ -89,8 +89,11 @@ impl FitFigure<'_> {
         notes.push(format!("model: {model}"));
         let a = &rep.adequacy;
         notes.push(format!(
-            "chi2 = {:.1} for {:.0} dof (reduced {:.3}, p = {:.3})",
-            a.chi2, a.dof, a.reduced_chi2, a.p_value
+            "chi2 = {:.1} for {:.0} dof (reduced {:.3}, {})",
+            a.chi2,
+            a.dof,
+            a.reduced_chi2,
+            crate::report::p_is(a.p_value)
         ));
         notes.push(format!(
             "noise (measured): slider {:.3} mm, bob {:.3} mm",

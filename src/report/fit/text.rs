@@ -126,8 +126,10 @@ fn statistics(s: &mut String, rep: &FitReport) {
     );
     let _ = writeln!(
         s,
-        "    chi-square         {:.1}; reduced {:.4}; p = {:.3} (against the noise above)",
-        a.chi2, a.reduced_chi2, a.p_value
+        "    chi-square         {:.1}; reduced {:.4}; {} (against the noise above)",
+        a.chi2,
+        a.reduced_chi2,
+        crate::report::p_is(a.p_value)
     );
     let _ = writeln!(s, "    AIC, BIC           {:.1}, {:.1}", a.aic, a.bic);
     let _ = writeln!(
@@ -152,11 +154,11 @@ fn variables(s: &mut String, rep: &FitReport) {
             .map_or(f64::NAN, |(_, v)| *v);
         let _ = writeln!(
             s,
-            "    {:<20} {:>14.8} +- {:<10.3e} ({:>6.2}%) [{:.8}, {:.8}] [{}] start {:.6} {}",
+            "    {:<20} {:>14.8} +- {:<10.3e} ({:>8}) [{:.8}, {:.8}] [{}] start {:.6} {}",
             p.name(),
             e.value,
             e.stderr,
-            100.0 * e.stderr / e.value.abs(),
+            crate::report::percent_of(e.stderr, e.value),
             e.ci95[0],
             e.ci95[1],
             e.interval,
@@ -164,7 +166,13 @@ fn variables(s: &mut String, rep: &FitReport) {
             p.unit()
         );
     }
+    // mu_static tied to mu_kinetic is said once, below, with what the data allow.
+    let static_said = !matches!(rep.mu_static, StaticResult::Estimated(_))
+        || !rep.params.iter().any(|(p, _)| *p == Param::MuStatic);
     for (p, v) in &rep.fixed {
+        if *p == Param::MuStatic && static_said {
+            continue;
+        }
         let _ = writeln!(s, "    {:<20} {v:>14.8} (fixed) {}", p.name(), p.unit());
     }
     match (&rep.mu_kinetic, &rep.mu_static) {
@@ -253,9 +261,8 @@ fn windows(s: &mut String, rep: &FitReport) {
     if !rep.windows.is_empty() {
         let _ = writeln!(
             s,
-            "[[Windows]] mu_kinetic per slide (cut at sticks and reversals; agreement p = {})",
-            a.windows_p_value
-                .map_or("-".to_owned(), |p| format!("{p:.3}"))
+            "[[Windows]] mu_kinetic per slide (cut at sticks and reversals; agreement {})",
+            crate::report::p_is(a.windows_p_value.unwrap_or(f64::NAN))
         );
         for w in &rep.windows {
             let _ = writeln!(
