@@ -24,5 +24,6 @@ mod real_rigs;
 mod recordings;
 mod regions;
 mod rigid;
+mod safety_io;
 mod simulate_oracles;
 mod stress;
