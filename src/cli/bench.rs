@@ -118,8 +118,14 @@ fn check_flags(args: &Args) -> Result<(), Failure> {
     }
     let s = args.seconds_per_point;
     if !(s.is_finite() && (0.0..=MAX_SECONDS_PER_POINT).contains(&s)) {
+        // 1e300 as 1e300, not three hundred digits.
+        let shown = if s.is_finite() && s.abs() >= 1e6 {
+            format!("{s:e}")
+        } else {
+            format!("{s}")
+        };
         return bad(format!(
-            "--seconds-per-point {s}: expected seconds from 0 to {MAX_SECONDS_PER_POINT}"
+            "--seconds-per-point {shown}: expected seconds from 0 to {MAX_SECONDS_PER_POINT}"
         ));
     }
     if args.rtols.len() > MAX_RTOLS {
