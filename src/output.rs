@@ -2,9 +2,11 @@
 //!
 //! Every command that writes a file (`convert`, `synth`, `simulate --out`, every `--plot`) goes
 //! through this module, which sits below `data` and `report` so that both can use it:
-//! - [`write_atomic`] writes through a temporary sibling and a rename, so a failure never leaves
-//!   half a file; the temporary is registered so that [`remove_temporaries_on_signal`] can
-//!   delete it when the process is interrupted (SIGINT, SIGTERM, SIGHUP).
+//! - [`write_atomic`] writes through a temporary sibling (created exclusively, random name) and
+//!   a rename, so a failure never leaves half a file; the temporary is registered so that
+//!   [`remove_temporaries_on_signal`] can delete it when the process is interrupted (SIGINT,
+//!   SIGTERM, SIGHUP). `-` is the standard output.
+//! - [`TempDir`] is a temporary directory removed on drop and on those signals.
 //! - [`refuse_input`] is the one check that an output names none of the command's inputs: the
 //!   same file through a symbolic link, `..`, a hard link or another letter case on a
 //!   case-insensitive file system counts as the same file.
@@ -13,7 +15,8 @@ use std::io::Write;
 use std::path::{Path, PathBuf};
 use std::sync::Mutex;
 
-/// Temporary files being written now, removed by the signal handler.
+/// Temporary files and directories this process created and is using now, removed by the
+/// signal handler.
 static TEMPORARIES: Mutex<Vec<PathBuf>> = Mutex::new(Vec::new());
 
 /// An output that would replace one of the command's inputs.
@@ -54,9 +57,10 @@ fn same_file(a: &Path, b: &Path) -> bool {
     canonical(a) == canonical(b)
 }
 
-/// Install, once, a handler that removes the temporary files being written when the process
-/// receives SIGINT, SIGTERM or SIGHUP, then exits with code 130. Without it an interrupted
-/// `synth` of a large recording would leave its hidden temporary file behind.
+/// Install, once, a handler that removes the temporary files and directories being written
+/// when the process receives SIGINT, SIGTERM or SIGHUP, then exits with code 130. Without it
+/// an interrupted `synth` of a large recording would leave its hidden temporary file behind,
+/// and `bench --read` its directory of recordings.
 pub fn remove_temporaries_on_signal() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
@@ -64,23 +68,64 @@ pub fn remove_temporaries_on_signal() {
         let _ = ctrlc::set_handler(|| {
             let list = TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
             for path in list.iter() {
-                let _ = std::fs::remove_file(path);
+                // Only what this process created is listed: a file, or a directory whole.
+                match std::fs::symlink_metadata(path) {
+                    Ok(m) if m.is_dir() => {
+                        let _ = std::fs::remove_dir_all(path);
+                    }
+                    _ => {
+                        let _ = std::fs::remove_file(path);
+                    }
+                }
             }
             std::process::exit(130);
         });
     });
 }
 
+/// Whether an output path means the standard output: `-`.
+pub fn is_stdout(path: &Path) -> bool {
+    path.as_os_str() == "-"
+}
+
+/// Whether an output path writes to the standard output: `-`, or the file it is open on
+/// (`/dev/stdout`, `/proc/self/fd/1`, the file stdout was redirected to). A command writing
+/// there says what it wrote on stderr instead, so the output stays whole.
+pub fn names_stdout(path: &Path) -> bool {
+    if is_stdout(path) {
+        return true;
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::MetadataExt;
+        if let (Ok(a), Ok(b)) = (std::fs::metadata(path), std::fs::metadata("/dev/stdout")) {
+            return a.dev() == b.dev() && a.ino() == b.ino();
+        }
+    }
+    false
+}
+
 /// Write a file through a temporary sibling and a rename, so a failure never leaves half a
-/// file behind. A symbolic link is followed (the file it points to is replaced, the link
-/// stays); a special file (a named pipe, a device such as `/dev/stdout` or `/dev/full`) is
-/// written directly, once the whole content is ready, never replaced by a plain file.
+/// file behind. The temporary is created exclusively (it never opens a file that exists) under
+/// a random name (`.NAME.XXXXXX.tmp` beside the output), and only that file, which this
+/// process created, is removed when writing fails or a signal comes. A symbolic link is
+/// followed (the file it points to is replaced, the link stays); `-` is the standard output,
+/// and a special file (a named pipe, a device such as `/dev/stdout` or `/dev/full`) is written
+/// directly, once the whole content is ready, never replaced by a plain file.
 pub fn write_atomic(
     path: &Path,
     fill: impl FnOnce(&mut dyn Write) -> std::io::Result<()>,
 ) -> std::io::Result<()> {
-    let target = output_target(path)?;
-    if let Ok(meta) = std::fs::metadata(&target) {
+    if is_stdout(path) {
+        let mut buf = Vec::new();
+        fill(&mut buf)?;
+        let mut out = std::io::stdout().lock();
+        out.write_all(&buf)?;
+        return out.flush();
+    }
+    // Through the path itself first: `/dev/stdout` is a link to `/proc/self/fd/1`, whose
+    // target (`pipe:[...]`) only the kernel can follow.
+    if let Ok(meta) = std::fs::metadata(path) {
         if meta.is_dir() {
             return Err(std::io::Error::new(
                 std::io::ErrorKind::InvalidInput,
@@ -90,32 +135,43 @@ pub fn write_atomic(
         if !meta.is_file() {
             let mut buf = Vec::new();
             fill(&mut buf)?;
-            let mut f = std::fs::OpenOptions::new().write(true).open(&target)?;
+            let mut f = std::fs::OpenOptions::new().write(true).open(path)?;
             f.write_all(&buf)?;
             return f.flush();
         }
     }
+    let target = output_target(path)?;
     let name = target.file_name().ok_or_else(|| {
         std::io::Error::new(
             std::io::ErrorKind::InvalidInput,
             "output path has no file name",
         )
     })?;
-    let mut tmp_name = std::ffi::OsString::from(".");
-    tmp_name.push(name);
-    tmp_name.push(format!(".{}.tmp", std::process::id()));
-    let tmp = target.with_file_name(tmp_name);
-    // Registered before it exists, so no moment passes in which a signal would leave it.
-    register(&tmp, true);
-    let result = (|| {
-        let mut file = std::io::BufWriter::new(
-            std::fs::OpenOptions::new()
+    let dir = match target.parent() {
+        Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    let mut prefix = std::ffi::OsString::from(".");
+    prefix.push(name);
+    prefix.push(".");
+    // Created with O_EXCL under a fresh random name (retried if taken), then registered for
+    // the signal handler: a name that existed is never ours to remove.
+    let tmp = tempfile::Builder::new()
+        .prefix(&prefix)
+        .suffix(".tmp")
+        .make_in(&dir, |p| {
+            let f = std::fs::OpenOptions::new()
                 .write(true)
                 .create_new(true)
-                .open(&tmp)?,
-        );
-        fill(&mut file)?;
-        file.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+                .open(p)?;
+            register(p, true);
+            Ok(f)
+        })?;
+    let tmp_path = tmp.path().to_owned();
+    let result = (|| {
+        let mut w = std::io::BufWriter::new(tmp.as_file());
+        fill(&mut w)?;
+        w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
         // Checked again just before the rename: never rename onto something that became a
         // special file or a link in the meantime.
         match std::fs::symlink_metadata(&target) {
@@ -123,17 +179,49 @@ pub fn write_atomic(
                 std::io::ErrorKind::InvalidInput,
                 "the output changed into a link or special file while it was written",
             )),
-            _ => std::fs::rename(&tmp, &target),
+            _ => Ok(()),
         }
     })();
-    if result.is_err() {
-        let _ = std::fs::remove_file(&tmp);
-    }
-    register(&tmp, false);
+    // On failure the temporary is dropped, which removes it (it is ours).
+    let result = result.and_then(|()| tmp.persist(&target).map(drop).map_err(|e| e.error));
+    register(&tmp_path, false);
     result
 }
 
-/// Add or remove a temporary file in the list the signal handler cleans up.
+/// A temporary directory (random name, created exclusively under the system's temporary
+/// directory) that is removed with everything in it when dropped, and by the signal handler
+/// ([`remove_temporaries_on_signal`]) when the process is interrupted.
+pub struct TempDir {
+    dir: Option<tempfile::TempDir>,
+    path: PathBuf,
+}
+
+impl TempDir {
+    /// A new directory named `PREFIX` and random characters.
+    pub fn new(prefix: &str) -> std::io::Result<TempDir> {
+        let dir = tempfile::Builder::new().prefix(prefix).tempdir()?;
+        let path = dir.path().to_owned();
+        register(&path, true);
+        Ok(TempDir {
+            dir: Some(dir),
+            path,
+        })
+    }
+
+    /// The directory.
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for TempDir {
+    fn drop(&mut self) {
+        drop(self.dir.take());
+        register(&self.path, false);
+    }
+}
+
+/// Add or remove a temporary file or directory in the list the signal handler cleans up.
 fn register(tmp: &Path, add: bool) {
     let mut list = TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
     if add {

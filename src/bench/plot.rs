@@ -226,8 +226,9 @@ mod tests {
             seconds_per_point: 0.0,
         };
         let wp = run(&config, |_| {});
-        let dir = std::env::temp_dir().join(format!("appell-wp-plot-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        // Removed with everything in it at the end of the test.
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().to_path_buf();
         let path = dir.join("wp.svg");
         crate::report::plot::render(&path, &WorkPrecisionPlot { result: &wp }).unwrap();
         let svg = std::fs::read_to_string(&path).unwrap();

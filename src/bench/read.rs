@@ -8,7 +8,7 @@ use crate::data::{read_recording, ReadOptions, Recording};
 use crate::scene::Scene;
 use serde::Serialize;
 use std::io::Write;
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::Instant;
 
 /// The paper's rig released from rest with the rod horizontal.
@@ -37,27 +37,6 @@ pub struct ReadTiming {
     pub frames_per_s: f64,
     /// Reads timed (after one untimed warm-up read).
     pub runs: usize,
-}
-
-/// A temporary directory removed when dropped.
-struct TempDir(PathBuf);
-
-impl TempDir {
-    fn new() -> std::io::Result<TempDir> {
-        let nanos = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0, |d| d.as_nanos());
-        let dir =
-            std::env::temp_dir().join(format!("appell-read-bench-{}-{nanos}", std::process::id()));
-        std::fs::create_dir(&dir)?;
-        Ok(TempDir(dir))
-    }
-}
-
-impl Drop for TempDir {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_dir_all(&self.0);
-    }
 }
 
 /// The benchmark's recording: the paper scene at [`FPS`] with 0.5 mm noise (seed 2), `frames`
@@ -107,15 +86,17 @@ fn write_long(path: &Path, rec: &Recording) -> std::io::Result<()> {
 }
 
 /// Write a `frames`-frame recording as wide CSV, long CSV and MCAP to a temporary directory
-/// (removed afterwards) and time `batches` reads of each (after one untimed read) with
+/// (removed afterwards, or on a signal) and time `batches` reads of each (after one untimed read) with
 /// [`read_recording`] and default options. Every read must give back the frames written.
 pub fn read_benchmark(frames: usize, batches: usize) -> Result<Vec<ReadTiming>, String> {
     let (rec, truth) = recording(frames)?;
-    let dir = TempDir::new().map_err(|e| format!("creating a temporary directory: {e}"))?;
+    // Removed when done, and by the signal handler on SIGINT, SIGTERM or SIGHUP.
+    let dir = crate::output::TempDir::new("appell-read-bench-")
+        .map_err(|e| format!("creating a temporary directory: {e}"))?;
     let files = [
-        ("wide", dir.0.join("recording.csv")),
-        ("long", dir.0.join("recording_long.csv")),
-        ("mcap", dir.0.join("recording.mcap")),
+        ("wide", dir.path().join("recording.csv")),
+        ("long", dir.path().join("recording_long.csv")),
+        ("mcap", dir.path().join("recording.mcap")),
     ];
     for (format, path) in &files {
         match *format {

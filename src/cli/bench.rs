@@ -22,7 +22,7 @@ pub struct Args {
     /// Scene to time (default: the shipped paper scene, configs/paper_rest_horizontal.toml).
     #[arg(conflicts_with = "work_precision")]
     scene: Option<PathBuf>,
-    /// Timed batches (the median is reported; work-precision default 7).
+    /// Timed batches, 1 to 1000 (the median is reported; work-precision default 7).
     #[arg(long)]
     batches: Option<usize>,
     /// Print JSON.
@@ -65,22 +65,86 @@ pub struct Args {
     /// Joint benchmark: how many releases to fit together, e.g. 5,10,20.
     #[arg(long, value_delimiter = ',', requires = "joint")]
     counts: Vec<usize>,
-    /// Read benchmark: frames in the recording (10 kHz).
+    /// Read benchmark: frames in the recording (10 kHz), 2 to 10^7.
     #[arg(long, default_value_t = appell::bench::read::DEFAULT_FRAMES, requires = "read")]
     frames: usize,
     /// Work-precision: draw run time against error (log axes) to this SVG or PNG.
     #[arg(long, value_name = "FILE.svg", requires = "work_precision")]
     plot: Option<PathBuf>,
-    /// Work-precision: comma-separated tolerance ladder (default 1e-4,1e-5,...,1e-12).
+    /// Work-precision: comma-separated tolerance ladder, each in [1e-14, 0.1], at most 32
+    /// (default 1e-4,1e-5,...,1e-12).
     #[arg(long, value_delimiter = ',')]
     rtols: Vec<f64>,
     /// Work-precision: comma-separated scene names (default all: paper, unequal, rotation,
     /// near_critical, stuck, frictionless).
     #[arg(long, value_delimiter = ',', requires = "work_precision")]
     scenes: Vec<String>,
-    /// Work-precision: wall time spent timing each point (s).
+    /// Work-precision: wall time spent timing each point (s), 0 to 10.
     #[arg(long, default_value_t = 0.03, requires = "work_precision")]
     seconds_per_point: f64,
+}
+
+/// The most timed batches any benchmark takes (`--batches`).
+const MAX_BATCHES: usize = 1000;
+
+/// The most frames the read benchmark writes and reads (`--frames`): about 1.5 GB of files.
+const MAX_FRAMES: usize = 10_000_000;
+
+/// The longest wall time a work-precision point may be timed for (`--seconds-per-point`, s).
+const MAX_SECONDS_PER_POINT: f64 = 10.0;
+
+/// The tolerances the work-precision ladder may hold (`--rtols`), and how many.
+const RTOL_RANGE: (f64, f64) = (1e-14, 0.1);
+
+/// The most tolerances in the work-precision ladder.
+const MAX_RTOLS: usize = 32;
+
+/// Every bench flag bounded like any other input, before any work: bad input (exit 2) naming
+/// the flag, the value and the range.
+fn check_flags(args: &Args) -> Result<(), Failure> {
+    let bad = |m: String| Err(Failure::Input(anyhow!(m)));
+    if let Some(b) = args.batches {
+        if !(1..=MAX_BATCHES).contains(&b) {
+            return bad(format!(
+                "--batches {b}: expected a whole number from 1 to {MAX_BATCHES}"
+            ));
+        }
+    }
+    if args.read && !(2..=MAX_FRAMES).contains(&args.frames) {
+        return bad(format!(
+            "--frames {}: expected a whole number from 2 to {MAX_FRAMES} (10 kHz, about 150 bytes a frame over the three files)",
+            args.frames
+        ));
+    }
+    let s = args.seconds_per_point;
+    if !(s.is_finite() && (0.0..=MAX_SECONDS_PER_POINT).contains(&s)) {
+        // 1e300 as 1e300, not three hundred digits.
+        let shown = if s.is_finite() && s.abs() >= 1e6 {
+            format!("{s:e}")
+        } else {
+            format!("{s}")
+        };
+        return bad(format!(
+            "--seconds-per-point {shown}: expected seconds from 0 to {MAX_SECONDS_PER_POINT}"
+        ));
+    }
+    if args.rtols.len() > MAX_RTOLS {
+        return bad(format!(
+            "--rtols: {} tolerances, expected at most {MAX_RTOLS}",
+            args.rtols.len()
+        ));
+    }
+    let (lo, hi) = RTOL_RANGE;
+    if let Some(r) = args.rtols.iter().find(|r| !(lo..=hi).contains(*r)) {
+        return bad(format!("--rtols: {r:e} is not in [{lo:e}, {hi:e}]"));
+    }
+    if args.counts.len() > MAX_RTOLS {
+        return bad(format!(
+            "--counts: {} counts, expected at most {MAX_RTOLS}",
+            args.counts.len()
+        ));
+    }
+    Ok(())
 }
 
 /// A validated work-precision run, from the parsed arguments.
@@ -143,12 +207,12 @@ fn row(p: &WpPoint) -> String {
 }
 
 fn print_summary(wp: &WorkPrecision) {
-    println!(
+    outln!(
         "\nreferences (DP5 vs DOP853 at rtol {:e}; the floor of the errors above):",
         work_precision::REFERENCE_RTOL
     );
     for r in &wp.references {
-        println!(
+        outln!(
             "  {:<13} {} events, event times agree to {}, final state to {:.1e}{}  ({})",
             r.scene,
             r.events,
@@ -159,21 +223,21 @@ fn print_summary(wp: &WorkPrecision) {
             r.about
         );
     }
-    println!("\ngoals:");
+    outln!("\ngoals:");
     for g in &wp.goals {
         let verdict = match g.met {
             Some(true) => "met",
             Some(false) => "NOT met",
             None => "undecided",
         };
-        println!("  {verdict:<9} {:<13} {}", g.scene, g.detail);
+        outln!("  {verdict:<9} {:<13} {}", g.scene, g.detail);
     }
 }
 
 fn run_work_precision(args: &Args) -> Result<(), Failure> {
     let config = wp_config(args)?;
     if !args.json {
-        println!(
+        outln!(
             "{:<13} {:<7} {:>7} {:>11} {:>10} {:>10} {:>10} {:>10} {:>9} {:>7} {:>8}",
             "scene",
             "method",
@@ -191,7 +255,7 @@ fn run_work_precision(args: &Args) -> Result<(), Failure> {
     let json = args.json;
     let wp = work_precision::run(&config, |p| {
         if !json {
-            println!("{}", row(p));
+            outln!("{}", row(p));
         }
     });
     if let Some(path) = &args.plot {
@@ -199,14 +263,14 @@ fn run_work_precision(args: &Args) -> Result<(), Failure> {
             .map_err(|e| Failure::Run(anyhow!(e).context("drawing the work-precision plot")))?;
     }
     if json {
-        println!(
+        outln!(
             "{}",
             serde_json::to_string(&wp).map_err(|e| Failure::Run(e.into()))?
         );
     } else {
         print_summary(&wp);
         if let Some(path) = &args.plot {
-            println!("\nplot written to {}", path.display());
+            outln!("\nplot written to {}", path.display());
         }
     }
     Ok(())
@@ -427,6 +491,7 @@ fn run_read(args: &Args) -> Result<(), Failure> {
 }
 
 pub fn run(args: Args) -> Result<(), Failure> {
+    check_flags(&args)?;
     if let Some(dir) = &args.joint {
         return run_joint(&args, dir);
     }

@@ -29,9 +29,15 @@ pub fn run(args: Args) -> Result<(), Failure> {
     let (output, inputs) = (&args.output, &args.inputs);
     super::refuse_input(Some(output), inputs)?;
     let rec = read_recording(inputs, &opts).map_err(|e| Failure::Input(e.into()))?;
-    out!("{}", rec.summary());
+    let quiet = appell::output::names_stdout(output);
+    if quiet {
+        note!("{}", rec.summary().trim_end());
+    } else {
+        out!("{}", rec.summary());
+    }
     synth::write(output, &rec, &Default::default()).map_err(|e| Failure::Run(e.into()))?;
-    outln!(
+    status!(
+        quiet,
         "wrote {} frames to {} ({})",
         rec.len(),
         output.display(),

@@ -194,7 +194,7 @@ pub(super) fn directory_files(dir: &Path, format_given: bool) -> Result<Vec<Path
     if !format_given {
         files.retain(|f| match appell::data::detect(f) {
             Err(e @ appell::data::DataError::UnknownFormat { .. }) => {
-                eprintln!("note: skipped, not a recording: {e}");
+                note!("note: skipped, not a recording: {e}");
                 false
             }
             _ => true,
@@ -226,7 +226,7 @@ pub(super) fn read_for_rig(
     for note in &rec.provenance.notes {
         if note.starts_with(appell::data::TIMES_JOINED_NOTE) {
             let files: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
-            eprintln!("note: {}: {note}", files.join(" + "));
+            note!("note: {}: {note}", files.join(" + "));
         }
     }
     check_recording(&rec).map_err(|e| Failure::Input(e.into()))?;
@@ -341,9 +341,9 @@ pub fn run(args: Args) -> Result<(), Failure> {
                             serde_json::json!({"recording": file.display().to_string(), "error": message})
                         );
                     } else if message.contains(&file.display().to_string()) {
-                        eprintln!("error: {message}");
+                        note!("error: {message}");
                     } else {
-                        eprintln!("error: {}: {message}", file.display());
+                        note!("error: {}: {message}", file.display());
                     }
                 }
             }
@@ -403,6 +403,49 @@ fn release_paths(args: &Args, format_given: bool) -> Result<Vec<Vec<PathBuf>>, F
     }
 }
 
+/// A file's device and inode, or its path as given where it cannot be looked at.
+type FileId = Result<(u64, u64), PathBuf>;
+
+/// The identity of a file: its device and inode (any spelling, link or `..` of one file gives
+/// the same), or, where the file cannot be opened, its path as given (the read names it).
+fn file_id(path: &Path) -> FileId {
+    use std::os::unix::fs::MetadataExt;
+    std::fs::metadata(path)
+        .map(|m| (m.dev(), m.ino()))
+        .map_err(|_| path.to_owned())
+}
+
+/// One release per file: a release whose files are those of an earlier one (`A` and
+/// `DIR/./A`, a link to `A` in the directory, the same Tracker pair twice) is dropped with a
+/// note on stderr, so no recording is counted twice.
+fn once_each(paths: Vec<Vec<PathBuf>>) -> Vec<Vec<PathBuf>> {
+    let mut seen: Vec<(Vec<FileId>, String)> = Vec::new();
+    let mut kept = Vec::new();
+    for p in paths {
+        let id: Vec<_> = p.iter().map(|f| file_id(f)).collect();
+        let name = release_name(&p);
+        match seen.iter().find(|(other, _)| *other == id) {
+            Some((_, first)) => {
+                note!("note: {name} is {first} again (the same file): counted once");
+            }
+            None => {
+                seen.push((id, name));
+                kept.push(p);
+            }
+        }
+    }
+    kept
+}
+
+/// A release's name in messages and the table: its files joined by commas.
+fn release_name(files: &[PathBuf]) -> String {
+    files
+        .iter()
+        .map(|f| f.display().to_string())
+        .collect::<Vec<_>>()
+        .join(",")
+}
+
 /// `appell fit --joint`: the releases read (in parallel), fitted together and reported.
 fn run_joint(
     args: &Args,
@@ -410,15 +453,11 @@ fn run_joint(
     rig: &Rig<f64>,
     settings: &FitSettings,
 ) -> Result<(), Failure> {
-    let paths = release_paths(args, opts.format.is_some())?;
+    let paths = once_each(release_paths(args, opts.format.is_some())?);
     let read: Vec<(String, Result<Observations, Failure>)> = paths
         .par_iter()
         .map(|p| {
-            let name = p
-                .iter()
-                .map(|f| f.display().to_string())
-                .collect::<Vec<_>>()
-                .join(",");
+            let name = release_name(p);
             let obs = read_for_rig(p, opts, &args.rig, rig);
             (name, obs)
         })
@@ -430,7 +469,7 @@ fn run_joint(
             Ok(obs) => releases.push(Release { name, obs }),
             Err(Failure::Input(e) | Failure::Run(e)) if args.keep_going => {
                 let message = super::messages(&e).join(": ");
-                eprintln!("error: {message} (left out)");
+                note!("error: {message} (left out)");
                 unread.push((name, message));
             }
             Err(e) => return Err(e),

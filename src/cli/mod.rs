@@ -1,25 +1,62 @@
 //! Command-line interface: clap derive structs that only parse, and one function per
 //! command that calls the library and prints.
+//!
+//! Every line goes out through `outln!`/`out!` (stdout) or `note!` (stderr), never
+//! `println!`/`eprintln!`, which panic when the stream fails: stdout closed by its reader
+//! (`appell ... | head`) ends the process quietly with exit code 0, any other stdout error (a
+//! full disk) ends it with exit code 1 and the reason on stderr; a stderr that cannot be
+//! written is ignored.
 
-/// `println!` that ends the process quietly when stdout is closed (`appell ... | head`),
-/// instead of panicking on the broken pipe.
+/// `println!` to stdout; a failed write ends the process ([`stdout_failed`]).
 macro_rules! outln {
     ($($t:tt)*) => {{
         use std::io::Write as _;
-        if writeln!(std::io::stdout().lock(), $($t)*).is_err() {
-            std::process::exit(0);
+        if let Err(e) = writeln!(std::io::stdout().lock(), $($t)*) {
+            $crate::cli::stdout_failed(e);
         }
     }};
 }
 
-/// `print!` with the same broken-pipe handling as `outln!`.
+/// `print!` with the same handling of a failed write as `outln!`.
 macro_rules! out {
     ($($t:tt)*) => {{
         use std::io::Write as _;
-        if write!(std::io::stdout().lock(), $($t)*).is_err() {
-            std::process::exit(0);
+        if let Err(e) = write!(std::io::stdout().lock(), $($t)*) {
+            $crate::cli::stdout_failed(e);
         }
     }};
+}
+
+/// `eprintln!` that ignores a stderr that cannot be written (a full disk, a closed pipe)
+/// instead of panicking: the exit code still says how the command ended.
+macro_rules! note {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stderr().lock(), $($t)*);
+    }};
+}
+
+/// A line about what a command wrote: on stdout, or on stderr (`note!`) when the output itself
+/// goes to stdout (`--out -`, `/dev/stdout`), so the output stays whole.
+macro_rules! status {
+    ($to_stderr:expr, $($t:tt)*) => {{
+        if $to_stderr {
+            note!($($t)*);
+        } else {
+            outln!($($t)*);
+        }
+    }};
+}
+
+/// End the process after stdout failed: quietly with exit code 0 when its reader closed it
+/// (a broken pipe: `appell ... | head` read what it wanted), else with exit code 1 and the
+/// reason on stderr (a full disk: the output is incomplete).
+pub fn stdout_failed(e: std::io::Error) -> ! {
+    if e.kind() == std::io::ErrorKind::BrokenPipe {
+        std::process::exit(0);
+    }
+    note!("error: writing the standard output: {e}");
+    std::process::exit(1);
 }
 
 mod bench;
@@ -106,14 +143,26 @@ pub fn main() -> ExitCode {
         Command::Synth(args) => synth::run(args),
         Command::Plan(args) => plan::run(args),
     };
+    // What is still buffered goes out now, so a full disk is an error and not exit 0.
+    if let Err(e) = std::io::Write::flush(&mut std::io::stdout().lock()) {
+        stdout_failed(e);
+    }
     match result {
         Ok(()) => ExitCode::SUCCESS,
         Err(failure) => {
             let (Failure::Input(e) | Failure::Run(e)) = &failure;
+            // An output into a pipe its reader closed (`--out - | head`): a quiet end.
+            let closed = e.chain().any(|c| {
+                c.downcast_ref::<std::io::Error>()
+                    .is_some_and(|io| io.kind() == std::io::ErrorKind::BrokenPipe)
+            });
+            if closed {
+                return ExitCode::SUCCESS;
+            }
             let messages = messages(e);
-            eprintln!("error: {}", messages[0]);
+            note!("error: {}", messages[0]);
             for cause in &messages[1..] {
-                eprintln!("  caused by: {cause}");
+                note!("  caused by: {cause}");
             }
             ExitCode::from(failure.code())
         }

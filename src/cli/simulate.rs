@@ -46,12 +46,23 @@ pub fn run(args: Args) -> Result<(), Failure> {
         })
         .map_err(|e| Failure::Run(anyhow!(e).context(format!("writing {}", path.display()))))?;
     }
+    // With the trajectory on stdout, the timeline and the JSON go to stderr.
+    let quiet = args
+        .out
+        .as_deref()
+        .is_some_and(appell::output::names_stdout);
     if args.json {
-        outln!("{}", report::simulation_json(&scene, &sol));
+        status!(quiet, "{}", report::simulation_json(&scene, &sol));
     } else {
-        out!("{}", report::timeline(&scene, &sol));
+        let timeline = report::timeline(&scene, &sol);
+        if quiet {
+            note!("{}", timeline.trim_end());
+        } else {
+            out!("{timeline}");
+        }
         if let Some(path) = &args.out {
-            outln!(
+            status!(
+                quiet,
                 "trajectory: {} samples written to {}",
                 sol.samples.len(),
                 path.display()

@@ -62,7 +62,9 @@ pub fn run(args: Args) -> Result<(), Failure> {
     })?;
     synth::write(&args.output, &syn.recording, &syn.truth).map_err(|e| Failure::Run(e.into()))?;
     let (ns, nb) = syn.recording.seen();
-    outln!(
+    let quiet = appell::output::names_stdout(&args.output);
+    status!(
+        quiet,
         "wrote {} frames at {} Hz to {} ({}); slider seen in {ns}, bob in {nb}; mu_kinetic {}, seed {}",
         syn.recording.len(),
         opts.fps,
@@ -72,7 +74,8 @@ pub fn run(args: Args) -> Result<(), Failure> {
         opts.seed
     );
     if let Some(t) = syn.stopped_at {
-        outln!(
+        status!(
+            quiet,
             "note: the run stopped at t = {t} s (a paradox it does not resolve); frames end there"
         );
     }

@@ -364,6 +364,13 @@ pub enum FitError {
     /// A setting out of range.
     #[error("{0}")]
     Settings(String),
+    /// The mis-tracked filter dropped so many positions that too few frames with both
+    /// markers are left: the sentence says how many, against which noise, and the fix.
+    #[error("{0}")]
+    AllDropped(String),
+    /// Neither marker moves beyond its noise: nothing in the recording shows mu.
+    #[error("{0}")]
+    NoMotion(String),
 }
 
 /// The default [`FitSettings::long_prefix`]: frames a long recording's starts and candidate

@@ -12,7 +12,7 @@ use nalgebra::DVector;
 const HALF: usize = 6;
 
 /// A deviation beyond this many noise deviations marks a frame as mis-tracked.
-const THRESHOLD: f64 = 8.0;
+pub(super) const THRESHOLD: f64 = 8.0;
 
 /// Drop (set to missing) every marker position that sits more than [`THRESHOLD`] noise
 /// deviations (`sigma`, per marker) from the quadratic through its neighbours; returns how

@@ -27,7 +27,12 @@ pub(super) fn prepare(obs: Observations, settings: &FitSettings) -> Result<Prepa
     let mut obs = check_data(obs)?;
     let n_frames = obs.times.len();
     let (sigma, noise, dropped) = noise_and_outliers(&mut obs, settings)?;
-    enough_frames(&obs)?;
+    if let Err(FitError::TooFewFrames(left)) = enough_frames(&obs) {
+        return Err(all_dropped(&obs, left, dropped, sigma, settings));
+    }
+    if let Some(message) = nothing_moves(&obs, sigma) {
+        return Err(FitError::NoMotion(message));
+    }
     let noise_dof = noise.iter().flatten().map(|e| e.dof).sum::<f64>().max(2.0);
     Ok(Prepared {
         obs: Arc::new(obs),
@@ -59,6 +64,70 @@ pub(super) fn enough_frames(obs: &Observations) -> Result<(), FitError> {
         return Err(FitError::TooFewFrames(both));
     }
     Ok(())
+}
+
+/// Why too few frames are left once the mis-tracked filter ran (there were ten or more with
+/// both markers before it): how many positions of each marker it dropped, the noise it
+/// measured them against and where that noise came from, and the fix.
+fn all_dropped(
+    obs: &Observations,
+    left: usize,
+    dropped: [usize; 2],
+    sigma: [f64; 2],
+    settings: &FitSettings,
+) -> FitError {
+    let seen = [&obs.slider, &obs.bob].map(|t| t.iter().flatten().count());
+    let (source, fix) = if settings.noise.is_some() {
+        (
+            "given with --noise",
+            "give the noise the tracks have with --noise, or leave it out to measure it",
+        )
+    } else {
+        (
+            "measured from the tracks",
+            "the tracks jump from frame to frame far beyond their measured noise; check the frame times and the markers (--noise sets the noise)",
+        )
+    };
+    FitError::AllDropped(format!(
+        "the mis-tracked filter dropped {} of {} slider and {} of {} bob positions (each more than {} noise deviations from the quadratic through its neighbours, with the noise {source}: slider {:.3e} m, bob {:.3e} m), leaving {left} frames with both markers where the fit needs at least 10: {fix}",
+        dropped[0],
+        dropped[0] + seen[0],
+        dropped[1],
+        dropped[1] + seen[1],
+        outliers::THRESHOLD,
+        sigma[0],
+        sigma[1],
+    ))
+}
+
+/// Noise deviations within which a marker's track must stay (its 2nd to 98th percentile, in
+/// each coordinate) for the marker to count as not moving; the never-sliding slider's rule.
+const STILL_NOISES: f64 = 10.0;
+
+/// The sentence for a recording in which neither marker moves beyond [`STILL_NOISES`] noise
+/// deviations (`sigma`, per marker): no slide shows mu_kinetic and no swing bounds mu_static,
+/// so there is nothing to fit. `None` when either marker moves.
+fn nothing_moves(obs: &Observations, sigma: [f64; 2]) -> Option<String> {
+    let mut spans = [0.0; 2];
+    for (m, track) in [&obs.slider, &obs.bob].into_iter().enumerate() {
+        for k in 0..2 {
+            let mut v: Vec<f64> = track.iter().flatten().map(|p| p[k]).collect();
+            let n = v.len();
+            if n == 0 {
+                return None;
+            }
+            let lo = *v.select_nth_unstable_by(n * 2 / 100, f64::total_cmp).1;
+            let hi = *v.select_nth_unstable_by(n * 98 / 100, f64::total_cmp).1;
+            spans[m] = f64::max(spans[m], hi - lo);
+        }
+        if spans[m].is_nan() || spans[m] > STILL_NOISES * sigma[m] {
+            return None;
+        }
+    }
+    Some(format!(
+        "nothing moves in this recording: the slider's track spans {:.2e} m and the bob's {:.2e} m (2nd to 98th percentile, the wider coordinate), within {STILL_NOISES} noise deviations ({:.2e} m, {:.2e} m); mu is not identifiable without motion (no slide shows mu_kinetic, no swing bounds mu_static): fit a recording of a release",
+        spans[0], spans[1], sigma[0], sigma[1]
+    ))
 }
 
 /// The noise used as weights (m), the measurements behind it, and the positions dropped.

@@ -388,8 +388,9 @@ mod tests {
 
     #[test]
     fn unknown_extension_is_refused_and_nothing_written() {
-        let dir = std::env::temp_dir().join(format!("appell-plot-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        // Removed with everything in it at the end of the test.
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().to_path_buf();
         let path = dir.join("figure.jpg");
         let plot = LinePlot {
             title: String::new(),
@@ -408,8 +409,9 @@ mod tests {
 
     #[test]
     fn line_plot_writes_svg_and_png_with_text() {
-        let dir = std::env::temp_dir().join(format!("appell-plot-ok-{}", std::process::id()));
-        std::fs::create_dir_all(&dir).unwrap();
+        // Removed with everything in it at the end of the test.
+        let tmp = tempfile::tempdir().unwrap();
+        let dir = tmp.path().to_path_buf();
         let plot = LinePlot {
             title: "sine".into(),
             x_label: "t [s]".into(),

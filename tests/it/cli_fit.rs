@@ -59,8 +59,9 @@ fn example_recordings_fit_to_their_true_mu() {
 
 #[test]
 fn directory_gives_one_json_line_per_recording_and_a_figure() {
-    let dir = std::env::temp_dir().join(format!("appell-fitdir-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    // Removed with everything in it at the end of the test.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().to_path_buf();
     for f in ["markers_json_zstd.mcap", "markers_reference.csv"] {
         std::fs::copy(path(&format!("tests/data/{f}")), dir.join(f)).unwrap();
     }
@@ -123,8 +124,9 @@ fn directory_gives_one_json_line_per_recording_and_a_figure() {
 
 #[test]
 fn bad_rig_or_recording_exits_2_with_the_cause() {
-    let dir = std::env::temp_dir().join(format!("appell-fitbad-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    // Removed with everything in it at the end of the test.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().to_path_buf();
     let rig = dir.join("rig.toml");
     std::fs::write(&rig, "[rig]\nslider_mass = 0.5\nbob_mass = 0.2\nrod_length = 0.3\ngravity = 9.81\nfriction = 0.1\n").unwrap();
     let out = appell(&[

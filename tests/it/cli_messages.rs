@@ -2,7 +2,7 @@
 //! are not recordings skipped in a directory, each error said once, help and usage lines that
 //! match what the commands do.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::process::{Command, Output};
 
 fn appell(args: &[&str]) -> Output {
@@ -19,11 +19,24 @@ fn path(rel: &str) -> String {
         .to_string()
 }
 
-fn scratch(name: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("appell-cli-msg-{}-{name}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&dir);
-    std::fs::create_dir_all(&dir).unwrap();
-    dir
+/// A scratch directory, removed with everything in it when dropped (the tests left 60 of them
+/// in /tmp before).
+struct Scratch(tempfile::TempDir);
+
+impl std::ops::Deref for Scratch {
+    type Target = Path;
+    fn deref(&self) -> &Path {
+        self.0.path()
+    }
+}
+
+fn scratch(name: &str) -> Scratch {
+    Scratch(
+        tempfile::Builder::new()
+            .prefix(&format!("appell-cli-msg-{name}-"))
+            .tempdir()
+            .unwrap(),
+    )
 }
 
 fn stderr(out: &Output) -> String {
@@ -74,7 +87,7 @@ fn a_scene_file_is_accepted_as_the_rig() {
 
 /// Fit a directory holding the shipped canonical CSV (as `good.csv`) and `extra` files (name,
 /// content), without profile intervals.
-fn fit_directory(name: &str, extra: &[(&str, &str)], json: bool) -> (PathBuf, Output) {
+fn fit_directory(name: &str, extra: &[(&str, &str)], json: bool) -> (Scratch, Output) {
     let dir = scratch(name);
     std::fs::copy(
         path("tests/data/markers_reference.csv"),

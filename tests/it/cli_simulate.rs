@@ -9,7 +9,21 @@ fn appell(args: &[&str]) -> std::process::Output {
         .expect("runs")
 }
 
-fn scene_with(replace: &str, with: &str) -> std::path::PathBuf {
+/// A file in a directory of its own, removed with everything beside it (the outputs a test
+/// writes next to it) when dropped.
+struct Scratch {
+    _dir: tempfile::TempDir,
+    path: std::path::PathBuf,
+}
+
+impl std::ops::Deref for Scratch {
+    type Target = std::path::Path;
+    fn deref(&self) -> &std::path::Path {
+        &self.path
+    }
+}
+
+fn scene_with(replace: &str, with: &str) -> Scratch {
     let base = std::fs::read_to_string(concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/configs/paper_rest_horizontal.toml"
@@ -17,11 +31,15 @@ fn scene_with(replace: &str, with: &str) -> std::path::PathBuf {
     .unwrap();
     assert!(base.contains(replace), "fixture lacks {replace}");
     let text = base.replacen(replace, with, 1);
-    let dir = std::env::temp_dir().join(format!("appell-test-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
-    let path = dir.join(format!("scene-{:x}.toml", text.len() * 31 + with.len()));
+    let dir = tempfile::Builder::new()
+        .prefix("appell-test-")
+        .tempdir()
+        .unwrap();
+    let path = dir
+        .path()
+        .join(format!("scene-{:x}.toml", text.len() * 31 + with.len()));
     std::fs::write(&path, text).unwrap();
-    path
+    Scratch { _dir: dir, path }
 }
 
 #[test]

@@ -378,8 +378,9 @@ fn plan_after_a_joint_fit() {
     std::fs::remove_dir_all(&tmp).unwrap();
 }
 
-/// `--release SLIDER.txt,BOB.txt` is one release (a Tracker pair), not two: twice the pair
-/// gives two releases, each with both markers, and mu as made (0.12).
+/// `--release SLIDER.txt,BOB.txt` is one release (a Tracker pair), not two: the pair and a
+/// copy of it give two releases, each with both markers, and mu as made (0.12). The same pair
+/// named twice is one release (issue 35: one release per file), with a note.
 #[test]
 fn a_tracker_pair_is_one_release() {
     let pair = format!(
@@ -387,10 +388,31 @@ fn a_tracker_pair_is_one_release() {
         repo("tests/data/tracker_slider.txt").display(),
         repo("tests/data/tracker_bob.txt").display()
     );
-    let out = Command::new(env!("CARGO_BIN_EXE_appell"))
+    let tmp = tempfile::tempdir().unwrap();
+    for name in ["tracker_slider.txt", "tracker_bob.txt"] {
+        std::fs::copy(repo("tests/data").join(name), tmp.path().join(name)).unwrap();
+    }
+    let copy = format!(
+        "{},{}",
+        tmp.path().join("tracker_slider.txt").display(),
+        tmp.path().join("tracker_bob.txt").display()
+    );
+    let twice = Command::new(env!("CARGO_BIN_EXE_appell"))
         .args(["fit", "--joint", "--json", "--rig"])
         .arg(repo("configs/markers_example.toml"))
         .args(["--release", &pair, "--release", &pair])
+        .output()
+        .unwrap();
+    let stderr = String::from_utf8_lossy(&twice.stderr);
+    assert_eq!(twice.status.code(), Some(2), "{stderr}");
+    assert!(
+        stderr.contains("counted once") && stderr.contains("two or more"),
+        "{stderr}"
+    );
+    let out = Command::new(env!("CARGO_BIN_EXE_appell"))
+        .args(["fit", "--joint", "--json", "--rig"])
+        .arg(repo("configs/markers_example.toml"))
+        .args(["--release", &pair, "--release", &copy])
         .output()
         .unwrap();
     assert!(

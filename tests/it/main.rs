@@ -25,5 +25,6 @@ mod real_rigs;
 mod recordings;
 mod regions;
 mod rigid;
+mod safety_io;
 mod simulate_oracles;
 mod stress;

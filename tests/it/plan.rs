@@ -191,8 +191,9 @@ fn impossible_plan_says_so_and_names_the_nearest() {
 /// The example plan end to end: JSON with the documented keys and a figure.
 #[test]
 fn cli_example_plan_json_and_figure() {
-    let dir = std::env::temp_dir().join(format!("appell-cli-plan-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    // Removed with everything in it at the end of the test.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().to_path_buf();
     let svg = dir.join("plan.svg");
     let out = appell(&[
         "plan",
@@ -231,8 +232,9 @@ fn cli_example_plan_json_and_figure() {
 /// A bad plan file exits with code 2 and names the file and the key.
 #[test]
 fn cli_bad_plan_file_names_the_key() {
-    let dir = std::env::temp_dir().join(format!("appell-cli-plan-bad-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    // Removed with everything in it at the end of the test.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().to_path_buf();
     let text = std::fs::read_to_string(config("plan_example.toml"))
         .unwrap()
         .replace("frame_rate = 500.0", "frame_rate = -5.0");

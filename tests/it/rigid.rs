@@ -383,8 +383,9 @@ fn regions_prints_both_critical_frictions() {
 /// Pendulum keys no body can have are refused with exit 2, naming the file and the key.
 #[test]
 fn impossible_pendulums_exit_2_naming_the_key() {
-    let dir = std::env::temp_dir().join(format!("appell-rigid-{}", std::process::id()));
-    std::fs::create_dir_all(&dir).unwrap();
+    // Removed with everything in it at the end of the test.
+    let tmp = tempfile::tempdir().unwrap();
+    let dir = tmp.path().to_path_buf();
     let head = "[rig]\nslider_mass = 0.1\nrod_length = 0.3\ngravity = 9.81\nmu_kinetic = 0.3\n";
     for (name, keys, key) in [
         ("neg_rod", "bob_mass = 0.1\nrod_mass = -0.01\n", "rod_mass"),

@@ -161,7 +161,13 @@ impl<'a, T: Scalar + 'static, const N: usize> Run<'a, '_, T, N> {
         if !(err.is_finite() && finite(&y1)) || err > 1.0 {
             self.out.stats.rejected += 1;
             if cfg!(debug_assertions) {
-                eprintln!("reject t={t} h={} err={err} mode={}", self.h, self.mode);
+                use std::io::Write as _;
+                let _ = writeln!(
+                    std::io::stderr(),
+                    "reject t={t} h={} err={err} mode={}",
+                    self.h,
+                    self.mode
+                );
             }
             self.h *= shrink_factor(err, seg.exponent);
             if self.h < h_min {
