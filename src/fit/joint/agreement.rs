@@ -11,16 +11,8 @@ use crate::fit::uncertainty::{self, WindowFit};
 use crate::fit::{Estimate, FitSettings};
 use rayon::prelude::*;
 
-/// A p-value for a sentence: below double precision's resolution as a bound.
-fn p_text(p: f64) -> String {
-    if p < 1e-16 {
-        "< 1e-16".to_owned()
-    } else {
-        format!("{p:.1e}")
-    }
-}
-
-/// Below this p-value the releases' own mu disagree (the single fit's windows use the same).
+/// Below this p-value the releases' own mu disagree. Stricter than the single fit's windows
+/// ([`crate::fit::WINDOWS_P`]): a release set aside is named, and its value left out.
 pub(super) const AGREE_P: f64 = 0.01;
 
 /// The releases' own (mu, se) as the windows' test sees them.
@@ -136,13 +128,13 @@ pub(super) fn agreement(
             disagreeing: Vec::new(),
             others: None,
             sentence: format!(
-                "The {} releases agree (p = {:.2}); the interval is what they support together.",
+                "The {} releases agree ({}); the interval is what they support together.",
                 rows.len(),
-                consistency_p.unwrap_or(f64::NAN)
+                crate::report::p_is(consistency_p.unwrap_or(f64::NAN))
             ),
         };
     }
-    // Which releases: the worst one set aside at a time and the rest refitted (an odd
+    // Which releases: the worst set aside in rounds and the rest refitted (an odd
     // release pulls the shared tilt and so every release's own mu), until the rest agree.
     let (disagreeing, others) = mark_disagreeing(jp, &z, rows, settings);
     let spread = window_spread_of(&pairs, mu.value);
@@ -160,8 +152,8 @@ pub(super) fn agreement(
 /// others, and that the widened interval is the rail's only if every release ran on one rail.
 fn disagree_sentence(p: Option<f64>, disagreeing: &[String], others: Option<Estimate>) -> String {
     format!(
-        "The releases disagree (p = {}): {} {} off the others{}; the interval is widened by the releases' spread, and is the rail's only if every release ran on one rail.",
-        p_text(p.unwrap_or(f64::NAN)),
+        "The releases disagree ({}): {} {} off the others{}; the interval is widened by the releases' spread, and is the rail's only if every release ran on one rail.",
+        crate::report::p_is(p.unwrap_or(f64::NAN)),
         disagreeing.join(", "),
         if disagreeing.len() == 1 { "lies" } else { "lie" },
         others.map_or(String::new(), |e: Estimate| format!(
