@@ -23,6 +23,7 @@ mod real_files;
 mod real_rigs;
 mod recordings;
 mod regions;
+mod rig_ranges;
 mod rigid;
 mod simulate_oracles;
 mod stress;
