@@ -258,7 +258,7 @@ fn check(path: &Path, ok: bool, key: &str, expected: &str, value: f64) -> Result
     } else {
         Err(SceneError::Invalid {
             path: path.to_owned(),
-            message: format!("{key} must be {expected}, got {value}"),
+            message: format!("{key} must be {expected}, got {value:?}"),
         })
     }
 }
