@@ -1,6 +1,7 @@
 //! Scenes: a TOML file with a rig, an initial state, a run and what the run should produce.
 //! Key names are fixed (scripts use them); unknown keys are errors so typos never pass.
 
+use crate::fit::Param;
 use crate::model::{FrictionLaw, PendulumKeys, Rig, RigError, State};
 use crate::sim::{Method, Options, Request, RestRule};
 use serde::Deserialize;
@@ -92,6 +93,19 @@ impl RigSpec {
             }
         }
         rig.validate()?;
+        Ok(rig)
+    }
+
+    /// The validated rig with every range checked, the errors naming `path`: the keys as
+    /// written first ([`check_rig_range`]), then the rig built from them, then what was
+    /// computed ([`check_rig`]). Scenes, rig files and plans all build their rig here.
+    pub fn checked(&self, path: &Path) -> Result<Rig<f64>, SceneError> {
+        check_rig_range(path, self)?;
+        let rig = self.rig().map_err(|e| SceneError::Invalid {
+            path: path.to_owned(),
+            message: e.to_string(),
+        })?;
+        check_rig(path, &rig, RigOrigin::File { friction: "rig" })?;
         Ok(rig)
     }
 
@@ -244,7 +258,7 @@ fn check(path: &Path, ok: bool, key: &str, expected: &str, value: f64) -> Result
     } else {
         Err(SceneError::Invalid {
             path: path.to_owned(),
-            message: format!("{key} must be {expected}, got {value}"),
+            message: format!("{key} must be {expected}, got {value:?}"),
         })
     }
 }
@@ -356,8 +370,270 @@ pub fn check_gravity(path: &Path, gravity: f64) -> Result<(), SceneError> {
     )
 }
 
-/// Check that the rig's values stay where the model's arithmetic is finite.
-fn check_rig_range(path: &Path, r: &RigSpec) -> Result<(), SceneError> {
+/// The relative tolerance `run.rtol` may ask for: from 1e-14, near what f64 arithmetic
+/// resolves (tighter only multiplies the steps), to 1e-2, past which the step control lets
+/// the error grow unseen (rtol 0.5 ended a light-slider scene in NaN, 0.9 gave theta' of
+/// 2.8e20 rad/s with exit 0).
+pub const RTOL_RANGE: [f64; 2] = [1e-14, 1e-2];
+
+/// The absolute tolerance `run.atol` may ask for (metres, radians and their rates alike):
+/// from 1e-16 to 1e-3, a millimetre or milliradian per step, which still keeps the shipped
+/// scenes' final states within a few millimetres; a larger one lets the step control accept
+/// any step (atol 1 moved a rigid rig's slide by 0.2 m).
+pub const ATOL_RANGE: [f64; 2] = [1e-16, 1e-3];
+
+/// The fastest rate (1/s) a rig may have: its time scale must be at least 10 ms. The explicit
+/// integrator takes about one step per 1/6 of the fastest time scale however loose the
+/// tolerance (stability, not accuracy): 3,149 steps for a 2 s run of the paper scene at a
+/// damping rate of 1.1e4 /s, against 107 at the paper's 8 /s. A fit runs hundreds of runs:
+/// `tests/data/rigid/rigid_paper.csv` with the measured rig fits in 0.05 s, with pivot damping
+/// at a rate of 95 /s (c_p = 0.4 N m s) in 9.7 s, at 950 /s (c_p = 4) in 250 s, and at 1e5 /s
+/// (c_p = 1e3, or an equivalent length of 1e-9 m) for over three minutes before this check.
+/// Real rigs are far below it: a 1 cm pendulum on a slider of its own mass swings at 44
+/// rad/s, the paper's at 8, and critically damping the paper's pendulum is a rate of 11 /s.
+pub const MAX_RIG_RATE: f64 = 100.0;
+
+/// Where a rig's values came from: what names a bad one in a message.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum RigOrigin<'a> {
+    /// Typed in a file's `[rig]` (scene, rig file or plan); `friction` is the section the
+    /// friction coefficients are in (`rig`, or `friction` in a plan).
+    File {
+        /// Section of `mu_kinetic` and `mu_static`.
+        friction: &'static str,
+    },
+    /// Computed by a fit and read from its JSON (`plan --after`): the parameters it fitted
+    /// and their values, under `section` (`shared` for a joint fit, `parameters` otherwise).
+    Fit {
+        /// Where the values are in the JSON.
+        section: &'static str,
+        /// The parameters the fit set in the rig.
+        names: &'a [Param],
+        /// Their values, as in the JSON.
+        values: &'a [f64],
+    },
+}
+
+/// A value of the rig the dynamics use, for [`check_rig`]'s messages.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Quantity {
+    MarkerLength,
+    Length,
+    MassRatio,
+    MuKinetic,
+    MuStatic,
+    Tilt,
+    PivotDamping,
+    Viscous,
+    Stribeck,
+}
+
+impl RigOrigin<'_> {
+    /// The field a quantity of `rig` is named by, and the value to show (a fit's own value
+    /// where it fitted the quantity, so a mass ratio of -1 shows as -1, not as the NaN it
+    /// makes of the masses).
+    fn name(&self, q: Quantity, rig: &Rig<f64>, value: f64) -> (String, f64) {
+        let rigid = rig.pendulum.is_some();
+        match *self {
+            RigOrigin::File { friction } => {
+                let name = match q {
+                    Quantity::MarkerLength => "rig.rod_length".into(),
+                    Quantity::Length if rigid => "the pendulum's equivalent length L = J / (m_p d) (from rig.rod_length and the pendulum's keys)".into(),
+                    Quantity::Length => "rig.rod_length".into(),
+                    Quantity::MassRatio if rigid => "the equivalent mass ratio r' = (m1 + m_p - m_e) / m_e (from rig.slider_mass and the pendulum's keys)".into(),
+                    Quantity::MassRatio => "the mass ratio rig.slider_mass / rig.bob_mass".into(),
+                    Quantity::MuKinetic => format!("{friction}.mu_kinetic"),
+                    Quantity::MuStatic => format!("{friction}.mu_static"),
+                    Quantity::Tilt => "rig.rail_tilt_deg".into(),
+                    Quantity::PivotDamping => "rig.pivot_damping".into(),
+                    Quantity::Viscous => "rig.viscous_friction".into(),
+                    Quantity::Stribeck => "rig.stribeck_velocity".into(),
+                };
+                let value = if q == Quantity::Tilt {
+                    value.to_degrees()
+                } else {
+                    value
+                };
+                (name, value)
+            }
+            RigOrigin::Fit {
+                section,
+                names,
+                values,
+            } => {
+                let param = match q {
+                    Quantity::MarkerLength => Param::RodLength,
+                    Quantity::Length if names.contains(&Param::PendulumLength) => {
+                        Param::PendulumLength
+                    }
+                    Quantity::Length => Param::RodLength,
+                    Quantity::MassRatio => Param::MassRatio,
+                    Quantity::MuKinetic => Param::MuKinetic,
+                    Quantity::MuStatic if names.contains(&Param::MuStatic) => Param::MuStatic,
+                    Quantity::MuStatic => Param::MuKinetic,
+                    Quantity::Tilt => Param::RailTilt,
+                    Quantity::PivotDamping => Param::PivotDamping,
+                    Quantity::Viscous => Param::ViscousFriction,
+                    Quantity::Stribeck => Param::StribeckVelocity,
+                };
+                let given = names.iter().position(|&n| n == param).map(|i| values[i]);
+                let name = format!(
+                    "{section}.{}.value (a value the fit computed, {})",
+                    param.name(),
+                    if given.is_some() {
+                        "read from the fit JSON"
+                    } else {
+                        "the plan's, moved by the fit's other values"
+                    }
+                );
+                (name, given.unwrap_or(value))
+            }
+        }
+    }
+}
+
+/// Check a rig however it arrived (scene, rig file, plan, a fit's JSON) against the same
+/// ranges, on the values the dynamics use: lengths within [`RIG_MIN`]..[`RIG_MAX`], the
+/// (equivalent) mass ratio within their quotients, friction coefficients from 0 to
+/// [`RIG_MAX`] with mu_static >= mu_kinetic, a tilt below 90 degrees, damping and viscous
+/// friction from 0 to [`RIG_MAX`], a Stribeck speed within [`RIG_MIN`]..[`RIG_MAX`]. Errors
+/// name `path` and the field by `origin`. The rig's keys as written are checked before it is
+/// built (`check_rig_range`), so this catches what was computed: a rigid pendulum's
+/// equivalents and a fit's values.
+pub fn check_rig(path: &Path, rig: &Rig<f64>, origin: RigOrigin) -> Result<(), SceneError> {
+    let bad = |q: Quantity, value: f64, expected: String| -> SceneError {
+        let (name, value) = origin.name(q, rig, value);
+        SceneError::Invalid {
+            path: path.to_owned(),
+            message: format!("{name} must be {expected}, got {value:?}"),
+        }
+    };
+    let within = |v: f64, lo: f64, hi: f64| (lo..=hi).contains(&v);
+    let range = format!("between {RIG_MIN:e} and {RIG_MAX:e}");
+    check_gravity(path, rig.gravity)?;
+    for (q, v) in [
+        (Quantity::MarkerLength, rig.marker_length),
+        (Quantity::Length, rig.rod_length),
+    ] {
+        if !within(v, RIG_MIN, RIG_MAX) {
+            return Err(bad(q, v, format!("{range} m")));
+        }
+    }
+    let [r_lo, r_hi] = [RIG_MIN / RIG_MAX, RIG_MAX / RIG_MIN];
+    let ratio = rig.mass_ratio();
+    if !(within(ratio, r_lo, r_hi) && rig.slider_mass > 0.0 && rig.bob_mass > 0.0) {
+        return Err(bad(
+            Quantity::MassRatio,
+            ratio,
+            format!("between {r_lo:e} and {r_hi:e} (masses {range} kg)"),
+        ));
+    }
+    for (q, v) in [
+        (Quantity::MuKinetic, rig.mu_kinetic),
+        (Quantity::MuStatic, rig.mu_static),
+    ] {
+        if !within(v, 0.0, RIG_MAX) {
+            return Err(bad(q, v, format!("between 0 and {RIG_MAX:e}")));
+        }
+    }
+    if rig.mu_static < rig.mu_kinetic {
+        return Err(bad(
+            Quantity::MuStatic,
+            rig.mu_static,
+            format!("at least mu_kinetic ({})", rig.mu_kinetic),
+        ));
+    }
+    if !(rig.rail_tilt.is_finite() && rig.rail_tilt.abs() < std::f64::consts::FRAC_PI_2) {
+        let expected = match origin {
+            RigOrigin::File { .. } => "strictly between -90 and 90 degrees",
+            RigOrigin::Fit { .. } => "strictly between -pi/2 and pi/2 rad (-90 and 90 degrees)",
+        };
+        return Err(bad(Quantity::Tilt, rig.rail_tilt, expected.into()));
+    }
+    for (q, v, unit) in [
+        (Quantity::PivotDamping, rig.pivot_damping, "N m s"),
+        (Quantity::Viscous, rig.viscous_friction, "N s/m"),
+    ] {
+        if !within(v, 0.0, RIG_MAX) {
+            return Err(bad(q, v, format!("between 0 and {RIG_MAX:e} {unit}")));
+        }
+    }
+    if rig.friction_law == FrictionLaw::Stribeck && !within(rig.stribeck_velocity, RIG_MIN, RIG_MAX)
+    {
+        return Err(bad(
+            Quantity::Stribeck,
+            rig.stribeck_velocity,
+            format!("{range} m/s"),
+        ));
+    }
+    Ok(())
+}
+
+/// The rig's fastest rate (1/s) and the quantity that sets it: the pendulum's swing with the
+/// slider free, sqrt(g (1 + m2/m1) / L); the pivot damping's c_p (1 + m2/m1) / (m2 L^2); the
+/// rail's viscous friction c_v / m1 (the dynamics' point rig: m2 and L a rigid pendulum's
+/// equivalents). The slider-free forms are the larger, so the estimate holds in every mode.
+fn rig_rate(rig: &Rig<f64>) -> (f64, Quantity) {
+    let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);
+    let free = 1.0 + m2 / m1;
+    [
+        ((rig.gravity * free / l).sqrt(), Quantity::Length),
+        (
+            rig.pivot_damping * free / (m2 * l * l),
+            Quantity::PivotDamping,
+        ),
+        (rig.viscous_friction / m1, Quantity::Viscous),
+    ]
+    .into_iter()
+    .fold((0.0, Quantity::Length), |best, (rate, q)| {
+        // NaN (never from a rig [`check_rig`] passed) counts as too fast.
+        if rate.is_nan() || rate > best.0 {
+            (if rate.is_nan() { f64::INFINITY } else { rate }, q)
+        } else {
+            best
+        }
+    })
+}
+
+/// The rig's fastest rate (1/s), for work estimates: see [`MAX_RIG_RATE`].
+pub fn rig_time_rate(rig: &Rig<f64>) -> f64 {
+    rig_rate(rig).0
+}
+
+/// Check that the rig's fastest time scale is at least 1 / [`MAX_RIG_RATE`] s, before any
+/// integration: a stiffer rig makes the explicit integrator's steps (and a fit's or a
+/// region map's runs) take minutes. Every command that integrates a rig calls it: simulate
+/// and synth (scenes), regions (rig files), fits (after the rig is compared with the
+/// recording) and plans (the plan's rig, and again with a fit's values).
+pub fn check_time_scale(path: &Path, rig: &Rig<f64>, origin: RigOrigin) -> Result<(), SceneError> {
+    let (rate, q) = rig_rate(rig);
+    if rate <= MAX_RIG_RATE {
+        return Ok(());
+    }
+    let what = match q {
+        Quantity::PivotDamping => "c_p (1 + m2/m1) / (m2 L^2)",
+        Quantity::Viscous => "c_v / m1",
+        _ => "sqrt(g (1 + m2/m1) / L)",
+    };
+    let value = match q {
+        Quantity::PivotDamping => rig.pivot_damping,
+        Quantity::Viscous => rig.viscous_friction,
+        _ => rig.rod_length,
+    };
+    let (name, value) = origin.name(q, rig, value);
+    Err(SceneError::Invalid {
+        path: path.to_owned(),
+        message: format!(
+            "{name} must give the rig a time scale of at least {} ms (a rate {what} of at most {MAX_RIG_RATE:e} /s; a stiffer rig takes the integrator minutes), got {value:?} (a rate of {rate:.3e} /s)",
+            1e3 / MAX_RIG_RATE
+        ),
+    })
+}
+
+/// Check the rig's keys as written against their ranges, before the rig is built from them
+/// (so a bad key is named, not a value computed from it): every file with a `[rig]` (scene,
+/// rig file, plan) calls it.
+pub fn check_rig_range(path: &Path, r: &RigSpec) -> Result<(), SceneError> {
     let within = |v: f64| (RIG_MIN..=RIG_MAX).contains(&v);
     let range = format!("between {RIG_MIN:e} and {RIG_MAX:e}");
     check(
@@ -453,11 +729,8 @@ pub fn check_frames(path: &Path, duration: f64, rate: f64, key: &str) -> Result<
 impl SceneFile {
     /// Check every value, naming the first bad key.
     pub fn validate(&self, path: &Path) -> Result<Scene, SceneError> {
-        let rig = self.rig.rig().map_err(|e| SceneError::Invalid {
-            path: path.to_owned(),
-            message: e.to_string(),
-        })?;
-        check_rig_range(path, &self.rig)?;
+        let rig = self.rig.checked(path)?;
+        check_time_scale(path, &rig, RigOrigin::File { friction: "rig" })?;
         let i = &self.initial;
         for (key, v) in [
             ("initial.x", i.x),
@@ -493,20 +766,18 @@ impl SceneFile {
         let defaults = Options::default();
         let rtol = r.rtol.unwrap_or(defaults.rtol);
         let atol = r.atol.unwrap_or(defaults.atol);
-        check(
-            path,
-            rtol > 0.0 && rtol < 1.0,
-            "run.rtol",
-            "in (0, 1)",
-            rtol,
-        )?;
-        check(
-            path,
-            atol > 0.0 && atol.is_finite(),
-            "run.atol",
-            "a finite number > 0",
-            atol,
-        )?;
+        for (key, value, [lo, hi]) in [
+            ("run.rtol", rtol, RTOL_RANGE),
+            ("run.atol", atol, ATOL_RANGE),
+        ] {
+            check(
+                path,
+                (lo..=hi).contains(&value),
+                key,
+                &format!("between {lo:e} and {hi:e} (tighter only adds steps; looser lets the integrator's error grow unchecked)"),
+                value,
+            )?;
+        }
         if let Some(fr) = self.output.frame_rate {
             check(
                 path,
@@ -593,25 +864,25 @@ impl RigFile {
     /// uncertainties: `*_sd` keys).
     pub fn load_measured(path: &Path, mu_guess: f64) -> Result<(Rig<f64>, RigSpec), SceneError> {
         let file: RigFile = parse_toml(&read_text(path, MAX_TOML_BYTES)?, path)?;
-        let rig = file
-            .rig
-            .rig_or_guess(mu_guess)
-            .map_err(|e| SceneError::Invalid {
-                path: path.to_owned(),
-                message: e.to_string(),
-            })?;
-        check_rig_range(path, &file.rig)?;
-        Ok((rig, file.rig))
+        let spec = RigSpec {
+            mu_kinetic: Some(file.rig.mu_kinetic.unwrap_or(mu_guess)),
+            mu_static: file
+                .rig
+                .mu_static
+                .or(file.rig.mu_kinetic)
+                .or(Some(mu_guess)),
+            ..file.rig
+        };
+        // The time scale is checked by the fit once the rig is compared with the recording
+        // (a rod its markers contradict is the better message).
+        Ok((spec.checked(path)?, file.rig))
     }
 
-    /// Parse and validate rig-file text; `path` only labels errors.
+    /// Parse and validate rig-file text, its time scale included; `path` only labels errors.
     pub fn parse(text: &str, path: &Path) -> Result<Rig<f64>, SceneError> {
         let file: RigFile = parse_toml(text, path)?;
-        let rig = file.rig.rig().map_err(|e| SceneError::Invalid {
-            path: path.to_owned(),
-            message: e.to_string(),
-        })?;
-        check_rig_range(path, &file.rig)?;
+        let rig = file.rig.checked(path)?;
+        check_time_scale(path, &rig, RigOrigin::File { friction: "rig" })?;
         Ok(rig)
     }
 }

@@ -231,6 +231,13 @@ pub(super) fn read_for_rig(
     }
     check_recording(&rec).map_err(|e| Failure::Input(e.into()))?;
     check_rod_length(rig_path, rig, &rec).map_err(|e| Failure::Input(e.into()))?;
+    // Before any integration: a rig too stiff to fit in minutes is refused, naming its key.
+    appell::scene::check_time_scale(
+        rig_path,
+        rig,
+        appell::scene::RigOrigin::File { friction: "rig" },
+    )
+    .map_err(|e| Failure::Input(e.into()))?;
     Ok(Observations::from(&rec))
 }
 

@@ -40,7 +40,11 @@ pub fn run(args: Args) -> Result<(), Failure> {
     let mut spec = PlanSpec::from_path(&args.plan).map_err(|e| Failure::Input(e.into()))?;
     if let Some(fit) = &args.after {
         let prior = Prior::from_path(fit).map_err(|e| Failure::Input(e.into()))?;
-        prior.apply(&mut spec);
+        prior
+            .apply(&mut spec)
+            .map_err(|e| Failure::Input(e.into()))?;
+        spec.check_work(&args.plan, Some(fit))
+            .map_err(|e| Failure::Input(e.into()))?;
         spec.prior = Some(prior);
     }
     // Drawn only when stderr is a terminal (indicatif hides it otherwise).

@@ -306,6 +306,16 @@ pub enum RigError {
         /// The offending value.
         value: f64,
     },
+    /// A value of a rigid pendulum's equivalent point rig (PHYSICS.md, "Rigid pendulum") that
+    /// is not finite and positive: it is computed from several keys, which the message names,
+    /// so no single key is blamed for it.
+    #[error("the pendulum's equivalent {what} (computed from rig.slider_mass and the pendulum's keys: bob_mass, rod_mass, bob_radius or pendulum_mass, pendulum_com, pendulum_inertia) must be a finite positive number, got {value}")]
+    Equivalent {
+        /// Which value: `slider mass m1 + m_p - m_e`, `bob mass m_e` or `length L`.
+        what: &'static str,
+        /// The value computed.
+        value: f64,
+    },
     /// Static friction below kinetic friction.
     #[error("rig.mu_static ({mu_static}) must be >= rig.mu_kinetic ({mu_kinetic})")]
     StaticBelowKinetic {
@@ -409,6 +419,19 @@ impl Rig<f64> {
 
     /// Check every parameter, naming the first bad one by its scene key.
     pub fn validate(&self) -> Result<(), RigError> {
+        if self.pendulum.is_some() {
+            // The dynamics' masses and length are the equivalent point rig's, computed from
+            // several keys: a bad one is named as what it is, not as `rig.slider_mass`.
+            for (what, value) in [
+                ("slider mass m1 + m_p - m_e", self.slider_mass),
+                ("bob mass m_e", self.bob_mass),
+                ("length L", self.rod_length),
+            ] {
+                if !(value.is_finite() && value > 0.0) {
+                    return Err(RigError::Equivalent { what, value });
+                }
+            }
+        }
         for (key, value) in [
             ("slider_mass", self.slider_mass),
             ("bob_mass", self.bob_mass),

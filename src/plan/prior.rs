@@ -6,7 +6,7 @@
 use super::spec::{PlanSpec, Uncertain};
 use crate::fit::Param;
 use crate::model::FrictionLaw;
-use crate::scene::SceneError;
+use crate::scene::{check_rig, check_time_scale, RigOrigin, SceneError};
 use nalgebra::DMatrix;
 use serde_json::Value;
 use std::path::{Path, PathBuf};
@@ -14,6 +14,63 @@ use std::path::{Path, PathBuf};
 /// The largest fit JSON read (a fit's report is tens of kilobytes; a joint one of many
 /// releases a few hundred).
 const MAX_FIT_JSON: u64 = 16 << 20;
+
+/// The standard errors a fit's covariance may give (the square roots of its diagonal): from
+/// 1e-20 to 1e6 in the parameter's unit. A fit of noise-free data reports errors near 1e-12;
+/// below 1e-20 the information (1 / variance) loses the release's part to rounding, and a
+/// subnormal variance made it infinite (every predicted error null, the verdict "not
+/// feasible"); above 1e6 nothing was measured, and the robustness draws of mu would leave
+/// the rig's ranges (1e308 printed "+- inf").
+pub const STDERR_RANGE: [f64; 2] = [1e-20, 1e6];
+
+/// How far a covariance may be from symmetric: |C_ij - C_ji| at most this times
+/// sqrt(C_ii C_jj). A fit's own matrix is symmetric to about 1e-11 of that (its inverse is
+/// computed in floating point); a larger difference is an edited or a different matrix.
+pub const SYMMETRY_TOLERANCE: f64 = 1e-6;
+
+/// Check a fit's covariance (`shared_covariance.matrix`, finite numbers, square): standard
+/// errors within [`STDERR_RANGE`], symmetric within [`SYMMETRY_TOLERANCE`], and positive
+/// definite (its correlation matrix has a Cholesky factor, so its scale does not decide).
+fn check_covariance(path: &Path, m: &DMatrix<f64>) -> Result<(), SceneError> {
+    let [lo, hi] = STDERR_RANGE;
+    let n = m.nrows();
+    for i in 0..n {
+        let var = m[(i, i)];
+        let se = var.sqrt();
+        if !(var > 0.0 && (lo..=hi).contains(&se)) {
+            return Err(invalid(
+                path,
+                format!(
+                    "shared_covariance.matrix[{i}][{i}]: expected a variance whose square root, a standard error, is between {lo:e} and {hi:e}, got {var:e}"
+                ),
+            ));
+        }
+    }
+    for i in 0..n {
+        for j in 0..i {
+            let (a, b) = (m[(i, j)], m[(j, i)]);
+            if (a - b).abs() > SYMMETRY_TOLERANCE * (m[(i, i)] * m[(j, j)]).sqrt() {
+                return Err(invalid(
+                    path,
+                    format!(
+                        "shared_covariance.matrix[{i}][{j}] = {a:e} and [{j}][{i}] = {b:e}: expected a symmetric matrix (within {SYMMETRY_TOLERANCE:e} of sqrt(C_ii C_jj))"
+                    ),
+                ));
+            }
+        }
+    }
+    let scale = m.diagonal().map(|v| 1.0 / v.sqrt());
+    let correlation = DMatrix::from_fn(n, n, |i, j| {
+        0.5 * (m[(i, j)] + m[(j, i)]) * scale[i] * scale[j]
+    });
+    if correlation.cholesky().is_none() {
+        return Err(invalid(
+            path,
+            "shared_covariance.matrix: expected a positive definite matrix (a covariance: its correlations have no Cholesky factor, so some combination of the parameters has a variance <= 0)".into(),
+        ));
+    }
+    Ok(())
+}
 
 /// A fit's knowledge of the rig's parameters.
 #[derive(Debug, Clone, PartialEq)]
@@ -28,6 +85,8 @@ pub struct Prior {
     pub covariance: DMatrix<f64>,
     /// Its inverse: what is known.
     pub information: DMatrix<f64>,
+    /// Where the values are in the JSON: `shared` (a joint fit) or `parameters`.
+    pub section: &'static str,
 }
 
 fn invalid(path: &Path, message: String) -> SceneError {
@@ -74,9 +133,17 @@ impl Prior {
                 ),
             ));
         }
-        let mut params = Vec::with_capacity(n);
+        let mut params: Vec<Param> = Vec::with_capacity(n);
         for (i, name) in names.iter().enumerate() {
             let name = name.as_str().unwrap_or("");
+            if let Some(j) = params.iter().position(|q| q.name() == name) {
+                return Err(invalid(
+                    path,
+                    format!(
+                        "shared_covariance.names[{i}]: expected each parameter once, got {name:?} again (it is names[{j}])"
+                    ),
+                ));
+            }
             let q = Param::ALL
                 .into_iter()
                 .find(|q| q.name() == name)
@@ -107,19 +174,20 @@ impl Prior {
                 })?;
             }
         }
+        check_covariance(path, &m)?;
+        let section = if v["shared"].is_object() {
+            "shared"
+        } else {
+            "parameters"
+        };
         let value = |q: Param| -> Result<f64, SceneError> {
-            let e = if v["shared"].is_object() {
-                &v["shared"][q.name()]
-            } else {
-                &v["parameters"][q.name()]
-            };
-            e["value"]
+            v[section][q.name()]["value"]
                 .as_f64()
                 .filter(|x| x.is_finite())
                 .ok_or_else(|| {
                     invalid(
                         path,
-                        format!("{}.value: expected a finite number", q.name()),
+                        format!("{section}.{}.value: expected a finite number", q.name()),
                     )
                 })
         };
@@ -132,6 +200,7 @@ impl Prior {
             ));
         }
         let covariance = m.select_rows(&keep).select_columns(&keep);
+        // Symmetric within SYMMETRY_TOLERANCE (checked): the rounding is averaged away.
         let covariance = (&covariance + covariance.transpose()) * 0.5;
         let information = covariance
             .clone()
@@ -151,6 +220,7 @@ impl Prior {
             values,
             covariance,
             information,
+            section,
         })
     }
 
@@ -162,8 +232,11 @@ impl Prior {
 
     /// The plan's rig with the fitted values (its friction law Stribeck's when the fit chose
     /// it), and mu's uncertainty for the robustness draws the fit's: mu_kinetic (and
-    /// mu_static when fitted) normal about the values with their standard errors.
-    pub fn apply(&self, spec: &mut PlanSpec) {
+    /// mu_static when fitted) normal about the values with their standard errors. The rig
+    /// they make is checked as any rig ([`check_rig`], [`check_time_scale`]), the errors
+    /// naming the fit's JSON and the field its value came from, and so is the plan's work
+    /// with it (`plan` names the plan file for that).
+    pub fn apply(&self, spec: &mut PlanSpec) -> Result<(), SceneError> {
         use crate::fit::TrajectoryProblem;
         if self.names.contains(&Param::StribeckVelocity) {
             spec.rig.friction_law = FrictionLaw::Stribeck;
@@ -178,6 +251,13 @@ impl Prior {
         );
         p.tie_static = !self.names.contains(&Param::MuStatic);
         p.set_values(&nalgebra::DVector::from_column_slice(&self.values));
+        let origin = RigOrigin::Fit {
+            section: self.section,
+            names: &self.names,
+            values: &self.values,
+        };
+        check_rig(&self.path, &p.rig, origin)?;
+        check_time_scale(&self.path, &p.rig, origin)?;
         spec.rig = p.rig;
         if let Some((mu, se)) = self.get(Param::MuKinetic) {
             spec.mu_kinetic = Uncertain::Normal { mean: mu, sd: se };
@@ -185,5 +265,6 @@ impl Prior {
         spec.mu_static = self
             .get(Param::MuStatic)
             .map(|(mean, sd)| Uncertain::Normal { mean, sd });
+        Ok(())
     }
 }

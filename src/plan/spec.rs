@@ -2,8 +2,8 @@
 //! release mechanism can do, and the transitions to film. Unknown keys are errors, and every
 //! value is checked with the file and the key named, like scenes.
 
-use crate::model::{PendulumKeys, Rig};
-use crate::scene::SceneError;
+use crate::model::Rig;
+use crate::scene::{check_time_scale, rig_time_rate, RigOrigin, RigSpec, SceneError, RIG_MAX};
 use serde::Deserialize;
 use std::fmt;
 use std::path::Path;
@@ -137,6 +137,32 @@ fn default_min_frames() -> f64 {
 /// The most simulations a plan's search may ask for (grid releases x (1 + draws) + top x
 /// verify_draws): about a minute of work on one core.
 pub const MAX_PLAN_RUNS: f64 = 1e6;
+
+/// The most work a plan may ask for, in frames (or integration steps, when a run has more of
+/// them) summed over every simulation its search may run: each run costs its frames (samples
+/// and the checks on them) or its steps. The example plan is 1.8e7 and takes 0.25 s on two
+/// cores; 2e9 is about 30 s on one. A fine grid with a 10^6-frame camera (2e11) took about 20
+/// minutes before it was counted this way.
+pub const MAX_PLAN_WORK: f64 = 2e9;
+
+/// Frame rates a camera may have (Hz): from 1 to 10^6, the fastest high-speed cameras.
+pub const FRAME_RATE_RANGE: [f64; 2] = [1.0, 1e6];
+/// Scales a camera may have (m per pixel): from 0.1 um (a microscope) to 1 m; outside, the
+/// products with pixel counts leave the range where a rig's travel is meaningful.
+pub const METRES_PER_PIXEL_RANGE: [f64; 2] = [1e-7, 1.0];
+/// Marker noise a camera may have (pixels): from 1e-3 (better than any tracker) to 1000.
+pub const NOISE_PX_RANGE: [f64; 2] = [1e-3, 1e3];
+/// The longest recording a plan may simulate (s): ten minutes, far beyond a release's few
+/// seconds; each run integrates the whole of it.
+pub const MAX_DURATION: f64 = 600.0;
+/// The largest magnitude of a position along the rail (m): field of view, rail, release x.
+pub const MAX_POSITION: f64 = 1e3;
+/// The largest magnitude of a release speed, its range or its error: theta' in rad/s and x'
+/// in m/s (a push of 100 rad/s turns a 30 cm rod 16 times a second).
+pub const MAX_RELEASE_SPEED: f64 = 100.0;
+/// The most pixels or frames a goal's margin may ask for (`min_slide_px`, `min_frames`,
+/// `edge_frames`): a recording has at most 10^6 frames.
+pub const MAX_GOAL_COUNT: f64 = 1e6;
 
 fn default_edge_frames() -> f64 {
     10.0
@@ -399,18 +425,18 @@ fn uncertain(
             path: path.to_owned(),
             message: format!("give friction.{key}_sd or friction.{key}_range, not both"),
         }),
-        (Some(sd), None) if !(sd.is_finite() && sd >= 0.0) => Err(invalid(
+        (Some(sd), None) if !(sd.is_finite() && (0.0..=RIG_MAX).contains(&sd)) => Err(invalid(
             path,
             &format!("friction.{key}_sd"),
-            "a finite number >= 0",
+            &format!("between 0 and {RIG_MAX:e} (as mu itself)"),
             sd,
         )),
         (Some(sd), None) => Ok(Uncertain::Normal { mean, sd }),
-        (None, Some([lo, hi])) if !(lo.is_finite() && hi.is_finite() && 0.0 <= lo && lo <= hi) => {
+        (None, Some([lo, hi])) if !(lo.is_finite() && 0.0 <= lo && lo <= hi && hi <= RIG_MAX) => {
             Err(invalid(
                 path,
                 &format!("friction.{key}_range"),
-                "[lo, hi] with 0 <= lo <= hi",
+                &format!("[lo, hi] with 0 <= lo <= hi <= {RIG_MAX:e} (as mu itself)"),
                 [lo, hi],
             ))
         }
@@ -439,6 +465,47 @@ fn positive(path: &Path, key: &str, v: f64) -> Result<f64, SceneError> {
     } else {
         Err(invalid(path, key, "a finite number > 0", v))
     }
+}
+
+/// `v` within `[lo, hi]` (`unit` and `why` for the message).
+fn bounded(
+    path: &Path,
+    key: &str,
+    v: f64,
+    [lo, hi]: [f64; 2],
+    unit: &str,
+    why: &str,
+) -> Result<f64, SceneError> {
+    if (lo..=hi).contains(&v) {
+        Ok(v)
+    } else {
+        Err(invalid(
+            path,
+            key,
+            &format!("between {lo:e} and {hi:e}{unit} ({why})"),
+            v,
+        ))
+    }
+}
+
+/// A range `[lo, hi]` within +-`limit`.
+fn range_within(
+    path: &Path,
+    key: &str,
+    r: [f64; 2],
+    limit: f64,
+    unit: &str,
+) -> Result<[f64; 2], SceneError> {
+    let r = range(path, key, r)?;
+    if r[0] < -limit || r[1] > limit {
+        return Err(invalid(
+            path,
+            key,
+            &format!("[lo, hi] within +-{limit:e}{unit}"),
+            r,
+        ));
+    }
+    Ok(r)
 }
 
 fn non_negative(path: &Path, key: &str, v: f64) -> Result<f64, SceneError> {
@@ -473,8 +540,8 @@ impl PlanFile {
         let camera = self.camera.validate(path)?;
         let release = self.release.validate(path)?;
         let goal = self.goal.validate(path, &camera)?;
-        self.search.check_work(path, &release)?;
-        Ok(PlanSpec {
+        self.search.check_counts(path)?;
+        let spec = PlanSpec {
             rig,
             mu_kinetic,
             mu_static,
@@ -483,7 +550,9 @@ impl PlanFile {
             goal,
             search: self.search,
             prior: None,
-        })
+        };
+        spec.check_work(path, None)?;
+        Ok(spec)
     }
 }
 
@@ -520,31 +589,48 @@ impl FrictionSpec {
 }
 
 impl PlanRigSpec {
-    /// The rig with the friction's central values, checked as a rig file's (its errors name
-    /// the plan's friction keys).
+    /// The rig with the friction's central values, checked as a rig file's by the same
+    /// function ([`RigSpec::checked`]: the same ranges and messages, the friction keys named
+    /// as the plan's), and its time scale.
     fn rig(&self, path: &Path, f: &FrictionSpec) -> Result<Rig<f64>, SceneError> {
         let r = self;
-        let keys = PendulumKeys {
+        let spec = RigSpec {
+            slider_mass: r.slider_mass,
             bob_mass: r.bob_mass,
+            rod_length: r.rod_length,
             rod_mass: r.rod_mass,
             bob_radius: r.bob_radius,
             pendulum_mass: r.pendulum_mass,
             pendulum_com: r.pendulum_com,
             pendulum_inertia: r.pendulum_inertia,
+            gravity: r.gravity,
+            mu_kinetic: Some(f.mu_kinetic),
+            mu_static: f.mu_static,
+            rail_tilt_deg: None,
+            pivot_damping: None,
+            friction_law: None,
+            stribeck_velocity: None,
+            viscous_friction: None,
+            rod_length_sd: None,
+            slider_mass_sd: None,
+            bob_mass_sd: None,
+            rod_mass_sd: None,
+            bob_radius_sd: None,
         };
-        let rig = keys
-            .rig(
-                r.slider_mass,
-                r.rod_length,
-                r.gravity,
-                f.mu_kinetic,
-                f.mu_static,
-            )
-            .map_err(|e| SceneError::Invalid {
-                path: path.to_owned(),
-                message: e.to_string().replace("rig.mu_", "friction.mu_"),
-            })?;
-        crate::scene::check_gravity(path, r.gravity)?;
+        let rig = spec.checked(path).map_err(|e| match e {
+            SceneError::Invalid { path, message } => SceneError::Invalid {
+                path,
+                message: message.replace("rig.mu_", "friction.mu_"),
+            },
+            e => e,
+        })?;
+        check_time_scale(
+            path,
+            &rig,
+            RigOrigin::File {
+                friction: "friction",
+            },
+        )?;
         Ok(rig)
     }
 }
@@ -555,11 +641,45 @@ impl CameraSpec {
     fn validate(&self, path: &Path) -> Result<Camera, SceneError> {
         let c = self;
         let camera = Camera {
-            frame_rate: positive(path, "camera.frame_rate", c.frame_rate)?,
-            metres_per_pixel: positive(path, "camera.metres_per_pixel", c.metres_per_pixel)?,
-            noise_m: positive(path, "camera.noise_px", c.noise_px)? * c.metres_per_pixel,
-            duration: positive(path, "camera.duration", c.duration)?,
-            field_of_view: range(path, "camera.field_of_view", c.field_of_view)?,
+            frame_rate: bounded(
+                path,
+                "camera.frame_rate",
+                c.frame_rate,
+                FRAME_RATE_RANGE,
+                " Hz",
+                "up to the fastest high-speed cameras",
+            )?,
+            metres_per_pixel: bounded(
+                path,
+                "camera.metres_per_pixel",
+                c.metres_per_pixel,
+                METRES_PER_PIXEL_RANGE,
+                " m",
+                "a microscope's scale to a metre a pixel",
+            )?,
+            noise_m: bounded(
+                path,
+                "camera.noise_px",
+                c.noise_px,
+                NOISE_PX_RANGE,
+                " px",
+                "from better than any tracker to a thousand pixels",
+            )? * c.metres_per_pixel,
+            duration: bounded(
+                path,
+                "camera.duration",
+                positive(path, "camera.duration", c.duration)?,
+                [0.0, MAX_DURATION],
+                " s",
+                "each simulation integrates the whole recording",
+            )?,
+            field_of_view: range_within(
+                path,
+                "camera.field_of_view",
+                c.field_of_view,
+                MAX_POSITION,
+                " m",
+            )?,
         };
         if camera.duration * camera.frame_rate < 2.0 {
             return Err(invalid(
@@ -598,7 +718,7 @@ impl ReleaseSpec {
                 theta,
             ));
         }
-        let rail = range(path, "release.rail", rl.rail)?;
+        let rail = range_within(path, "release.rail", rl.rail, MAX_POSITION, " m")?;
         if !(rail[0] <= rl.x && rl.x <= rail[1] && rl.x.is_finite()) {
             return Err(invalid(
                 path,
@@ -610,13 +730,41 @@ impl ReleaseSpec {
         let release = Release {
             x: rl.x,
             theta: theta.map(f64::to_radians),
-            theta_dot: range(path, "release.theta_dot", rl.theta_dot)?,
-            x_dot: range(path, "release.x_dot", rl.x_dot)?,
+            theta_dot: range_within(
+                path,
+                "release.theta_dot",
+                rl.theta_dot,
+                MAX_RELEASE_SPEED,
+                " rad/s",
+            )?,
+            x_dot: range_within(path, "release.x_dot", rl.x_dot, MAX_RELEASE_SPEED, " m/s")?,
             rail,
             error: [
-                non_negative(path, "release.theta_error_deg", rl.theta_error_deg)?.to_radians(),
-                non_negative(path, "release.theta_dot_error", rl.theta_dot_error)?,
-                non_negative(path, "release.x_dot_error", rl.x_dot_error)?,
+                bounded(
+                    path,
+                    "release.theta_error_deg",
+                    rl.theta_error_deg,
+                    [0.0, 360.0],
+                    " degrees",
+                    "a whole turn at most",
+                )?
+                .to_radians(),
+                bounded(
+                    path,
+                    "release.theta_dot_error",
+                    rl.theta_dot_error,
+                    [0.0, MAX_RELEASE_SPEED],
+                    " rad/s",
+                    "as the push itself",
+                )?,
+                bounded(
+                    path,
+                    "release.x_dot_error",
+                    rl.x_dot_error,
+                    [0.0, MAX_RELEASE_SPEED],
+                    " m/s",
+                    "as the moving start itself",
+                )?,
             ],
         };
         Ok(release)
@@ -641,9 +789,9 @@ impl GoalSpec {
         }
         let goal = Goal {
             targets: g.targets.clone(),
-            min_slide_px: non_negative(path, "goal.min_slide_px", g.min_slide_px)?,
-            min_frames: non_negative(path, "goal.min_frames", g.min_frames)?,
-            edge_frames: non_negative(path, "goal.edge_frames", g.edge_frames)?,
+            min_slide_px: goal_count(path, "goal.min_slide_px", g.min_slide_px)?,
+            min_frames: goal_count(path, "goal.min_frames", g.min_frames)?,
+            edge_frames: goal_count(path, "goal.edge_frames", g.edge_frames)?,
             min_robustness: if (0.0..=1.0).contains(&g.min_robustness) {
                 g.min_robustness
             } else {
@@ -667,10 +815,21 @@ impl GoalSpec {
     }
 }
 
+/// A goal's count of pixels or frames: from 0 to [`MAX_GOAL_COUNT`].
+fn goal_count(path: &Path, key: &str, v: f64) -> Result<f64, SceneError> {
+    bounded(
+        path,
+        key,
+        non_negative(path, key, v)?,
+        [0.0, MAX_GOAL_COUNT],
+        "",
+        "a recording has at most 10^6 frames",
+    )
+}
+
 impl SearchSpec {
-    /// Each count within its range, and the work the search will do over `release`'s grid
-    /// bounded before it starts.
-    fn check_work(&self, path: &Path, release: &Release) -> Result<(), SceneError> {
+    /// Each count within its range.
+    fn check_counts(&self, path: &Path) -> Result<(), SceneError> {
         let s = self;
         for (key, v, lo) in [
             ("search.draws", s.draws, 1),
@@ -682,24 +841,77 @@ impl SearchSpec {
                 return Err(invalid(path, key, &format!("in {lo}..=100000"), v));
             }
         }
-        // The work the search will do, bounded before it starts: grid releases times their
-        // draws, plus the fresh checks of the proposals.
+        Ok(())
+    }
+}
+
+impl PlanSpec {
+    /// The simulations the search may run over the release grid: grid releases x (1 +
+    /// draws), the refinement of up to four of them (Nelder-Mead, up to 30 iterations of a
+    /// few evaluations each, every one with the draws), the fresh checks (top x
+    /// verify_draws) and, when nothing works, the nearest release's seven wider grids.
+    /// Returns (grid releases, simulations).
+    pub fn runs(&self) -> (f64, f64) {
+        let s = &self.search;
+        let release = &self.release;
         let axis = |r: [f64; 2], n: usize| if r[1] <= r[0] { 1 } else { n.max(2) };
-        let n = s.grid_points;
-        let grid = axis([release.theta[0], release.theta[1]], n)
-            * axis(release.theta_dot, n.div_ceil(3) * 2 - 1)
-            * axis(release.x_dot, n.div_ceil(2));
-        let runs =
-            (grid as f64) * (1.0 + s.draws as f64) + (s.top as f64) * (s.verify_draws as f64);
+        let grid_of = |n: usize, wide: bool| {
+            let theta = if wide { n } else { axis(release.theta, n) };
+            let push = if wide {
+                n.div_ceil(3) * 2 - 1
+            } else {
+                axis(release.theta_dot, n.div_ceil(3) * 2 - 1)
+            };
+            (theta * push * axis(release.x_dot, n.div_ceil(2))) as f64
+        };
+        let draws = 1.0 + s.draws as f64;
+        let grid = grid_of(s.grid_points, false);
+        let refine = 4.0 * 60.0 * draws;
+        let nearest = 7.0 * grid_of(s.grid_points.max(13) + 8, true) * 2.0;
+        let runs = grid * draws + (s.top as f64) * (s.verify_draws as f64) + refine + nearest;
+        (grid, runs)
+    }
+
+    /// Check the plan's work before it starts, in the units of work ([`MAX_PLAN_RUNS`]
+    /// simulations, [`MAX_PLAN_WORK`] frames or steps over them): a run costs its frames
+    /// or, for a fast rig over a long recording, its steps (about 10 per unit of the rig's
+    /// fastest rate times the duration). `path` is the plan file, whose `[search]` and
+    /// `[camera]` set the work; `after` names the fit whose values moved the rig, if any.
+    pub fn check_work(&self, path: &Path, after: Option<&Path>) -> Result<(), SceneError> {
+        let s = &self.search;
+        let (grid, runs) = self.runs();
         if runs > MAX_PLAN_RUNS {
             return Err(invalid(
                 path,
                 "search",
                 &format!(
-                    "at most {MAX_PLAN_RUNS:e} simulations (grid releases x (1 + draws) + top x verify_draws; here {grid} x (1 + {}) + {} x {})",
-                    s.draws, s.top, s.verify_draws
+                    "at most {MAX_PLAN_RUNS:e} simulations (grid releases x (1 + draws) + top x verify_draws + the refinement and the nearest release's grids; here {grid} x (1 + {}) + {} x {} and {:.0} more)",
+                    s.draws,
+                    s.top,
+                    s.verify_draws,
+                    runs - grid * (1.0 + s.draws as f64) - (s.top * s.verify_draws) as f64
                 ),
                 runs,
+            ));
+        }
+        let c = &self.camera;
+        let frames = (c.duration * c.frame_rate).floor() + 1.0;
+        let steps = 10.0 * rig_time_rate(&self.rig) * c.duration;
+        let work = runs * frames.max(steps);
+        if work.is_nan() || work > MAX_PLAN_WORK {
+            let rig = match after {
+                Some(fit) => format!(" (the rig with the values of {})", fit.display()),
+                None => String::new(),
+            };
+            return Err(invalid(
+                path,
+                "search",
+                &format!(
+                    "at most {MAX_PLAN_WORK:e} frames (or integration steps) over all its simulations: {runs:.0} simulations x {:.0} {} each (camera.frame_rate x camera.duration{rig}); reduce search.grid_points, search.draws, search.verify_draws or the camera's frames",
+                    frames.max(steps),
+                    if steps > frames { "steps" } else { "frames" }
+                ),
+                work,
             ));
         }
         Ok(())

@@ -16,12 +16,12 @@ const ADDRESS_SPACE: u64 = 4 << 30;
 /// How long a refusal may take (the bound; they take milliseconds).
 const QUICK: Duration = Duration::from_secs(20);
 
-fn root(p: &str) -> PathBuf {
+pub(crate) fn root(p: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(p)
 }
 
-/// `appell args` in an address space of [`ADDRESS_SPACE`], and how long it ran.
-fn appell_capped<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> (Output, Duration) {
+/// The command `appell args`, to run in an address space of [`ADDRESS_SPACE`].
+pub(crate) fn capped_command<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> Command {
     let mut cmd = Command::new(env!("CARGO_BIN_EXE_appell"));
     cmd.args(args);
     // SAFETY: setrlimit is async-signal-safe and touches no memory of the parent.
@@ -38,6 +38,12 @@ fn appell_capped<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> (Output, Duration) {
             }
         });
     }
+    cmd
+}
+
+/// `appell args` in an address space of [`ADDRESS_SPACE`], and how long it ran.
+fn appell_capped<S: AsRef<std::ffi::OsStr>>(args: &[S]) -> (Output, Duration) {
+    let mut cmd = capped_command(args);
     let start = Instant::now();
     let out = cmd.output().expect("appell runs");
     (out, start.elapsed())
@@ -82,14 +88,14 @@ fn assert_refused(dir: &Path, inputs: &[PathBuf], args: &[String], names: &[&str
     took
 }
 
-fn s(p: &Path) -> String {
+pub(crate) fn s(p: &Path) -> String {
     p.display().to_string()
 }
 
 /// A copy of the shipped file `from` in `dir` as `name`, with each `(key, value)` of `edits`
 /// applied: the line setting `key` set to `key = value` (added after `[section]` when there is
 /// no such line), or taken out where `value` is `None`.
-fn edited(
+pub(crate) fn edited(
     from: &str,
     dir: &Path,
     name: &str,

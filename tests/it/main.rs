@@ -24,6 +24,7 @@ mod real_files;
 mod real_rigs;
 mod recordings;
 mod regions;
+mod rig_ranges;
 mod rigid;
 mod safety_io;
 mod simulate_oracles;
