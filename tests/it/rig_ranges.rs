@@ -367,6 +367,37 @@ fn stiff_rigs_are_refused_before_integrating() {
         "[rig]",
     );
     accepted(&["simulate".into(), s(&mild)]);
+    // A region map's portraits are bounded in simulated seconds (trajectories x duration):
+    // 1000 runs of 600 s took over 40 s on the plain paper rig and 300 s damped near the
+    // time-scale bound, and kept 6e8 samples.
+    let paper = root("configs/rig_paper.toml");
+    refused(
+        &[
+            "regions".into(),
+            s(&paper),
+            "--trajectories".into(),
+            "1000".into(),
+            "--duration".into(),
+            "600".into(),
+        ],
+        &["--trajectories 1000", "--duration 600", "simulated seconds"],
+    );
+    // At the bound, on a rig damped near the time-scale bound, the map is drawn.
+    let near = edited(
+        "configs/rig_paper.toml",
+        d,
+        "near.toml",
+        &[("pivot_damping", Some("0.4"))],
+        "[rig]",
+    );
+    accepted(&[
+        "regions".into(),
+        s(&near),
+        "--trajectories".into(),
+        "100".into(),
+        "--duration".into(),
+        "100".into(),
+    ]);
 }
 
 /// Class 3: tolerances in documented ranges. rtol up to 0.9 and any atol were accepted and the
