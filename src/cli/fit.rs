@@ -11,7 +11,7 @@ use appell::fit::{
     StaticMode,
 };
 use appell::model::Rig;
-use appell::report::fit::{fit_json, fit_text, FitFigure};
+use appell::report::fit::{answer, fit_json, fit_text, FitFigure};
 use appell::report::joint::{joint_json, joint_text, JointFigure};
 use appell::report::plot::render;
 use appell::scene::RigFile;
@@ -296,6 +296,12 @@ pub fn run(args: Args) -> Result<(), Failure> {
         return run_joint(&args, &opts, &rig, &settings);
     }
     if args.inputs.len() == 1 && args.inputs[0].is_dir() {
+        if args.plot.is_some() {
+            return Err(Failure::Input(anyhow!(
+                "--plot draws one recording's fit, and {} is a directory: give one recording, or --joint for the releases' joint figure",
+                args.inputs[0].display()
+            )));
+        }
         let files = directory_files(&args.inputs[0], opts.format.is_some())?;
         let bar = ProgressBar::new(files.len() as u64);
         bar.set_style(
@@ -323,19 +329,12 @@ pub fn run(args: Args) -> Result<(), Failure> {
                 Ok((_, rep)) => {
                     let mut v = fit_json(&rep);
                     v["recording"] = serde_json::json!(file.display().to_string());
+                    provenance(&mut v, std::slice::from_ref(&file), &args.rig);
                     if args.json {
                         outln!("{v}");
                     } else {
-                        let mu = match (rep.mu_kinetic, &rep.failed) {
-                            (_, Some(_)) => "not measured (the fit failed; see --json)".to_owned(),
-                            (None, None) => "not identifiable".to_owned(),
-                            (Some(m), None) => format!("{:.6} +- {:.2e}", m.value, m.stderr),
-                        };
-                        outln!(
-                            "{}: mu_kinetic {mu}; rms {:.3e} m",
-                            file.display(),
-                            rep.rms_residual_m
-                        );
+                        // The answer line keeps the verdict (adequate or limited, and why).
+                        outln!("{}: {}", file.display(), answer(&rep));
                     }
                 }
                 Err(Failure::Input(e) | Failure::Run(e)) => {
@@ -380,7 +379,9 @@ pub fn run(args: Args) -> Result<(), Failure> {
         .map_err(|e| Failure::Run(anyhow!(e)))?;
     }
     if args.json {
-        outln!("{}", fit_json(&rep));
+        let mut v = fit_json(&rep);
+        provenance(&mut v, &args.inputs, &args.rig);
+        outln!("{v}");
     } else {
         out!("{}", fit_text(&rep));
         if let Some(p) = &args.plot {
@@ -388,6 +389,17 @@ pub fn run(args: Args) -> Result<(), Failure> {
         }
     }
     Ok(())
+}
+
+/// What a fit's JSON was made from: the recordings read, the rig file, and this tool's
+/// version, so that a result kept in a lab's archive says where it came from.
+fn provenance(v: &mut serde_json::Value, inputs: &[PathBuf], rig: &Path) {
+    v["inputs"] = serde_json::json!(inputs
+        .iter()
+        .map(|p| p.display().to_string())
+        .collect::<Vec<_>>());
+    v["rig_file"] = serde_json::json!(rig.display().to_string());
+    v["version"] = serde_json::json!(concat!("appell ", env!("CARGO_PKG_VERSION")));
 }
 
 /// The releases of a joint fit: a directory's recordings, or each `--release`.
@@ -495,7 +507,10 @@ fn run_joint(
         render(p, &JointFigure { report: &rep }).map_err(|e| Failure::Run(anyhow!(e)))?;
     }
     if args.json {
-        outln!("{}", joint_json(&rep));
+        let mut v = joint_json(&rep);
+        let inputs: Vec<PathBuf> = paths.iter().flatten().cloned().collect();
+        provenance(&mut v, &inputs, &args.rig);
+        outln!("{v}");
     } else {
         out!("{}", joint_text(&rep));
         if let Some(p) = &args.plot {

@@ -89,7 +89,43 @@ fn directory_gives_one_json_line_per_recording_and_a_figure() {
             "{v}"
         );
         assert!(v["recording"].as_str().unwrap().contains("markers_"));
+        // Where the result came from: the recording, the rig file and the tool's version.
+        assert_eq!(v["inputs"][0], v["recording"], "{v}");
+        assert!(v["rig_file"]
+            .as_str()
+            .unwrap()
+            .ends_with("rig_example.toml"));
+        assert!(v["version"].as_str().unwrap().starts_with("appell "));
     }
+    // Without --json each recording's line is its answer, with the verdict.
+    let out = appell(&[
+        "fit",
+        dir.to_str().unwrap(),
+        "--rig",
+        &path("configs/rig_example.toml"),
+        "--no-profile",
+    ]);
+    assert!(out.status.success());
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert_eq!(text.lines().count(), 2, "{text}");
+    for l in text.lines() {
+        assert!(
+            l.contains(": mu_kinetic = 0.1") && l.ends_with("model adequate"),
+            "{l}"
+        );
+    }
+    // A figure is one recording's: for a directory --plot is refused, not ignored.
+    let out = appell(&[
+        "fit",
+        dir.to_str().unwrap(),
+        "--rig",
+        &path("configs/rig_example.toml"),
+        "--plot",
+        dir.join("d.svg").to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--plot draws one recording's fit"));
+    assert!(!dir.join("d.svg").exists());
     let svg = dir.join("fit.svg");
     let out = appell(&[
         "fit",
