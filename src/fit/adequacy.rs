@@ -71,10 +71,48 @@ pub const RUNS_P: f64 = 1e-4;
 /// alarm on a good recording only widens its interval.
 pub const WINDOWS_P: f64 = 0.05;
 
-/// The one plain sentence when the model limits the result: chi-square fails against the
-/// measured noise (p < 0.001), the residuals are correlated enough to widen the errors by half,
-/// the windows (a slide each) disagree (p < [`WINDOWS_P`]), or the residuals' signs run in long
-/// stretches (runs test p < [`RUNS_P`]).
+/// An adequacy test the fit failed, with the figure that failed it. Each test's threshold
+/// lives in [`failed_tests`] alone: the verdict, its sentence and the report's one-line
+/// answer all read it from there.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FailedTest {
+    /// Chi-square against the measured noise, p < 0.001 (its p-value).
+    ChiSquare(f64),
+    /// Block standard errors more than 1.5 times the plain ones (their ratio).
+    Correlated(f64),
+    /// The residuals' signs run in long stretches, p < [`RUNS_P`] (its p-value).
+    Runs(f64),
+    /// The slides, fitted one by one, disagree, p < [`WINDOWS_P`] (its p-value).
+    Slides(f64),
+}
+
+/// The adequacy tests failed by a fit with chi-square p-value `p_value`, block-to-plain
+/// standard-error ratio `block_ratio`, runs-test p-value `runs_p` and windows' agreement
+/// `windows_p` (in the order the report says them).
+pub fn failed_tests(
+    p_value: f64,
+    block_ratio: f64,
+    runs_p: f64,
+    windows_p: Option<f64>,
+) -> Vec<FailedTest> {
+    let mut failed = Vec::new();
+    if p_value < 1e-3 {
+        failed.push(FailedTest::ChiSquare(p_value));
+    }
+    if block_ratio > 1.5 {
+        failed.push(FailedTest::Correlated(block_ratio));
+    }
+    if runs_p < RUNS_P {
+        failed.push(FailedTest::Runs(runs_p));
+    }
+    if let Some(p) = windows_p.filter(|p| *p < WINDOWS_P) {
+        failed.push(FailedTest::Slides(p));
+    }
+    failed
+}
+
+/// The one plain sentence when the model limits the result: the tests of [`failed_tests`]
+/// that failed, and what the widened interval holds.
 pub(super) fn adequacy_sentence(
     a: &uncertainty::Assessment,
     block_ratio: f64,
@@ -82,33 +120,29 @@ pub(super) fn adequacy_sentence(
     runs_p: f64,
     mu: Option<&Estimate>,
 ) -> Option<String> {
-    let mut why = Vec::new();
-    if a.p_value < 1e-3 {
-        why.push(format!(
-            "chi-square is {:.0} for {:.0} degrees of freedom against the noise measured from the tracks (reduced {:.2}, {})",
-            a.chi2,
-            a.dof,
-            a.reduced_chi2,
-            p_is(a.p_value)
-        ));
-    }
-    if block_ratio > 1.5 {
-        why.push(format!(
-            "the residuals are correlated in time (block standard error {block_ratio:.1} times the plain one)"
-        ));
-    }
-    if runs_p < RUNS_P {
-        why.push(format!(
-            "the residuals keep their sign over long stretches (runs test {})",
-            p_is(runs_p)
-        ));
-    }
-    if let Some(pw) = windows_p.filter(|p| *p < WINDOWS_P) {
-        why.push(format!(
-            "the recording's slides, fitted one by one, disagree on mu_kinetic ({})",
-            p_is(pw)
-        ));
-    }
+    let why: Vec<String> = failed_tests(a.p_value, block_ratio, runs_p, windows_p)
+        .into_iter()
+        .map(|t| match t {
+            FailedTest::ChiSquare(p) => format!(
+                "chi-square is {:.0} for {:.0} degrees of freedom against the noise measured from the tracks (reduced {:.2}, {})",
+                a.chi2,
+                a.dof,
+                a.reduced_chi2,
+                p_is(p)
+            ),
+            FailedTest::Correlated(r) => format!(
+                "the residuals are correlated in time (block standard error {r:.1} times the plain one)"
+            ),
+            FailedTest::Runs(p) => format!(
+                "the residuals keep their sign over long stretches (runs test {})",
+                p_is(p)
+            ),
+            FailedTest::Slides(p) => format!(
+                "the recording's slides, fitted one by one, disagree on mu_kinetic ({})",
+                p_is(p)
+            ),
+        })
+        .collect();
     if why.is_empty() {
         return None;
     }

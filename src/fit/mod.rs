@@ -48,7 +48,7 @@ mod solve;
 mod stages;
 mod uncertainty;
 
-pub use adequacy::{is_noise_free, RUNS_P, WINDOWS_P};
+pub use adequacy::{failed_tests, is_noise_free, FailedTest, RUNS_P, WINDOWS_P};
 pub use checks::{check_recording, RecordingCheck};
 pub use noise::NoiseEstimate;
 pub use pendulum::{PendulumFound, ValueSe};

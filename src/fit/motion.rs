@@ -63,14 +63,29 @@ pub(super) fn motion(problem: &TrajectoryProblem) -> Result<Motion, FitError> {
     })
 }
 
-/// Whether the raw slider track moves by more than its noise can explain: its range along
-/// the rail (2nd to 98th percentile) beyond ten noise deviations.
-pub(super) fn slider_moves(obs: &Observations, sigma: f64) -> Option<f64> {
-    let mut x: Vec<f64> = obs.slider.iter().flatten().map(|p| p[0]).collect();
-    if x.len() < 10 {
+/// Noise deviations a track's span ([`track_span`]) must exceed for its marker to count as
+/// moving.
+pub(super) const STILL_NOISES: f64 = 10.0;
+
+/// The span of coordinate `k` of a track's seen positions from its 2nd to its 98th
+/// percentile (a few mis-tracked frames do not widen it); `None` for a track never seen.
+pub(super) fn track_span(track: &[Option<[f64; 2]>], k: usize) -> Option<f64> {
+    let mut v: Vec<f64> = track.iter().flatten().map(|p| p[k]).collect();
+    let n = v.len();
+    if n == 0 {
         return None;
     }
-    x.sort_by(f64::total_cmp);
-    let range = x[x.len() * 98 / 100] - x[x.len() * 2 / 100];
-    (range > 10.0 * sigma).then_some(range)
+    let lo = *v.select_nth_unstable_by(n * 2 / 100, f64::total_cmp).1;
+    let hi = *v.select_nth_unstable_by(n * 98 / 100, f64::total_cmp).1;
+    Some(hi - lo)
+}
+
+/// Whether the raw slider track moves by more than its noise can explain: its span along
+/// the rail ([`track_span`]) beyond [`STILL_NOISES`] noise deviations.
+pub(super) fn slider_moves(obs: &Observations, sigma: f64) -> Option<f64> {
+    if obs.slider.iter().flatten().count() < 10 {
+        return None;
+    }
+    let range = track_span(&obs.slider, 0)?;
+    (range > STILL_NOISES * sigma).then_some(range)
 }

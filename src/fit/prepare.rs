@@ -1,6 +1,7 @@
 //! The recording made ready to fit: enough frames with both markers, times from zero, each
 //! marker's noise measured from its track (or given) and the mis-tracked positions dropped.
 
+use super::motion::{track_span, STILL_NOISES};
 use super::noise::{self, NoiseEstimate};
 use super::outliers;
 use super::problem::Observations;
@@ -100,27 +101,17 @@ fn all_dropped(
     ))
 }
 
-/// Noise deviations within which a marker's track must stay (its 2nd to 98th percentile, in
-/// each coordinate) for the marker to count as not moving; the never-sliding slider's rule.
-const STILL_NOISES: f64 = 10.0;
-
 /// The sentence for a recording in which neither marker moves beyond [`STILL_NOISES`] noise
-/// deviations (`sigma`, per marker): no slide shows mu_kinetic and no swing bounds mu_static,
-/// so there is nothing to fit. `None` when either marker moves.
+/// deviations (`sigma`, per marker) in either coordinate ([`track_span`]): no slide shows
+/// mu_kinetic and no swing bounds mu_static, so there is nothing to fit. `None` when either
+/// marker moves.
 fn nothing_moves(obs: &Observations, sigma: [f64; 2]) -> Option<String> {
     let mut spans = [0.0; 2];
     for (m, track) in [&obs.slider, &obs.bob].into_iter().enumerate() {
         for k in 0..2 {
-            let mut v: Vec<f64> = track.iter().flatten().map(|p| p[k]).collect();
-            let n = v.len();
-            if n == 0 {
-                return None;
-            }
-            let lo = *v.select_nth_unstable_by(n * 2 / 100, f64::total_cmp).1;
-            let hi = *v.select_nth_unstable_by(n * 98 / 100, f64::total_cmp).1;
-            spans[m] = f64::max(spans[m], hi - lo);
+            spans[m] = f64::max(spans[m], track_span(track, k)?);
         }
-        if spans[m].is_nan() || spans[m] > STILL_NOISES * sigma[m] {
+        if spans[m] > STILL_NOISES * sigma[m] {
             return None;
         }
     }

@@ -4,7 +4,7 @@
 //! estimates, the adequacy and its widenings, mu_static's result and the report. Each stage says what it reads and returns;
 //! the driver only orders them.
 
-use super::adequacy::{adequacy_sentence, is_noise_free, marker_rms, RUNS_P, WINDOWS_P};
+use super::adequacy::{self, adequacy_sentence, is_noise_free, marker_rms, WINDOWS_P};
 use super::base::Base;
 use super::intervals::{model_uncertainty, pinned_friction, widen, within_bounds};
 use super::motion::{motion, slider_moves, Motion};
@@ -429,11 +429,8 @@ pub(super) fn adequacy(
     // taken) while its model still misfits by the selection's own rule: what is left of the
     // misfit was never given a chance to be explained.
     let capped = problem.free.len() >= MAX_FREE && select::misfits(problem, a.chi2);
-    let misfit = a.p_value < 1e-3
-        || block_ratio > 1.5
-        || windows_p.is_some_and(|p| p < WINDOWS_P)
-        || runs_p < RUNS_P
-        || capped;
+    let misfit =
+        !adequacy::failed_tests(a.p_value, block_ratio, runs_p, windows_p).is_empty() || capped;
     if let Some(i) = mu_index {
         let e = &mut est.params[i].1;
         if windows_p.is_some_and(|p| p < WINDOWS_P) {

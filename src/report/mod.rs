@@ -30,11 +30,16 @@ pub fn percent_of(se: f64, value: f64) -> String {
     if !pc.is_finite() {
         return "-".to_owned();
     }
-    if pc <= 0.0 {
-        return "0%".to_owned();
+    match two_digit_decimals(pc) {
+        Some(d) => format!("{pc:.d$}%", d = d.min(10)),
+        None => "0%".to_owned(),
     }
-    let d = (1.0 - pc.log10().floor()).clamp(0.0, 10.0) as usize;
-    format!("{pc:.d$}%")
+}
+
+/// Decimal places that show `x` to two significant digits (none for 10 and up); `None` for
+/// zero, a negative or a value that is not finite.
+pub fn two_digit_decimals(x: f64) -> Option<usize> {
+    (x.is_finite() && x > 0.0).then(|| (1.0 - x.log10().floor()).max(0.0) as usize)
 }
 
 #[cfg(test)]

@@ -2,7 +2,8 @@
 //! as many digits as its uncertainty carries, and the verdict in a few words, so that a lab
 //! reads the result before the tables that back it.
 
-use crate::fit::{FitReport, RUNS_P, WINDOWS_P};
+use crate::fit::{failed_tests, FailedTest, FitReport};
+use crate::report::{p_is, two_digit_decimals};
 
 /// `value +- se` rounded where the uncertainty puts it: the standard error to two significant
 /// digits and the value to the same decimal place (0.2499917541986817 +- 5.35e-6 reads
@@ -14,14 +15,9 @@ pub fn value_pm(value: f64, se: f64) -> String {
     }
 }
 
-/// Decimal places that show a standard error to two significant digits (at most 12); `None`
-/// for an error that is zero or not finite.
+/// Decimal places that show a standard error to two significant digits (at most 12).
 fn decimals(se: f64) -> Option<usize> {
-    if !(se.is_finite() && se > 0.0) {
-        return None;
-    }
-    let d = 1.0 - se.log10().floor();
-    Some(d.clamp(0.0, 12.0) as usize)
+    two_digit_decimals(se).map(|d| d.min(12))
 }
 
 /// The one-line answer: `mu_kinetic = V +- E (95 %: LO to HI), model adequate`, or `...,
@@ -61,24 +57,23 @@ pub fn answer(rep: &FitReport) -> String {
             format!("needs {what}")
         })
         .collect();
-    if a.p_value < 1e-3 {
-        why.push(format!(
-            "misfits (reduced chi-square {:.2})",
-            a.reduced_chi2
-        ));
-    }
-    if a.block_se_ratio > 1.5 {
-        why.push("residuals correlated in time".to_owned());
-    }
-    if a.runs_p_value < RUNS_P {
-        why.push("residuals keep their sign over long stretches".to_owned());
-    }
-    if let Some(p) = a.windows_p_value.filter(|p| *p < WINDOWS_P) {
-        why.push(format!(
-            "the slides disagree on mu ({})",
-            crate::report::p_is(p)
-        ));
-    }
+    why.extend(
+        failed_tests(
+            a.p_value,
+            a.block_se_ratio,
+            a.runs_p_value,
+            a.windows_p_value,
+        )
+        .into_iter()
+        .map(|t| match t {
+            FailedTest::ChiSquare(_) => {
+                format!("misfits (reduced chi-square {:.2})", a.reduced_chi2)
+            }
+            FailedTest::Correlated(_) => "residuals correlated in time".to_owned(),
+            FailedTest::Runs(_) => "residuals keep their sign over long stretches".to_owned(),
+            FailedTest::Slides(p) => format!("the slides disagree on mu ({})", p_is(p)),
+        }),
+    );
     if why.is_empty() {
         why.push("an effect the model lacks (see below)".to_owned());
     }
