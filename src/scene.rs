@@ -41,8 +41,22 @@ pub struct RigSpec {
     pub rail_tilt_deg: Option<f64>,
     /// Viscous torque at the pivot, N m s (default 0).
     pub pivot_damping: Option<f64>,
-    /// `coulomb` (default) or `stribeck`.
+    /// `coulomb` (default), `stribeck`, `direction` or `load` (docs/physics.md, "Friction
+    /// laws").
     pub friction_law: Option<FrictionLaw>,
+    /// Kinetic coefficient sliding toward +x, under `friction_law = "direction"` (which takes
+    /// these four keys instead of `mu_kinetic` and `mu_static`).
+    pub mu_kinetic_positive: Option<f64>,
+    /// Kinetic coefficient sliding toward -x (direction law).
+    pub mu_kinetic_negative: Option<f64>,
+    /// Static coefficient holding a slider about to slip toward +x (direction law; default
+    /// `mu_kinetic_positive`).
+    pub mu_static_positive: Option<f64>,
+    /// Static coefficient toward -x (direction law; default `mu_kinetic_negative`).
+    pub mu_static_negative: Option<f64>,
+    /// Exponent n of `friction_law = "load"`: |F| = mu N_0 (|N| / N_0)^n, N_0 = (m1 + m2) g,
+    /// with `mu_kinetic` and `mu_static` the coefficients at N_0.
+    pub load_exponent: Option<f64>,
     /// Stribeck speed v_s in m/s (required with `friction_law = "stribeck"`, refused otherwise).
     pub stribeck_velocity: Option<f64>,
     /// Viscous rail friction, N s/m, added to either law (default 0).
@@ -63,16 +77,22 @@ pub struct RigSpec {
 impl RigSpec {
     /// The validated rig.
     pub fn rig(&self) -> Result<Rig<f64>, RigError> {
-        let mu_kinetic = self
-            .mu_kinetic
-            .ok_or(RigError::Missing { key: "mu_kinetic" })?;
+        let law = self.friction_law.unwrap_or_default();
+        let friction = self.friction(law)?;
         let mut rig = self.pendulum_keys().rig(
             self.slider_mass,
             self.rod_length,
             self.gravity,
-            mu_kinetic,
-            self.mu_static,
+            friction.mu_kinetic,
+            Some(friction.mu_static),
         )?;
+        rig.kinetic_split = friction.kinetic_split;
+        rig.static_split = friction.static_split;
+        if law == FrictionLaw::Load {
+            rig.load_exponent = self.load_exponent.ok_or(RigError::Missing {
+                key: "load_exponent",
+            })?;
+        }
         rig.rail_tilt = self.rail_tilt_deg.unwrap_or(0.0).to_radians();
         rig.pivot_damping = self.pivot_damping.unwrap_or(0.0);
         rig.viscous_friction = self.viscous_friction.unwrap_or(0.0);
@@ -84,8 +104,8 @@ impl RigSpec {
                     key: "stribeck_velocity",
                 })
             }
-            (FrictionLaw::Coulomb, Some(_)) => return Err(RigError::StribeckWithoutLaw),
-            (FrictionLaw::Coulomb, None) => {}
+            (_, Some(_)) => return Err(RigError::StribeckWithoutLaw),
+            (_, None) => {}
         }
         if let Some(deg) = self.rail_tilt_deg {
             if !(deg.is_finite() && deg.abs() < 90.0) {
@@ -109,6 +129,101 @@ impl RigSpec {
         Ok(rig)
     }
 
+    /// The friction coefficients of `law` from the keys: the direction law's four keys as
+    /// means and half differences, the others' `mu_kinetic` and `mu_static`; keys of another
+    /// law are refused rather than ignored.
+    fn friction(&self, law: FrictionLaw) -> Result<FrictionKeys, RigError> {
+        let direction_keys = [
+            ("mu_kinetic_positive", self.mu_kinetic_positive),
+            ("mu_kinetic_negative", self.mu_kinetic_negative),
+            ("mu_static_positive", self.mu_static_positive),
+            ("mu_static_negative", self.mu_static_negative),
+        ];
+        if law != FrictionLaw::Load && self.load_exponent.is_some() {
+            return Err(RigError::KeyWithoutLaw {
+                key: "load_exponent",
+                law: "load",
+            });
+        }
+        if law != FrictionLaw::Direction {
+            if let Some((key, _)) = direction_keys.iter().find(|k| k.1.is_some()) {
+                return Err(RigError::KeyWithoutLaw {
+                    key,
+                    law: "direction",
+                });
+            }
+            let mu_kinetic = self
+                .mu_kinetic
+                .ok_or(RigError::Missing { key: "mu_kinetic" })?;
+            return Ok(FrictionKeys {
+                mu_kinetic,
+                mu_static: self.mu_static.unwrap_or(mu_kinetic),
+                kinetic_split: 0.0,
+                static_split: 0.0,
+            });
+        }
+        for (key, v) in [
+            ("mu_kinetic", self.mu_kinetic),
+            ("mu_static", self.mu_static),
+        ] {
+            if v.is_some() {
+                return Err(RigError::Law {
+                    key,
+                    expected: "left out under friction_law = \"direction\" (give mu_kinetic_positive and mu_kinetic_negative, and optionally mu_static_positive and mu_static_negative)".into(),
+                    value: v.unwrap_or(f64::NAN),
+                });
+            }
+        }
+        let need = |key: &'static str, v: Option<f64>| -> Result<f64, RigError> {
+            let v = v.ok_or(RigError::Missing { key })?;
+            if v.is_finite() && v >= 0.0 {
+                Ok(v)
+            } else {
+                Err(RigError::Negative { key, value: v })
+            }
+        };
+        let kp = need("mu_kinetic_positive", self.mu_kinetic_positive)?;
+        let kn = need("mu_kinetic_negative", self.mu_kinetic_negative)?;
+        let sp = need("mu_static_positive", self.mu_static_positive.or(Some(kp)))?;
+        let sn = need("mu_static_negative", self.mu_static_negative.or(Some(kn)))?;
+        for (key, st, k) in [
+            ("mu_static_positive", sp, kp),
+            ("mu_static_negative", sn, kn),
+        ] {
+            if st < k {
+                return Err(RigError::Law {
+                    key,
+                    expected: format!(">= the same direction's kinetic coefficient {k}"),
+                    value: st,
+                });
+            }
+        }
+        Ok(FrictionKeys {
+            mu_kinetic: 0.5 * (kp + kn),
+            mu_static: 0.5 * (sp + sn),
+            kinetic_split: 0.5 * (kp - kn),
+            static_split: 0.5 * (sp - sn),
+        })
+    }
+
+    /// The keys with `mu_guess` wherever a friction coefficient is left out (rig files for
+    /// fitting, where friction is only a starting value): `mu_kinetic` and `mu_static`, or
+    /// under the direction law its kinetic keys.
+    pub fn with_guess(&self, mu_guess: f64) -> RigSpec {
+        if self.friction_law == Some(FrictionLaw::Direction) {
+            return RigSpec {
+                mu_kinetic_positive: self.mu_kinetic_positive.or(Some(mu_guess)),
+                mu_kinetic_negative: self.mu_kinetic_negative.or(Some(mu_guess)),
+                ..*self
+            };
+        }
+        RigSpec {
+            mu_kinetic: Some(self.mu_kinetic.unwrap_or(mu_guess)),
+            mu_static: self.mu_static.or(self.mu_kinetic).or(Some(mu_guess)),
+            ..*self
+        }
+    }
+
     /// The pendulum's keys, in either form.
     pub fn pendulum_keys(&self) -> PendulumKeys {
         PendulumKeys {
@@ -124,13 +239,16 @@ impl RigSpec {
     /// The validated rig, with `mu_guess` where mu_kinetic is left out (rig files for fitting:
     /// mu there is only a starting value).
     pub fn rig_or_guess(&self, mu_guess: f64) -> Result<Rig<f64>, RigError> {
-        RigSpec {
-            mu_kinetic: Some(self.mu_kinetic.unwrap_or(mu_guess)),
-            mu_static: self.mu_static.or(self.mu_kinetic).or(Some(mu_guess)),
-            ..*self
-        }
-        .rig()
+        self.with_guess(mu_guess).rig()
     }
+}
+
+/// A rig file's friction coefficients as the rig stores them (means and half differences).
+struct FrictionKeys {
+    mu_kinetic: f64,
+    mu_static: f64,
+    kinetic_split: f64,
+    static_split: f64,
 }
 
 /// The `[initial]` section: the state at t = 0 in PHYSICS.md's convention (radians, y down).
@@ -864,15 +982,7 @@ impl RigFile {
     /// uncertainties: `*_sd` keys).
     pub fn load_measured(path: &Path, mu_guess: f64) -> Result<(Rig<f64>, RigSpec), SceneError> {
         let file: RigFile = parse_toml(&read_text(path, MAX_TOML_BYTES)?, path)?;
-        let spec = RigSpec {
-            mu_kinetic: Some(file.rig.mu_kinetic.unwrap_or(mu_guess)),
-            mu_static: file
-                .rig
-                .mu_static
-                .or(file.rig.mu_kinetic)
-                .or(Some(mu_guess)),
-            ..file.rig
-        };
+        let spec = file.rig.with_guess(mu_guess);
         // The time scale is checked by the fit once the rig is compared with the recording
         // (a rod its markers contradict is the better message).
         Ok((spec.checked(path)?, file.rig))

@@ -10,8 +10,8 @@ use appell::fit::{
     check_recording, check_rod_length, fit, FitReport, FitSettings, Loss, Nuisance, Observations,
     StaticMode,
 };
-use appell::model::Rig;
-use appell::report::fit::{answer, fit_json, fit_text, FitFigure};
+use appell::model::{FrictionLaw, Rig};
+use appell::report::fit::{answer, fit_json, fit_text, FitFigure, FrictionFigure};
 use appell::report::joint::{joint_json, joint_text, JointFigure};
 use appell::report::plot::render;
 use appell::scene::RigFile;
@@ -55,6 +55,10 @@ pub struct Args {
     /// Draw data, fit, residuals and mode bands (SVG or PNG by extension).
     #[arg(long, value_name = "FILE.svg")]
     plot: Option<PathBuf>,
+    /// Draw the friction figure: each slide's friction coefficient |F| / |N| against its
+    /// sliding speed, both directions, with the chosen and the compared laws (SVG or PNG).
+    #[arg(long, value_name = "FILE.svg")]
+    friction_plot: Option<PathBuf>,
     /// Robust loss for mis-tracked frames.
     #[arg(long, value_parser = ["huber", "cauchy"])]
     robust: Option<String>,
@@ -81,12 +85,28 @@ pub struct Args {
     #[arg(long)]
     plain: bool,
     /// Put these nuisances in the model whatever the data say (e.g. a rail known to be
-    /// tilted): mu_static, stribeck, rail_tilt, pivot_damping, viscous_friction, camera_scale,
+    /// tilted): mu_static, stribeck, direction, load, rail_tilt, pivot_damping, viscous_friction, camera_scale,
     /// bob_marker_offset, bob_marker_across, slider_marker_offset, marker_lag, rigid_pendulum. With --plain, only these.
     #[arg(long, value_delimiter = ',', value_name = "NUISANCE,...", value_parser = nuisance)]
     with: Vec<Nuisance>,
+    /// Force the rail's friction law instead of letting the data choose: coulomb, stribeck,
+    /// direction (coefficients differ by sliding direction) or load (friction a power of the
+    /// normal force). Static above kinetic is --mu-static.
+    #[arg(long, value_name = "LAW", value_parser = friction_law)]
+    friction: Option<FrictionLaw>,
     #[command(flatten)]
     recording: RecordingArgs,
+}
+
+/// Parse a `--friction` law name.
+fn friction_law(name: &str) -> Result<FrictionLaw, String> {
+    FrictionLaw::ALL
+        .into_iter()
+        .find(|l| l.name() == name)
+        .ok_or_else(|| {
+            let names: Vec<&str> = FrictionLaw::ALL.iter().map(|l| l.name()).collect();
+            format!("expected one of {}", names.join(", "))
+        })
 }
 
 /// Parse one `--with` name.
@@ -162,6 +182,7 @@ fn settings(args: &Args) -> Result<FitSettings, String> {
         nuisances: !args.plain,
         windows: !args.plain,
         with: args.with.clone(),
+        friction: args.friction,
         ..FitSettings::default()
     })
 }
@@ -279,6 +300,7 @@ fn fit_inputs(args: &Args) -> Vec<PathBuf> {
 
 pub fn run(args: Args) -> Result<(), Failure> {
     super::refuse_input(args.plot.as_deref(), &fit_inputs(&args))?;
+    super::refuse_input(args.friction_plot.as_deref(), &fit_inputs(&args))?;
     let opts = args
         .recording
         .resolve()
@@ -286,7 +308,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
     let (rig, spec) =
         RigFile::load_measured(&args.rig, 0.3).map_err(|e| Failure::Input(e.into()))?;
     let mut settings = settings(&args).map_err(|e| Failure::Input(anyhow!(e)))?;
-    if let Some(p) = &args.plot {
+    for p in [&args.plot, &args.friction_plot].into_iter().flatten() {
         appell::report::plot::ImageFormat::from_path(p).map_err(|e| Failure::Input(e.into()))?;
     }
     // The rig file is the measurement it is: its rod length and mass ratio are fitted with
@@ -296,9 +318,9 @@ pub fn run(args: Args) -> Result<(), Failure> {
         return run_joint(&args, &opts, &rig, &settings);
     }
     if args.inputs.len() == 1 && args.inputs[0].is_dir() {
-        if args.plot.is_some() {
+        if args.plot.is_some() || args.friction_plot.is_some() {
             return Err(Failure::Input(anyhow!(
-                "--plot draws one recording's fit, and {} is a directory: give one recording, or --joint for the releases' joint figure",
+                "--plot and --friction-plot draw one recording's fit, and {} is a directory: give one recording, or --joint for the releases' joint figure",
                 args.inputs[0].display()
             )));
         }
@@ -378,13 +400,29 @@ pub fn run(args: Args) -> Result<(), Failure> {
         )
         .map_err(|e| Failure::Run(anyhow!(e)))?;
     }
+    if let Some(p) = &args.friction_plot {
+        let Some(law) = &rep.friction else {
+            return Err(Failure::Run(anyhow!(
+                "--friction-plot: the recording never slides, so it shows no friction law"
+            )));
+        };
+        let figure = FrictionFigure {
+            rig: &rep.rig,
+            law,
+            releases: vec![(
+                args.inputs[0].display().to_string(),
+                appell::fit::law::slide_points(&rep, &settings),
+            )],
+        };
+        render(p, &figure).map_err(|e| Failure::Run(anyhow!(e)))?;
+    }
     if args.json {
         let mut v = fit_json(&rep);
         provenance(&mut v, &args.inputs, &args.rig);
         outln!("{v}");
     } else {
         out!("{}", fit_text(&rep));
-        if let Some(p) = &args.plot {
+        for p in [&args.plot, &args.friction_plot].into_iter().flatten() {
             outln!("figure written to {}", p.display());
         }
     }
@@ -513,7 +551,7 @@ fn run_joint(
         outln!("{v}");
     } else {
         out!("{}", joint_text(&rep));
-        if let Some(p) = &args.plot {
+        for p in [&args.plot, &args.friction_plot].into_iter().flatten() {
             outln!("figure written to {}", p.display());
         }
     }

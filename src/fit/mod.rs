@@ -34,6 +34,7 @@ pub mod checks;
 pub mod guess;
 mod intervals;
 pub mod joint;
+pub mod law;
 pub mod lm;
 mod motion;
 pub mod noise;
@@ -57,7 +58,7 @@ pub use problem::{Counters, Observations, Param, TrajectoryProblem, MAX_FREE};
 pub use select::{ModelRow, Nuisance};
 pub use uncertainty::WindowFit;
 
-use crate::model::{Camera, Rig, State};
+use crate::model::{Camera, FrictionLaw, Rig, State};
 use crate::sim::{Event, Options};
 use nalgebra::DMatrix;
 use outliers::residual_outliers;
@@ -116,6 +117,10 @@ pub struct FitSettings {
     /// Nuisances put in the model whatever the data say (a rail known to be tilted); the
     /// selection adds others on top.
     pub with: Vec<Nuisance>,
+    /// The friction law the user forces (`--friction LAW`): the other laws are not offered.
+    /// `None`: the data choose among Coulomb's, static above kinetic, Stribeck's, the
+    /// direction and the load law.
+    pub friction: Option<FrictionLaw>,
     /// A recording with more than twice this many frames is long: its starts and candidate
     /// models are fitted on these first frames and the winner carried over the rest by
     /// doubling the length; its profile intervals are checked at the Wald ends first.
@@ -123,6 +128,33 @@ pub struct FitSettings {
     /// The rig file as a measurement: its rod length and mass ratio are fitted with these
     /// priors (errors in variables). `None`: the rig is taken as exact.
     pub measured: Option<priors::RigMeasurement>,
+}
+
+impl FitSettings {
+    /// The nuisances forced: `--with`'s and the law of `--friction`.
+    pub fn forced(&self) -> Vec<Nuisance> {
+        let mut forced = self.with.clone();
+        if let Some(nu) = self
+            .friction
+            .and_then(|law| Nuisance::ALL.into_iter().find(|n| n.law() == Some(law)))
+        {
+            if !forced.contains(&nu) {
+                forced.push(nu);
+            }
+        }
+        forced
+    }
+
+    /// The nuisances never offered: with `--friction`, every other law.
+    pub fn excluded(&self) -> Vec<Nuisance> {
+        match self.friction {
+            None => Vec::new(),
+            Some(law) => Nuisance::ALL
+                .into_iter()
+                .filter(|n| n.law().is_some_and(|l| l != law))
+                .collect(),
+        }
+    }
 }
 
 impl Default for FitSettings {
@@ -143,6 +175,7 @@ impl Default for FitSettings {
             nuisances: true,
             windows: true,
             with: Vec::new(),
+            friction: None,
             long_prefix: PREFIX_FRAMES,
             measured: None,
         }
@@ -350,6 +383,9 @@ pub struct FitReport {
     pub rig_values: Vec<RigValue>,
     /// The chosen model's values no real rig has, a sentence each (the fit is then flagged).
     pub implausible: Vec<String>,
+    /// The friction law the data chose, every law's evidence and the law's parameters
+    /// (`None` when the recording never slides).
+    pub friction: Option<law::FrictionLawResult>,
 }
 
 /// A recording that cannot be fitted.
@@ -400,7 +436,8 @@ pub fn fit(
     stages::measured_rig(&mut f, settings);
     let late = residual_outliers(&mut f.problem, &mut f.p, settings, &mut f.iterations, false);
     let seen = stages::seen(&f, &data.obs)?;
-    let (models, nuisances) = stages::nuisances(&mut f, &seen, &base, data.n_frames, settings);
+    let (models, nuisances, screening) =
+        stages::nuisances(&mut f, &seen, &base, data.n_frames, settings);
     let (outliers, late) = stages::late_outliers(&mut f, late, data.dropped, settings);
     if !seen.slides {
         stages::hold_stuck(&mut f, seen.raw_moves, settings);
@@ -441,6 +478,7 @@ pub fn fit(
             verdict,
             models,
             nuisances,
+            screening,
             outliers,
             motion,
             mu_static,

@@ -7,6 +7,7 @@
 use super::adequacy::{self, adequacy_sentence, is_noise_free, marker_rms, WINDOWS_P};
 use super::base::Base;
 use super::intervals::{model_uncertainty, pinned_friction, widen, within_bounds};
+use super::law;
 use super::motion::{motion, slider_moves, Motion};
 use super::outliers::{residual_outliers, ResidualOutliers, RESIDUAL_OUTLIER};
 use super::pendulum::pendulum_found;
@@ -104,17 +105,17 @@ pub(super) fn seen(f: &Fitting, obs: &Observations) -> Result<Seen, FitError> {
     })
 }
 
-/// The nuisances the data ask for (forward selection). Returns the models compared
-/// and the nuisances chosen.
+/// The nuisances the data ask for (forward selection). Returns the models compared, the
+/// nuisances chosen and the score test at the chosen model.
 pub(super) fn nuisances(
     f: &mut Fitting,
     seen: &Seen,
     base: &Base,
     n_frames: usize,
     settings: &FitSettings,
-) -> (Vec<ModelRow>, Vec<Nuisance>) {
-    if !seen.slides || (!settings.nuisances && settings.with.is_empty()) {
-        return (Vec::new(), Vec::new());
+) -> (Vec<ModelRow>, Vec<Nuisance>, Vec<(Nuisance, f64)>) {
+    if !seen.slides || (!settings.nuisances && settings.forced().is_empty()) {
+        return (Vec::new(), Vec::new(), Vec::new());
     }
     let chi2 = f.problem.chi2(&f.p).unwrap_or(f64::INFINITY);
     let mu_k = f.p[0];
@@ -144,14 +145,15 @@ pub(super) fn nuisances(
         // base fit reaches such recordings through their first frames).
         fresh_start: (n_frames <= settings.long_prefix.saturating_mul(2))
             .then_some((base.y0_guess, base.mu0)),
-        forced: settings.with.clone(),
+        forced: settings.forced(),
+        excluded: settings.excluded(),
     };
     let sel = select::forward(f.problem.clone(), f.p.clone(), chi2, &opts);
     f.iterations += sel.iterations;
     f.problem = sel.problem;
     f.p = sel.p;
     f.moved |= !sel.chosen.is_empty();
-    (sel.rows, sel.chosen)
+    (sel.rows, sel.chosen, sel.screening)
 }
 
 /// The residual outliers a misfitting base model left for the chosen one
@@ -698,6 +700,7 @@ pub(super) struct Parts<'a> {
     pub verdict: Verdict,
     pub models: Vec<ModelRow>,
     pub nuisances: Vec<Nuisance>,
+    pub screening: Vec<(Nuisance, f64)>,
     pub outliers: [usize; 2],
     pub motion: Motion,
     pub mu_static: StaticResult,
@@ -716,6 +719,7 @@ pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
         verdict: v,
         models,
         nuisances,
+        screening,
         outliers,
         motion,
         mu_static,
@@ -808,8 +812,20 @@ pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
             r.param, r.value, r.stderr, r.z, r.file, r.sd
         ));
     }
+    let friction = identifiable.then(|| {
+        law::friction_law(&law::LawInputs {
+            params: &est.params,
+            correlation: &est.correlation,
+            models: &models,
+            chosen: &nuisances,
+            screening: &screening,
+            n_rows,
+            forced: settings.friction.is_some(),
+        })
+    });
     let c = &problem.counters;
     FitReport {
+        friction,
         mu_parts,
         rig_keys: settings
             .measured

@@ -88,7 +88,8 @@ impl<T: Scalar> Shorthands<T> {
         Self::new(rig, y[THETA], y[THETA_DOT])
     }
 
-    /// Stick margin mu_s |b| - |c|: positive while the pendulum model holds.
+    /// Stick margin mu_s |b| - |c| for one static coefficient (Coulomb's law; the rig's law
+    /// is [`Rig::stick_margin`]): positive while the pendulum model holds.
     #[inline]
     pub fn stick_margin(&self, mu_static: T) -> T {
         mu_static * self.b.abs() - self.c.abs()
@@ -229,7 +230,7 @@ impl<T: Scalar> Rig<T> {
     }
 
     /// The sliding-rod model on the branch sigma = sign(N), sliding in direction `s`
-    /// (both +1 or -1) at velocity `x_dot`: with mu = mu(|x'|),
+    /// (both +1 or -1) at velocity `x_dot`: with mu the law's coefficient ([`Rig::slide_mu`]),
     /// x'' = (c - mu s sigma b - c_v x') / (D + mu s sigma a), N = b + a x''
     /// = (Q - a c_v x') / (same), l theta'' = A + sin(theta) x''.
     #[inline(always)]
@@ -258,7 +259,7 @@ impl<T: Scalar> Rig<T> {
         let mu = if plain {
             self.mu_kinetic
         } else {
-            self.friction_mu_on(x_dot * s, inverse_stribeck_velocity)
+            self.slide_mu(sh, (s, sigma), x_dot, inverse_stribeck_velocity)
         };
         let ms = mu * (s * sigma);
         let delta = sh.d + ms * sh.a;

@@ -3,6 +3,7 @@
 //! fit, the planner and the region analysis all call these functions.
 
 mod forces;
+mod friction;
 mod markers;
 mod mode;
 pub mod pendulum;
@@ -13,7 +14,10 @@ mod transition;
 pub use forces::{energy, momentum, Shorthands, SlideBranches, SlideDynamics};
 pub use markers::{markers, observed_markers, observed_markers_with, Camera};
 pub use mode::{Direction, Mode};
-pub use rig::{FrictionLaw, PendulumKeys, Rig, RigConstants, RigError, RigidPendulum};
+pub use rig::{
+    FrictionLaw, PendulumKeys, Rig, RigConstants, RigError, RigidPendulum, LOAD_EXPONENT_MAX,
+    LOAD_EXPONENT_MIN,
+};
 pub use transition::{choose_at_rest, RestChoice};
 
 use num_dual::DualNum;

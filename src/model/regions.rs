@@ -8,7 +8,7 @@
 //! theta where mu |a| = D). With tilt, the slide directions and the two sides of the plane
 //! differ.
 
-use super::{sign, Rig, Shorthands};
+use super::{sign, FrictionLaw, Rig, Shorthands};
 use serde::Serialize;
 use std::f64::consts::PI;
 
@@ -174,8 +174,67 @@ fn real_roots(v: [f64; 3]) -> Vec<f64> {
 /// ```
 pub fn stick_boundary_w(rig: &Rig<f64>, theta: f64, branch: f64) -> Vec<f64> {
     let f = QuadraticInW::new(rig, theta);
-    let mu = branch * rig.mu_static;
-    real_roots(std::array::from_fn(|i| f.c[i] - mu * f.b[i]))
+    match rig.friction_law {
+        FrictionLaw::Coulomb | FrictionLaw::Stribeck => {
+            let mu = branch * rig.mu_static;
+            real_roots(std::array::from_fn(|i| f.c[i] - mu * f.b[i]))
+        }
+        FrictionLaw::Direction => {
+            // Each direction's coefficient holds where the slider would slip that way
+            // (sign(c) = s): the roots of each quadratic on its own side.
+            let mut roots = Vec::new();
+            for s in [1.0, -1.0] {
+                let mu = branch * rig.static_mu(s);
+                let side = real_roots(std::array::from_fn(|i| f.c[i] - mu * f.b[i]));
+                roots.extend(side.into_iter().filter(|&w| sign(eval(f.c, w)) == s));
+            }
+            roots.sort_by(f64::total_cmp);
+            roots
+        }
+        FrictionLaw::Load => load_stick_boundary_w(rig, &f, branch),
+    }
+}
+
+/// [`stick_boundary_w`] under the load law, c = branch mu_s |b| (|b| / N_0)^(n - 1) sign(b),
+/// which is no quadratic: its sign changes on a grid of w out to twice the largest root of
+/// Coulomb's boundary (or a swing of 8 sqrt(g / l)), each refined by bisection.
+fn load_stick_boundary_w(rig: &Rig<f64>, f: &QuadraticInW, branch: f64) -> Vec<f64> {
+    let coulomb = real_roots(std::array::from_fn(|i| {
+        f.c[i] - branch * rig.mu_static * f.b[i]
+    }));
+    let reach = 8.0 * (rig.gravity / rig.rod_length).sqrt();
+    let w_max = coulomb.iter().fold(reach, |m, w| m.max(2.0 * w.abs()));
+    let n0 = rig.static_load();
+    let g = |w: f64| {
+        let b = eval(f.b, w);
+        let held = rig.mu_static * b * (b.abs() / n0).powf(rig.load_exponent - 1.0);
+        eval(f.c, w) - branch * held
+    };
+    let n = 512;
+    let mut roots = Vec::new();
+    let (mut w0, mut g0) = (-w_max, g(-w_max));
+    for k in 1..=n {
+        let w1 = -w_max + 2.0 * w_max * k as f64 / n as f64;
+        let g1 = g(w1);
+        if g0 == 0.0 {
+            roots.push(w0);
+        } else if g0 * g1 < 0.0 {
+            let (mut a, mut b, mut ga) = (w0, w1, g0);
+            for _ in 0..80 {
+                let m = 0.5 * (a + b);
+                let gm = g(m);
+                if gm * ga <= 0.0 {
+                    b = m;
+                } else {
+                    a = m;
+                    ga = gm;
+                }
+            }
+            roots.push(0.5 * (a + b));
+        }
+        (w0, g0) = (w1, g1);
+    }
+    roots
 }
 
 /// The curve Q = 0 at angle `theta`: the w where the rail reaction of a slide changes sign
@@ -189,7 +248,7 @@ pub fn q_zero_w(rig: &Rig<f64>, theta: f64) -> Vec<f64> {
 
 /// Whether the pendulum (stick) model holds at (theta, w): |c| <= mu_s |b|.
 pub fn in_stick_region(rig: &Rig<f64>, theta: f64, w: f64) -> bool {
-    Shorthands::new(rig, theta, w).stick_margin(rig.mu_static) >= 0.0
+    rig.stick_margin(&Shorthands::new(rig, theta, w)) >= 0.0
 }
 
 /// Whether (theta, w) lies strictly inside the paradox band, mu |a| > D, with the largest mu
@@ -219,7 +278,7 @@ pub fn in_paradox_band(rig: &Rig<f64>, theta: f64) -> bool {
 /// ```
 pub fn slide_solution_count(rig: &Rig<f64>, theta: f64, w: f64, s: f64) -> usize {
     let sh = Shorthands::new(rig, theta, w);
-    if sh.band_margin(rig.friction_mu(0.0)) >= -EDGE_TOL * sh.d {
+    if sh.band_margin(rig.friction_mu(s, 0.0)) >= -EDGE_TOL * sh.d {
         1
     } else if sign(sh.q) == sign(s * sh.a) {
         2
@@ -263,10 +322,7 @@ pub fn stick_intervals(rig: &Rig<f64>, theta: f64, w_max: f64) -> Vec<(f64, f64)
     breaks.extend(stick_boundary_w(rig, theta, -1.0));
     breaks.extend(real_roots(f.b));
     breaks.extend(real_roots(f.c));
-    let mu = rig.mu_static;
-    let pieces = pieces_in_w(w_max, breaks, |w| {
-        mu * eval(f.b, w).abs() >= eval(f.c, w).abs()
-    });
+    let pieces = pieces_in_w(w_max, breaks, |w| in_stick_region(rig, theta, w));
     pieces
         .into_iter()
         .filter(|p| p.2)

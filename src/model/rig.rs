@@ -4,8 +4,11 @@
 use super::Scalar;
 use thiserror::Error;
 
-/// (|x'| / v_s)^2 past which the Stribeck hump, e^-(|x'|/v_s)^2 < 2e-22, is left out.
-const STRIBECK_TAIL: f64 = 50.0;
+/// The load law's exponents a rig may have: polymer contacts show 0.7-0.95 (RIGS.md, "The
+/// rail"); the range leaves room either side without letting |N|^n overflow.
+pub const LOAD_EXPONENT_MIN: f64 = 0.3;
+/// See [`LOAD_EXPONENT_MIN`].
+pub const LOAD_EXPONENT_MAX: f64 = 2.0;
 
 /// A Painleve-Appell rig. Generic over the scalar so the fit can carry derivatives with
 /// respect to mu or the rod length through every formula.
@@ -40,8 +43,17 @@ pub struct Rig<T> {
     pub viscous_friction: T,
     /// How the sliding friction coefficient depends on speed.
     pub friction_law: FrictionLaw,
-    /// Stribeck speed v_s (m/s) of [`FrictionLaw::Stribeck`]; unused by Coulomb's law.
+    /// Stribeck speed v_s (m/s) of [`FrictionLaw::Stribeck`]; unused by the other laws.
     pub stribeck_velocity: T,
+    /// Half the difference of the kinetic coefficients by sliding direction,
+    /// (mu_k(+x) - mu_k(-x)) / 2, under [`FrictionLaw::Direction`] (zero under the others):
+    /// `mu_kinetic` is then the mean of the two directions.
+    pub kinetic_split: T,
+    /// The same half difference of the static coefficients (`mu_static` their mean).
+    pub static_split: T,
+    /// Exponent n of [`FrictionLaw::Load`]: |F| = mu N_0 (|N| / N_0)^n with N_0 = (m1 + m2) g,
+    /// the static load on a level rail; 1 (Coulomb's law) under the others.
+    pub load_exponent: T,
 }
 
 /// Factors of the real-rig terms that depend only on the rig, computed once per run
@@ -62,15 +74,46 @@ pub struct RigConstants<T> {
     pub inverse_stribeck_velocity: T,
 }
 
-/// How the friction coefficient of a slide depends on the slider's speed v = |x'|.
+/// The rail's dry friction law: how the friction force of a slide, and the most friction a
+/// stuck slider can hold, depend on the sliding speed v = |x'|, the sliding direction and the
+/// normal force N (docs/physics.md, "Friction laws"). Viscous rail friction (`c_v`) adds to
+/// any of them.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, serde::Deserialize, serde::Serialize)]
 #[serde(rename_all = "snake_case")]
 pub enum FrictionLaw {
-    /// mu(v) = mu_k at every speed.
+    /// |F| = mu_k |N| while sliding, at most mu_s |N| while stuck (mu_s >= mu_k).
     #[default]
     Coulomb,
     /// mu(v) = mu_k + (mu_s - mu_k) exp(-(v / v_s)^2): friction falls from mu_s at rest to mu_k.
     Stribeck,
+    /// Coulomb's law with coefficients that differ by sliding direction: mu_k + s d_k while
+    /// sliding in direction s, at most mu_s + s d_s while stuck and about to slip toward s
+    /// (d_k = [`Rig::kinetic_split`], d_s = [`Rig::static_split`]).
+    Direction,
+    /// Load-dependent friction (polymer contacts): |F| = mu_k N_0 (|N| / N_0)^n while
+    /// sliding, at most mu_s N_0 (|N| / N_0)^n while stuck, with N_0 = (m1 + m2) g; the
+    /// coefficient |F| / |N| is mu_k at the static load and falls with load for n < 1.
+    Load,
+}
+
+impl FrictionLaw {
+    /// Every law, in the order reports list them.
+    pub const ALL: [FrictionLaw; 4] = [
+        FrictionLaw::Coulomb,
+        FrictionLaw::Stribeck,
+        FrictionLaw::Direction,
+        FrictionLaw::Load,
+    ];
+
+    /// The law's name in files and reports.
+    pub fn name(self) -> &'static str {
+        match self {
+            FrictionLaw::Coulomb => "coulomb",
+            FrictionLaw::Stribeck => "stribeck",
+            FrictionLaw::Direction => "direction",
+            FrictionLaw::Load => "load",
+        }
+    }
 }
 
 /// The swinging part of a rig as one rigid body hinged at the slider (PHYSICS.md, "Rigid
@@ -316,6 +359,24 @@ pub enum RigError {
         /// The value computed.
         value: f64,
     },
+    /// A value of the direction or load law outside its range.
+    #[error("rig.{key} must be {expected}, got {value}")]
+    Law {
+        /// Scene key of the value (or what it is, when computed).
+        key: &'static str,
+        /// What the value must be.
+        expected: String,
+        /// The offending value.
+        value: f64,
+    },
+    /// Keys of a friction law given with another law.
+    #[error("rig.{key} is only used with rig.friction_law = \"{law}\"")]
+    KeyWithoutLaw {
+        /// The key given.
+        key: &'static str,
+        /// The law it belongs to.
+        law: &'static str,
+    },
     /// Static friction below kinetic friction.
     #[error("rig.mu_static ({mu_static}) must be >= rig.mu_kinetic ({mu_kinetic})")]
     StaticBelowKinetic {
@@ -366,6 +427,9 @@ impl Rig<f64> {
             viscous_friction: 0.0,
             friction_law: FrictionLaw::Coulomb,
             stribeck_velocity: 1.0,
+            kinetic_split: 0.0,
+            static_split: 0.0,
+            load_exponent: 1.0,
         }
     }
 
@@ -398,6 +462,28 @@ impl Rig<f64> {
         Rig {
             friction_law: FrictionLaw::Stribeck,
             stribeck_velocity: v_s,
+            ..self
+        }
+    }
+
+    /// The same rig with direction-dependent friction: `mu_kinetic` and `mu_static` become
+    /// the means of the two directions, and sliding toward +x meets them plus `kinetic_split`
+    /// and `static_split`, toward -x minus them.
+    pub fn with_direction_split(self, kinetic_split: f64, static_split: f64) -> Self {
+        Rig {
+            friction_law: FrictionLaw::Direction,
+            kinetic_split,
+            static_split,
+            ..self
+        }
+    }
+
+    /// The same rig with load-dependent friction of exponent `n` (mu_kinetic and mu_static
+    /// are the coefficients at the static load (m1 + m2) g).
+    pub fn with_load_exponent(self, n: f64) -> Self {
+        Rig {
+            friction_law: FrictionLaw::Load,
+            load_exponent: n,
             ..self
         }
     }
@@ -478,6 +564,62 @@ impl Rig<f64> {
                 mu_kinetic: self.mu_kinetic,
             });
         }
+        self.validate_law()
+    }
+
+    /// The checks of the direction and load laws' own values.
+    fn validate_law(&self) -> Result<(), RigError> {
+        let law = |key, expected: &str, value| RigError::Law {
+            key,
+            expected: expected.to_owned(),
+            value,
+        };
+        match self.friction_law {
+            FrictionLaw::Direction => {
+                for (key, v) in [
+                    ("kinetic split", self.kinetic_split),
+                    ("static split", self.static_split),
+                ] {
+                    if !v.is_finite() {
+                        return Err(law(key, "finite", v));
+                    }
+                }
+                // Each direction's coefficients: both >= 0, static >= kinetic.
+                for s in [1.0, -1.0] {
+                    let (k, st) = (
+                        self.mu_kinetic + s * self.kinetic_split,
+                        self.mu_static + s * self.static_split,
+                    );
+                    let key = if s > 0.0 {
+                        "mu_kinetic_positive"
+                    } else {
+                        "mu_kinetic_negative"
+                    };
+                    if k < 0.0 {
+                        return Err(law(key, ">= 0", k));
+                    }
+                    if st < k {
+                        let key = if s > 0.0 {
+                            "mu_static_positive"
+                        } else {
+                            "mu_static_negative"
+                        };
+                        return Err(law(key, &format!(">= the kinetic coefficient {k}"), st));
+                    }
+                }
+            }
+            FrictionLaw::Load => {
+                let n = self.load_exponent;
+                if !(n.is_finite() && (LOAD_EXPONENT_MIN..=LOAD_EXPONENT_MAX).contains(&n)) {
+                    return Err(law(
+                        "load_exponent",
+                        &format!("between {LOAD_EXPONENT_MIN} and {LOAD_EXPONENT_MAX}"),
+                        n,
+                    ));
+                }
+            }
+            FrictionLaw::Coulomb | FrictionLaw::Stribeck => {}
+        }
         Ok(())
     }
 
@@ -497,6 +639,9 @@ impl Rig<f64> {
             viscous_friction: T::from(self.viscous_friction),
             friction_law: self.friction_law,
             stribeck_velocity: T::from(self.stribeck_velocity),
+            kinetic_split: T::from(self.kinetic_split),
+            static_split: T::from(self.static_split),
+            load_exponent: T::from(self.load_exponent),
         }
     }
 }
@@ -518,6 +663,9 @@ impl<T: Scalar> Rig<T> {
             viscous_friction: self.viscous_friction.re(),
             friction_law: self.friction_law,
             stribeck_velocity: self.stribeck_velocity.re(),
+            kinetic_split: self.kinetic_split.re(),
+            static_split: self.static_split.re(),
+            load_exponent: self.load_exponent.re(),
         }
     }
 
@@ -528,7 +676,21 @@ impl<T: Scalar> Rig<T> {
         self.rail_tilt.is_exact_zero()
             && self.pivot_damping.is_exact_zero()
             && self.viscous_friction.is_exact_zero()
-            && (self.friction_law == FrictionLaw::Coulomb || self.mu_static == self.mu_kinetic)
+            && self.friction_is_symmetric_coulomb()
+    }
+
+    /// Whether the friction law acts as Coulomb's with one coefficient in both directions at
+    /// every load: Coulomb's law; Stribeck's with mu_s = mu_k; the direction law with no
+    /// split; the load law at exponent 1.
+    pub fn friction_is_symmetric_coulomb(&self) -> bool {
+        match self.friction_law {
+            FrictionLaw::Coulomb => true,
+            FrictionLaw::Stribeck => self.mu_static == self.mu_kinetic,
+            FrictionLaw::Direction => {
+                self.kinetic_split.re() == 0.0 && self.static_split.re() == 0.0
+            }
+            FrictionLaw::Load => self.load_exponent.re() == 1.0,
+        }
     }
 
     /// True on the seed paper's rig: level rail, no pivot damping, Coulomb friction without a
@@ -567,50 +729,6 @@ impl<T: Scalar> Rig<T> {
             damping_drive: c_p / (m2 * l),
             damping_normal: (m1 + m2) * c_p / l,
             inverse_stribeck_velocity: self.inverse_stribeck_velocity(),
-        }
-    }
-
-    /// 1 / v_s under Stribeck's law, zero under Coulomb's (where v_s is not used).
-    #[inline]
-    pub fn inverse_stribeck_velocity(&self) -> T {
-        match self.friction_law {
-            FrictionLaw::Coulomb => T::zero(),
-            FrictionLaw::Stribeck => self.stribeck_velocity.recip(),
-        }
-    }
-
-    /// The sliding friction coefficient at speed `speed` = |x'| under the rig's law.
-    #[inline(always)]
-    pub fn friction_mu(&self, speed: T) -> T {
-        self.friction_mu_on(speed, self.inverse_stribeck_velocity())
-    }
-
-    /// [`Rig::friction_mu`] with [`Rig::inverse_stribeck_velocity`] at hand (a caller that
-    /// evaluates it many times keeps it in [`RigConstants`]).
-    #[inline(always)]
-    pub fn friction_mu_on(&self, speed: T, inverse_stribeck_velocity: T) -> T {
-        match self.friction_law {
-            FrictionLaw::Coulomb => self.mu_kinetic,
-            FrictionLaw::Stribeck => {
-                let u = speed * inverse_stribeck_velocity;
-                let u2 = u * u;
-                if u2.re() > STRIBECK_TAIL {
-                    // The hump is below e^-50 = 2e-22 of mu_s - mu_k here: mu_k to far
-                    // below any friction measurement, without an exp on every evaluation
-                    // of a fast slide.
-                    return self.mu_kinetic;
-                }
-                self.mu_kinetic + (self.mu_static - self.mu_kinetic) * (-u2).exp()
-            }
-        }
-    }
-
-    /// The largest coefficient a slide can meet (mu_s for Stribeck, reached as v -> 0): it
-    /// decides whether the Painleve paradox is possible.
-    pub fn mu_slide_max(&self) -> T {
-        match self.friction_law {
-            FrictionLaw::Coulomb => self.mu_kinetic,
-            FrictionLaw::Stribeck => self.mu_static,
         }
     }
 

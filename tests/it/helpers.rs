@@ -39,7 +39,10 @@ pub fn elliptic_k(k: f64) -> f64 {
 ///   (m1 + m2) x'' - m2 l (sin th th'' + cos th w^2) = F + (m1 + m2) g_x
 ///   l th'' - sin th x'' = g_y cos th - g_x sin th - c_p w / (m2 l)
 ///   N = m2 l (cos th th'' - sin th w^2) - (m1 + m2) g_y
-/// with F = -mu(|x'|) s sigma N - c_v x' while sliding. Returns (x'', theta'').
+/// with F = -mu(|x'|, s) s sigma N - c_v x' while sliding (Coulomb, Stribeck, direction). The
+/// load law's F = -s mu_k N_0 (|N| / N_0)^n - c_v x' makes the system nonlinear in N: for a
+/// trial |N| = u the friction is known and the linear system gives N(u); the consistent u
+/// (sigma N(u) = u) is found by a scan and bisection. Returns (x'', theta'').
 pub fn slide_accel_oracle(rig: &Rig<f64>, y: &State<f64>, s: f64) -> (f64, f64) {
     let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);
     let m = m1 + m2;
@@ -48,34 +51,72 @@ pub fn slide_accel_oracle(rig: &Rig<f64>, y: &State<f64>, s: f64) -> (f64, f64) 
         rig.gravity * rig.rail_tilt.cos(),
     );
     let v = y[2].abs();
+    let (th, w) = (y[1], y[3]);
+    let (sn, cs) = th.sin_cos();
+    let rhs = Vector3::new(
+        m * gx + m2 * l * cs * w * w - rig.viscous_friction * y[2],
+        gy * cs - gx * sn - rig.pivot_damping * w / (m2 * l),
+        -m2 * l * sn * w * w - m * gy,
+    );
+    // The linear system with the friction's N-coefficient `k` (F = -k N + f0 on the
+    // first row's left side moved right).
+    let solve = |k: f64, f0: f64| {
+        let a = Matrix3::new(m, -m2 * l * sn, k, -sn, l, 0.0, 0.0, -m2 * l * cs, 1.0);
+        let mut r = rhs;
+        r[0] += f0;
+        a.lu().solve(&r).expect("regular system")
+    };
+    if rig.friction_law == FrictionLaw::Load {
+        let n0 = m * rig.gravity;
+        // On the consistent branch g > 0 for small u (N there has the branch's sign) and
+        // the first crossing from above is the solution that continues Coulomb's; for n > 1
+        // a second, spurious crossing at a huge |N| follows (the law's own paradox).
+        let mut found = None;
+        for sigma in [1.0, -1.0] {
+            let g = |u: f64| {
+                let f = -s * rig.mu_kinetic * n0 * (u / n0).powf(rig.load_exponent);
+                sigma * solve(0.0, f)[2] - u
+            };
+            let grid: Vec<f64> = (0..=1200)
+                .map(|i| n0 * 1e-9 * 10f64.powf(i as f64 / 100.0))
+                .collect();
+            if g(grid[0]) <= 0.0 {
+                continue;
+            }
+            let Some(pair) = grid.windows(2).find(|p| g(p[1]) <= 0.0) else {
+                continue;
+            };
+            let (mut a, mut b) = (pair[0], pair[1]);
+            for _ in 0..200 {
+                let c = 0.5 * (a + b);
+                if g(c) > 0.0 {
+                    a = c;
+                } else {
+                    b = c;
+                }
+            }
+            let u = 0.5 * (a + b);
+            let sol = solve(
+                0.0,
+                -s * rig.mu_kinetic * n0 * (u / n0).powf(rig.load_exponent),
+            );
+            assert!(found.is_none(), "two branches of the load law");
+            found = Some((sol[0], sol[1]));
+        }
+        return found.expect("a consistent sliding solution");
+    }
     let mu = match rig.friction_law {
         FrictionLaw::Coulomb => rig.mu_kinetic,
+        FrictionLaw::Direction => rig.mu_kinetic + s * rig.kinetic_split,
         FrictionLaw::Stribeck => {
             rig.mu_kinetic
                 + (rig.mu_static - rig.mu_kinetic) * (-(v / rig.stribeck_velocity).powi(2)).exp()
         }
+        FrictionLaw::Load => unreachable!("solved above"),
     };
-    let (th, w) = (y[1], y[3]);
-    let (sn, cs) = th.sin_cos();
     let mut found = None;
     for sigma in [1.0, -1.0] {
-        let a = Matrix3::new(
-            m,
-            -m2 * l * sn,
-            mu * s * sigma,
-            -sn,
-            l,
-            0.0,
-            0.0,
-            -m2 * l * cs,
-            1.0,
-        );
-        let rhs = Vector3::new(
-            m * gx + m2 * l * cs * w * w - rig.viscous_friction * y[2],
-            gy * cs - gx * sn - rig.pivot_damping * w / (m2 * l),
-            -m2 * l * sn * w * w - m * gy,
-        );
-        let sol = a.lu().solve(&rhs).expect("regular system");
+        let sol = solve(mu * s * sigma, 0.0);
         if sol[2] * sigma >= 0.0 {
             assert!(found.is_none(), "two solutions: paradox regime");
             found = Some((sol[0], sol[1]));
@@ -217,4 +258,50 @@ pub fn svg_text(svg: &str) -> String {
         }
     }
     out.join(" ")
+}
+
+/// The energy of PHYSICS.md with the tilted potential, written out here from the kinetic and
+/// potential energies of slider and bob (not the library's `energy`).
+pub fn energy_oracle(rig: &Rig<f64>, y: &State<f64>) -> f64 {
+    let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);
+    let (gx, gy) = (
+        rig.gravity * rig.rail_tilt.sin(),
+        rig.gravity * rig.rail_tilt.cos(),
+    );
+    let (x, th, xd, w) = (y[0], y[1], y[2], y[3]);
+    0.5 * (m1 + m2) * xd * xd - m2 * l * xd * w * th.sin() + 0.5 * m2 * l * l * w * w
+        - (m1 + m2) * gx * x
+        - m2 * gx * l * th.cos()
+        - m2 * gy * l * th.sin()
+}
+
+/// The states the acceleration tests sweep: angles, angular velocities and slider velocities
+/// (both directions), 6 x 5 x 4 of them.
+pub fn slide_states() -> impl Iterator<Item = State<f64>> {
+    [0.1, 0.7, 1.4, 2.2, 3.5, 5.0].into_iter().flat_map(|th| {
+        [-4.0, -0.5, 0.0, 1.0, 3.0].into_iter().flat_map(move |w| {
+            [-0.4f64, -0.02, 0.03, 0.5]
+                .into_iter()
+                .map(move |xd| [0.1, th, xd, w])
+        })
+    })
+}
+
+/// The library's sliding accelerations at `y` against [`slide_accel_oracle`], to `tol` of
+/// the acceleration scale g (1 + w^2 l / g); `name` labels a failure.
+pub fn assert_slide_matches_oracle(name: &str, r: &Rig<f64>, y: &State<f64>, tol: f64) {
+    let (xd, w) = (y[2], y[3]);
+    let s = xd.signum();
+    let (xdd, tdd) = slide_accel_oracle(r, y, s);
+    let sh = appell::model::Shorthands::at(r, y);
+    let sigma = r.slide_sigma(&sh, s, xd).expect("one branch below mu*");
+    let d = r.slide(&sh, s, sigma, xd);
+    let scale = r.gravity * (1.0 + w * w * r.rod_length / r.gravity);
+    assert!(
+        (d.x_ddot - xdd).abs() < tol * scale
+            && (d.theta_ddot - tdd).abs() < tol * scale / r.rod_length,
+        "{name} at {y:?}: ({}, {}) vs ({xdd}, {tdd})",
+        d.x_ddot,
+        d.theta_ddot
+    );
 }

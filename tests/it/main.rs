@@ -10,6 +10,7 @@ mod cli_simulate;
 mod doc_links;
 mod fit;
 mod fit_real;
+mod friction_laws;
 mod fuzz_structured;
 mod hardening;
 mod helpers;

@@ -81,7 +81,8 @@ fn choose_nuisances(
         max_iters: settings.max_iters,
         already: Vec::new(),
         fresh_start: Some(restarts),
-        forced: settings.with.clone(),
+        forced: settings.forced(),
+        excluded: settings.excluded(),
     };
     let sel = select::forward(model.problem, model.p, 2.0 * cost, &opts);
     JointModel {

@@ -272,6 +272,8 @@ impl TrajectoryProblem {
             Param::PivotDamping => self.rig.pivot_damping,
             Param::ViscousFriction => self.rig.viscous_friction,
             Param::StribeckVelocity => self.rig.stribeck_velocity,
+            Param::FrictionSplit => self.rig.kinetic_split,
+            Param::LoadExponent => self.rig.load_exponent,
             Param::ScaleError => self.camera.scale_error,
             Param::BobAlong => self.camera.bob_along,
             Param::BobAcross => self.camera.bob_across,
@@ -325,6 +327,12 @@ impl TrajectoryProblem {
                 Param::PivotDamping => rig.pivot_damping = v,
                 Param::ViscousFriction => rig.viscous_friction = v,
                 Param::StribeckVelocity => rig.stribeck_velocity = v,
+                // One split for both coefficients: the static ones differ as the kinetic.
+                Param::FrictionSplit => {
+                    rig.kinetic_split = v;
+                    rig.static_split = v;
+                }
+                Param::LoadExponent => rig.load_exponent = v,
                 Param::ScaleError => cam.scale_error = v,
                 Param::BobAlong => cam.bob_along = v,
                 Param::BobAcross => cam.bob_across = v,

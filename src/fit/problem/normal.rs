@@ -5,7 +5,9 @@
 use super::param::CAMERA_PARAMS;
 use super::{to_err, Param, TrajectoryProblem};
 use crate::fit::lm::{LeastSquares, Normal};
-use crate::model::{observed_markers_with, re_state, Scalar as _};
+use crate::model::{
+    observed_markers_with, re_state, Scalar as _, LOAD_EXPONENT_MAX, LOAD_EXPONENT_MIN,
+};
 use crate::sim::{Sample, SimError};
 use argmin::core::Error;
 use nalgebra::{DMatrix, DVector, U1};
@@ -315,6 +317,9 @@ impl LeastSquares for TrajectoryProblem {
         clamp(p, Param::PivotDamping, 0.0, f64::INFINITY);
         clamp(p, Param::ViscousFriction, 0.0, f64::INFINITY);
         clamp(p, Param::StribeckVelocity, 1e-4, 10.0);
+        // Each direction's coefficient at least 0; an exponent within the rig's range.
+        clamp(p, Param::FrictionSplit, -mu_k, mu_k);
+        clamp(p, Param::LoadExponent, LOAD_EXPONENT_MIN, LOAD_EXPONENT_MAX);
         clamp(p, Param::RailTilt, -0.3, 0.3);
         clamp(p, Param::ScaleError, -0.5, 0.5);
         clamp(p, Param::Lag, -0.05, 0.05);

@@ -37,6 +37,12 @@ pub enum Param {
     ViscousFriction,
     /// Stribeck speed v_s (m/s).
     StribeckVelocity,
+    /// Half the difference of the kinetic coefficients by sliding direction,
+    /// (mu_k(+x) - mu_k(-x)) / 2, under the direction law (mu_kinetic their mean); the static
+    /// coefficients differ by the same amount.
+    FrictionSplit,
+    /// Exponent n of the load law, |F| = mu N_0 (|N| / N_0)^n.
+    LoadExponent,
     /// Relative camera scale error (positions times 1 + this).
     ScaleError,
     /// Bob marker's offset along the rod from its end (m).
@@ -53,7 +59,7 @@ pub enum Param {
 
 impl Param {
     /// Every parameter, in report order.
-    pub const ALL: [Param; 19] = [
+    pub const ALL: [Param; 21] = [
         Param::MuKinetic,
         Param::MuStatic,
         Param::X,
@@ -67,6 +73,8 @@ impl Param {
         Param::PivotDamping,
         Param::ViscousFriction,
         Param::StribeckVelocity,
+        Param::FrictionSplit,
+        Param::LoadExponent,
         Param::ScaleError,
         Param::BobAlong,
         Param::BobAcross,
@@ -119,6 +127,8 @@ impl Param {
             Param::PivotDamping => "pivot_damping",
             Param::ViscousFriction => "viscous_friction",
             Param::StribeckVelocity => "stribeck_velocity",
+            Param::FrictionSplit => "mu_kinetic_split",
+            Param::LoadExponent => "load_exponent",
             Param::ScaleError => "camera_scale_error",
             Param::BobAlong => "bob_marker_along",
             Param::BobAcross => "bob_marker_across",
@@ -131,7 +141,12 @@ impl Param {
     /// Unit of the parameter's value, for reports.
     pub fn unit(self) -> &'static str {
         match self {
-            Param::MuKinetic | Param::MuStatic | Param::ScaleError | Param::MassRatio => "",
+            Param::MuKinetic
+            | Param::MuStatic
+            | Param::ScaleError
+            | Param::MassRatio
+            | Param::FrictionSplit
+            | Param::LoadExponent => "",
             Param::X
             | Param::RodLength
             | Param::PendulumLength

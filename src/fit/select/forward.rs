@@ -86,6 +86,8 @@ struct Search<M> {
     rows: Vec<ModelRow>,
     /// Levenberg-Marquardt iterations spent.
     iterations: u64,
+    /// The last round's screening at the model it stood on.
+    screening: Vec<(Nuisance, f64)>,
 }
 
 /// Forward selection from the base model `problem` at its optimum `p` (chi-square `chi2`).
@@ -108,6 +110,7 @@ pub fn forward<M: Candidate>(
         current: (problem, p, chi2),
         rows,
         iterations: 0,
+        screening: Vec::new(),
     };
     add_forced(&mut search, opts, &crit);
     for _ in 0..opts.max_added {
@@ -168,6 +171,7 @@ fn round<M: Candidate>(
     let screened: Vec<Nuisance> = open.iter().copied().filter(|n| n.screened()).collect();
     let mut drops = cur_problem.score_drops(cur_p, &screened);
     drops.sort_by(|a, b| b.1.total_cmp(&a.1));
+    s.screening = drops.clone();
     let misfit = misfits(cur_problem, *cur_chi2);
     let fresh = opts.fresh_start.as_ref().filter(|_| misfit);
     let to_fit = worth_fitting(&open, &drops, misfit, crit);
@@ -205,6 +209,7 @@ fn open_candidates<M: Candidate>(
     Nuisance::ALL
         .into_iter()
         .filter(|n| !chosen.contains(n) && !chosen.iter().any(|c| c.conflicts(*n)))
+        .filter(|n| !opts.excluded.contains(n))
         .filter(|n| cur_problem.width() + n.new_params(cur_problem) <= MAX_FREE)
         .filter(|n| n.screened() || friction)
         // A pendulum the rig file gives is used as given (`--with` may still free it).
@@ -264,8 +269,12 @@ fn jobs<M: Candidate>(
     let (mut first, mut rest) = (Vec::new(), Vec::new());
     for (i, &nu) in to_fit.iter().enumerate() {
         // The friction laws, which no score test ranks, are among the first when the
-        // onsets show mu_static above mu_kinetic.
-        let jobs = if i < leading || (!nu.screened() && opts.static_evidence) {
+        // onsets show mu_static above mu_kinetic. Under misfit every law is among the
+        // first: a misfitting model's score test ranks a law below the nuisance that mimics
+        // it (a rail tilt is the force of friction that differs by direction on a heavy
+        // slider), and the greedy selection would never come back to it.
+        let law_first = misfit && nu.is_law();
+        let jobs = if i < leading || (!nu.screened() && opts.static_evidence) || law_first {
             &mut first
         } else {
             &mut rest
@@ -401,6 +410,7 @@ fn finish<M: Candidate>(s: Search<M>, crit: &Criterion) -> Selection<M> {
         current,
         mut rows,
         iterations,
+        screening,
     } = s;
     let chosen_name = name_of(&chosen);
     let best_bic = crit.bic(current.0.n_free(), current.2);
@@ -417,5 +427,6 @@ fn finish<M: Candidate>(s: Search<M>, crit: &Criterion) -> Selection<M> {
         chosen,
         rows,
         iterations,
+        screening,
     }
 }

@@ -65,6 +65,9 @@ pub struct Selection<M> {
     pub rows: Vec<ModelRow>,
     /// Levenberg-Marquardt iterations spent.
     pub iterations: u64,
+    /// The score test's predicted chi-square drop of each screened candidate at the chosen
+    /// model (its last round): the evidence for a candidate that was not fitted.
+    pub screening: Vec<(Nuisance, f64)>,
 }
 
 /// Settings of the selection.
@@ -90,6 +93,8 @@ pub struct SelectOptions<S> {
     pub fresh_start: Option<S>,
     /// Nuisances the user put in the model (`--with`): added first, whatever they cost.
     pub forced: Vec<Nuisance>,
+    /// Nuisances never offered (`--friction LAW` leaves out the other laws).
+    pub excluded: Vec<Nuisance>,
 }
 
 /// Whether `problem`'s chi-square is far beyond its degrees of freedom (5 standard

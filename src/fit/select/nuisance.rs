@@ -14,6 +14,10 @@ pub enum Nuisance {
     StaticFriction,
     /// Stribeck friction: mu_static and the Stribeck speed free.
     Stribeck,
+    /// Friction that differs by sliding direction (the direction law).
+    Direction,
+    /// Friction growing as a power of the normal force (the load law).
+    Load,
     /// Rail tilt.
     RailTilt,
     /// Viscous damping at the pivot.
@@ -38,10 +42,12 @@ pub enum Nuisance {
 
 impl Nuisance {
     /// Every candidate, in the order ties are broken.
-    pub const ALL: [Nuisance; 11] = [
+    pub const ALL: [Nuisance; 13] = [
         Nuisance::RigidPendulum,
         Nuisance::StaticFriction,
         Nuisance::Stribeck,
+        Nuisance::Direction,
+        Nuisance::Load,
         Nuisance::RailTilt,
         Nuisance::PivotDamping,
         Nuisance::ViscousFriction,
@@ -57,6 +63,8 @@ impl Nuisance {
         match self {
             Nuisance::StaticFriction => "mu_static",
             Nuisance::Stribeck => "stribeck",
+            Nuisance::Direction => "direction",
+            Nuisance::Load => "load",
             Nuisance::RailTilt => "rail_tilt",
             Nuisance::PivotDamping => "pivot_damping",
             Nuisance::ViscousFriction => "viscous_friction",
@@ -74,6 +82,8 @@ impl Nuisance {
         match self {
             Nuisance::StaticFriction => &[Param::MuStatic],
             Nuisance::Stribeck => &[Param::MuStatic, Param::StribeckVelocity],
+            Nuisance::Direction => &[Param::FrictionSplit],
+            Nuisance::Load => &[Param::LoadExponent],
             Nuisance::RailTilt => &[Param::RailTilt],
             Nuisance::PivotDamping => &[Param::PivotDamping],
             Nuisance::ViscousFriction => &[Param::ViscousFriction],
@@ -88,7 +98,9 @@ impl Nuisance {
 
     /// Whether a score test can screen it: a parameter whose neutral value is an interior
     /// point. mu_static at mu_static = mu_kinetic has a vanishing first-order effect (the slip
-    /// then starts with x'' = 0), and Stribeck changes the law: both are fitted outright.
+    /// then starts with x'' = 0), and Stribeck changes the law: both are fitted outright. The
+    /// direction and load laws are screened: their neutral values (no split, exponent 1) are
+    /// interior, and the law's effect is first order there.
     pub(super) fn screened(self) -> bool {
         !matches!(self, Nuisance::StaticFriction | Nuisance::Stribeck)
     }
@@ -96,7 +108,8 @@ impl Nuisance {
     /// Whether a model holding `self` cannot take `other`: camera scale and the bob marker's
     /// distance along the rod act through their product; Stribeck contains mu_static, so
     /// mu_static is not offered on top of it (Stribeck on top of mu_static replaces it:
-    /// [`Nuisance::supersedes`]); the full bob offset contains the offset across the rod.
+    /// [`Nuisance::supersedes`]); the full bob offset contains the offset across the rod; a
+    /// rig has one friction law (Stribeck, direction or load).
     pub(super) fn conflicts(self, other: Nuisance) -> bool {
         use Nuisance::*;
         matches!(
@@ -106,7 +119,23 @@ impl Nuisance {
                 | (Stribeck, StaticFriction)
                 | (BobOffset, BobAcross)
                 | (BobAcross, BobOffset)
-        )
+        ) || (self != other && self.is_law() && other.is_law())
+    }
+
+    /// Whether it is a friction law of its own ([`FrictionLaw`] other than Coulomb's): a rig
+    /// holds one.
+    pub fn is_law(self) -> bool {
+        self.law().is_some()
+    }
+
+    /// The friction law it puts in the model, if it is one.
+    pub fn law(self) -> Option<FrictionLaw> {
+        match self {
+            Nuisance::Stribeck => Some(FrictionLaw::Stribeck),
+            Nuisance::Direction => Some(FrictionLaw::Direction),
+            Nuisance::Load => Some(FrictionLaw::Load),
+            _ => None,
+        }
     }
 
     /// The nuisance this one replaces when added: Stribeck friction generalises mu_static.
@@ -133,9 +162,22 @@ impl Nuisance {
     /// `problem` with this nuisance added at its neutral value (mu_static from `mu_static`).
     pub(super) fn add_to(self, problem: &TrajectoryProblem, mu_static: f64) -> TrajectoryProblem {
         let mut m = problem.clone();
-        if self == Nuisance::Stribeck {
-            m.rig.friction_law = FrictionLaw::Stribeck;
-            m.rig.stribeck_velocity = 0.05;
+        match self {
+            Nuisance::Stribeck => {
+                m.rig.friction_law = FrictionLaw::Stribeck;
+                m.rig.stribeck_velocity = 0.05;
+            }
+            // At the neutral values, where the law is Coulomb's bit for bit.
+            Nuisance::Direction => {
+                m.rig.friction_law = FrictionLaw::Direction;
+                m.rig.kinetic_split = 0.0;
+                m.rig.static_split = 0.0;
+            }
+            Nuisance::Load => {
+                m.rig.friction_law = FrictionLaw::Load;
+                m.rig.load_exponent = 1.0;
+            }
+            _ => {}
         }
         for &q in self.params() {
             if !m.free.contains(&q) {

@@ -5,10 +5,12 @@
 
 mod answer;
 mod figure;
+mod friction_figure;
 mod text;
 
 pub use answer::{answer, value_pm};
 pub use figure::FitFigure;
+pub use friction_figure::FrictionFigure;
 pub use text::fit_text;
 
 use crate::fit::{Estimate, FitReport, Param, StaticResult};
@@ -119,6 +121,7 @@ pub fn fit_json(rep: &FitReport) -> Value {
         "noise_m": {"slider": rep.noise_m[0], "bob": rep.noise_m[1]},
         "models": rep.models,
         "nuisances": rep.nuisances.iter().map(|n| n.name()).collect::<Vec<_>>(),
+        "friction_law": rep.friction,
         "windows": rep.windows,
         "windows_p_value": a.windows_p_value,
         "runs_p_value": a.runs_p_value,

@@ -44,6 +44,9 @@ pub fn fit_text(rep: &FitReport) -> String {
     }
     statistics(&mut s, rep);
     variables(&mut s, rep);
+    if let Some(f) = &rep.friction {
+        friction_law(&mut s, f);
+    }
     uncertainty(&mut s, rep);
     if let Some(p) = &rep.pendulum {
         pendulum_text(&mut s, p);
@@ -253,6 +256,43 @@ fn models(s: &mut String, rep: &FitReport) {
             );
         }
     }
+}
+
+/// [[Friction law]]: the law chosen, its parameters, every law's evidence and the notes on
+/// what this recording cannot tell apart.
+fn friction_law(s: &mut String, f: &crate::fit::law::FrictionLawResult) {
+    let _ = writeln!(
+        s,
+        "[[Friction law]] {}{}",
+        f.chosen,
+        if f.forced {
+            " (forced with --friction)"
+        } else {
+            ""
+        }
+    );
+    for p in &f.parameters {
+        let _ = writeln!(
+            s,
+            "    {:<22} {:>12.6} +- {:<10.2e} (95 %: {:.6} to {:.6})",
+            p.name, p.value, p.stderr, p.ci95[0], p.ci95[1]
+        );
+    }
+    for l in &f.laws {
+        let detail = match (l.status, l.delta_bic, l.predicted_drop) {
+            ("chosen", _, _) => "chosen".to_owned(),
+            (_, Some(d), _) => format!("its best model's BIC {d:+.1} against the chosen"),
+            ("screened", _, Some([drop, need])) => format!(
+                "not fitted: the score test predicts a chi-square drop of {drop:.1}, below the {need:.1} it would cost"
+            ),
+            _ => "not tried: the model described the recording without it".to_owned(),
+        };
+        let _ = writeln!(s, "    {:<10} {detail}", l.law);
+    }
+    for n in &f.notes {
+        let _ = writeln!(s, "  {n}");
+    }
+    let _ = writeln!(s);
 }
 
 /// [[Windows]]: mu_kinetic per slide with the windows' agreement.

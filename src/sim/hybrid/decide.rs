@@ -7,8 +7,8 @@ use super::locate::Located;
 use super::step::Step;
 use super::{Run, Segment};
 use crate::model::{
-    choose_at_rest, re_state, Direction, Mode, RestChoice, Rig, Scalar, Shorthands, State, THETA,
-    THETA_DOT, X_DOT,
+    choose_at_rest, re_state, sign, Direction, Mode, RestChoice, Rig, Scalar, Shorthands, State,
+    THETA, THETA_DOT, X_DOT,
 };
 use crate::sim::rk::Stepper;
 use crate::sim::{Event, EventKind, Impulse, Outcome, RestRule, SimError, Solution};
@@ -77,7 +77,7 @@ const SUDDEN_FRACTION: f64 = 1e-3;
 fn is_jam(rig: &Rig<f64>, y: &State<f64>) -> bool {
     let sh = Shorthands::at(rig, y);
     let m = rig.slider_mass + rig.bob_mass;
-    let mu = rig.friction_mu(y[X_DOT].abs());
+    let mu = rig.friction_mu(sign(y[X_DOT]), y[X_DOT].abs());
     sh.band_margin(mu).abs() <= JAM_TOL * m
         && sh.q.abs() <= JAM_TOL * rig.slider_mass * m * rig.gravity
 }

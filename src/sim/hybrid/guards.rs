@@ -6,8 +6,8 @@
 use super::locate::golden_min;
 use super::{Run, Segment};
 use crate::model::{
-    pendulum, re_state, regions, Mode, Rig, RigConstants, Scalar, Shorthands, THETA, THETA_DOT,
-    X_DOT,
+    pendulum, re_state, regions, FrictionLaw, Mode, Rig, RigConstants, Scalar, Shorthands, THETA,
+    THETA_DOT, X_DOT,
 };
 use crate::sim::rk::Stepper;
 use crate::sim::{Options, Solution};
@@ -45,8 +45,9 @@ impl Guard {
         plain: bool,
     ) -> S {
         match self {
-            Guard::StickMargin => Shorthands::new_on(rig, y[THETA], y[THETA_DOT], plain, k)
-                .stick_margin(rig.mu_static),
+            Guard::StickMargin => {
+                rig.stick_margin(&Shorthands::new_on(rig, y[THETA], y[THETA_DOT], plain, k))
+            }
             Guard::Stop => {
                 let s = match mode {
                     Mode::Slide(d) => d.sign(),
@@ -61,10 +62,8 @@ impl Guard {
                     Mode::Stick => 1.0,
                 };
                 let sh = Shorthands::new_on(rig, y[THETA], y[THETA_DOT], plain, k);
-                let delta = sh.d
-                    + sh.a
-                        * (rig.friction_mu_on(y[X_DOT] * s, k.inverse_stribeck_velocity)
-                            * (s * sigma));
+                let mu = rig.slide_mu(&sh, (s, sigma), y[X_DOT], k.inverse_stribeck_velocity);
+                let delta = sh.d + sh.a * (mu * (s * sigma));
                 delta.abs() - (rig.slider_mass + rig.bob_mass) * thr
             }
         }
@@ -235,7 +234,10 @@ impl<'a, T: Scalar> Ctx<'a, T> {
             k: rig.constants(),
             k_re: rig_re.constants(),
             k_dual: rig_dual.constants(),
-            paradox_possible: rig_re.mu_slide_max() > regions::mu_critical(rig_re.mass_ratio()),
+            // The load law's coefficient grows without bound as |N| -> 0 for n < 1: its
+            // denominator is watched on every rig.
+            paradox_possible: rig_re.friction_law == FrictionLaw::Load
+                || rig_re.mu_slide_max() > regions::mu_critical(rig_re.mass_ratio()),
             thr: options.stop_threshold,
             plain: rig.is_plain(),
         }

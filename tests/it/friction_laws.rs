@@ -1,0 +1,255 @@
+//! The friction laws (docs/physics.md, "Friction laws"): each law's accelerations against the
+//! independent Newton-Euler oracle, the energy balance against each law's friction work, the
+//! mirror symmetry of a direction-dependent rail, each law at its neutral values equal to
+//! Coulomb's bit for bit, and the rig files that select them.
+
+use super::helpers::{assert_slide_matches_oracle, energy_oracle, run, slide_states};
+use appell::model::{FrictionLaw, Rig, Shorthands, State};
+use appell::scene::RigSpec;
+use appell::sim::{EventKind, Method, Outcome, Request, Solution};
+use std::f64::consts::PI;
+
+/// The three rigs of the issue: light, equal and heavy slider (all below mu*).
+fn rigs(mu_k: f64, mu_s: f64) -> Vec<Rig<f64>> {
+    [(0.05, 0.15), (0.1, 0.1), (0.35, 0.1)]
+        .into_iter()
+        .map(|(m1, m2)| Rig::new(m1, m2, 0.3, 9.81, mu_k, Some(mu_s)).unwrap())
+        .collect()
+}
+
+/// Each new law alone, and with the real-rig terms that touch the normal force.
+fn laws(rig: Rig<f64>) -> Vec<(&'static str, Rig<f64>)> {
+    vec![
+        ("direction+", rig.with_direction_split(0.02, 0.03)),
+        ("direction-", rig.with_direction_split(-0.04, -0.01)),
+        ("load 0.8", rig.with_load_exponent(0.8)),
+        ("load 1.3", rig.with_load_exponent(1.3)),
+        (
+            "load 0.7 tilted viscous",
+            rig.with_load_exponent(0.7)
+                .with_rail_tilt(1f64.to_radians())
+                .with_viscous_friction(0.03),
+        ),
+        (
+            "direction damped",
+            rig.with_direction_split(0.03, 0.03)
+                .with_pivot_damping(1e-3),
+        ),
+    ]
+}
+
+#[test]
+fn accelerations_match_the_independent_oracle_for_each_law() {
+    let mut n = 0;
+    for rig in rigs(0.25, 0.3) {
+        for (name, r) in laws(rig) {
+            for y in slide_states() {
+                assert_slide_matches_oracle(name, &r, &y, 1e-10);
+                n += 1;
+            }
+        }
+    }
+    assert_eq!(n, 3 * 6 * 6 * 5 * 4);
+}
+
+/// E(t) - E(0) = friction work + damping work for every law, through stick-slip events.
+#[test]
+fn energy_balance_closes_with_each_laws_friction_work() {
+    for rig in rigs(0.3, 0.4) {
+        for (name, r) in laws(rig) {
+            let y0 = [0.0, 0.3, 0.4, 0.0];
+            let times: Vec<f64> = (0..=60).map(|k| k as f64 * 0.05).collect();
+            let sol = run(
+                &r,
+                y0,
+                3.0,
+                1e-12,
+                Method::Dop853,
+                &Request {
+                    sample_times: times,
+                    friction_work: true,
+                    positions_only: false,
+                },
+            );
+            let unit = (r.slider_mass + r.bob_mass) * r.gravity * r.rod_length;
+            let e0 = energy_oracle(&r, &y0);
+            let mut worst: f64 = 0.0;
+            for s in &sol.samples {
+                let (wf, wd) = (s.friction_work.unwrap(), s.damping_work.unwrap());
+                assert!(wf <= 1e-12 && wd <= 1e-12, "{name}: works are dissipative");
+                let de = energy_oracle(&r, &s.state) - e0;
+                worst = worst.max((de - wf - wd).abs() / unit);
+            }
+            assert!(worst < 1e-9, "{name}: worst {worst:e}");
+            assert!(
+                sol.events.iter().any(|e| e.kind == EventKind::Stick),
+                "{name}: the run slides and sticks: {:?}",
+                sol.events
+            );
+        }
+    }
+}
+
+fn mirrored(y: &State<f64>) -> State<f64> {
+    [-y[0], PI - y[1], -y[2], -y[3]]
+}
+
+/// A direction-dependent rail released mirrored is the rail with its coefficients swapped,
+/// mirrored: events at the same times, mirrored modes and states.
+#[test]
+fn mirrored_direction_rail_equals_swapped_coefficients() {
+    for rig in rigs(0.25, 0.3) {
+        let y0 = [0.0, 0.2, 0.0, 3.0];
+        let a = run(
+            &rig.with_direction_split(0.03, 0.02),
+            y0,
+            2.0,
+            1e-11,
+            Method::Dop853,
+            &Request::default(),
+        );
+        let b = run(
+            &rig.with_direction_split(-0.03, -0.02),
+            mirrored(&y0),
+            2.0,
+            1e-11,
+            Method::Dop853,
+            &Request::default(),
+        );
+        assert!(a.events.len() >= 3, "{:?}", a.events);
+        assert_eq!(a.events.len(), b.events.len());
+        for (ea, eb) in a.events.iter().zip(&b.events) {
+            assert!((ea.t - eb.t).abs() < 1e-9, "{} vs {}", ea.t, eb.t);
+            assert_eq!(ea.from.mirrored(), eb.from);
+            if let (Outcome::Mode(ma), Outcome::Mode(mb)) = (&ea.to, &eb.to) {
+                assert_eq!(ma.mirrored(), *mb);
+            }
+            let m = mirrored(&ea.state);
+            for i in 0..4 {
+                assert!(
+                    (m[i] - eb.state[i]).abs() < 1e-8,
+                    "{i}: {m:?} vs {:?}",
+                    eb.state
+                );
+            }
+        }
+        // And the split is seen: the same release on the unsplit rail has other events.
+        let c = run(&rig, y0, 2.0, 1e-11, Method::Dop853, &Request::default());
+        let ts = |s: &Solution<f64>| s.events.iter().map(|e| e.t).collect::<Vec<_>>();
+        let (tc, ta) = (ts(&c), ts(&a));
+        assert!(
+            tc.len() != ta.len() || tc.iter().zip(&ta).any(|(x, y)| (x - y).abs() > 1e-4),
+            "{tc:?} vs {ta:?}"
+        );
+    }
+}
+
+fn same_run(a: &Solution<f64>, b: &Solution<f64>) -> bool {
+    a.events.len() == b.events.len()
+        && a.events
+            .iter()
+            .zip(&b.events)
+            .all(|(x, y)| x.t == y.t && x.state == y.state)
+        && a.samples.len() == b.samples.len()
+        && a.samples
+            .iter()
+            .zip(&b.samples)
+            .all(|(x, y)| x.state == y.state)
+}
+
+/// The direction law with no split and the load law at exponent 1 are Coulomb's law: the
+/// same events and samples, bit for bit.
+#[test]
+fn each_law_at_its_neutral_values_is_coulomb_bit_for_bit() {
+    let times: Vec<f64> = (0..=40).map(|k| k as f64 * 0.05).collect();
+    let request = Request {
+        sample_times: times,
+        friction_work: false,
+        positions_only: false,
+    };
+    for rig in rigs(0.25, 0.3) {
+        let mut events = 0;
+        for y0 in [[0.0, 0.2, 0.0, 3.0], [0.0, 0.0, 0.0, 0.0]] {
+            let coulomb = run(&rig, y0, 2.0, 1e-10, Method::Dop853, &request);
+            events += coulomb.events.len();
+            for (name, r) in [
+                ("direction", rig.with_direction_split(0.0, 0.0)),
+                ("load", rig.with_load_exponent(1.0)),
+            ] {
+                assert_ne!(r.friction_law, FrictionLaw::Coulomb);
+                let other = run(&r, y0, 2.0, 1e-10, Method::Dop853, &request);
+                assert!(same_run(&coulomb, &other), "{name} differs from Coulomb");
+            }
+        }
+        assert!(events >= 2, "the releases slide and stick");
+    }
+}
+
+/// The load law's stick test: the rail holds mu_s N_0 (|b| / N_0)^n, so at n < 1 a state
+/// held under Coulomb's law at a load above N_0 may slip, and the margin's zero is where
+/// the held force equals the needed one.
+#[test]
+fn load_law_holds_its_power_of_the_normal_force() {
+    let rig = Rig::new(0.1, 0.1, 0.3, 9.81, 0.25, Some(0.25)).unwrap();
+    let load = rig.with_load_exponent(0.8);
+    let n0 = (rig.slider_mass + rig.bob_mass) * rig.gravity;
+    for &(th, w) in &[(0.3, 2.0), (1.0, -4.0), (2.5, 6.0), (4.0, 0.5)] {
+        let sh = Shorthands::new(&load, th, w);
+        let held = 0.25 * n0 * (sh.b.abs() / n0).powf(0.8);
+        let margin = load.stick_margin(&sh);
+        assert!(
+            (margin - (held - sh.c.abs())).abs() < 1e-12 * n0,
+            "{th} {w}"
+        );
+    }
+}
+
+fn spec(text: &str) -> Result<Rig<f64>, String> {
+    #[derive(serde::Deserialize)]
+    struct File {
+        rig: RigSpec,
+    }
+    let f: File = toml::from_str(text).map_err(|e| e.to_string())?;
+    f.rig.rig().map_err(|e| e.to_string())
+}
+
+#[test]
+fn rig_files_take_each_law_with_its_own_keys() {
+    let base = "[rig]\nslider_mass = 0.1\nbob_mass = 0.1\nrod_length = 0.3\ngravity = 9.81\n";
+    let r = spec(&format!(
+        "{base}friction_law = \"direction\"\nmu_kinetic_positive = 0.24\nmu_kinetic_negative = 0.20\n"
+    ))
+    .unwrap();
+    assert_eq!(r.friction_law, FrictionLaw::Direction);
+    assert!((r.mu_kinetic - 0.22).abs() < 1e-15 && (r.kinetic_split - 0.02).abs() < 1e-15);
+    assert_eq!(r.static_split, r.kinetic_split);
+    let r = spec(&format!(
+        "{base}friction_law = \"load\"\nmu_kinetic = 0.25\nload_exponent = 0.85\n"
+    ))
+    .unwrap();
+    assert_eq!((r.friction_law, r.load_exponent), (FrictionLaw::Load, 0.85));
+    for (extra, says) in [
+        ("mu_kinetic = 0.2\nload_exponent = 0.9\n", "load_exponent"),
+        ("mu_kinetic = 0.2\nmu_kinetic_negative = 0.2\n", "mu_kinetic_negative"),
+        (
+            "friction_law = \"direction\"\nmu_kinetic = 0.2\nmu_kinetic_positive = 0.2\nmu_kinetic_negative = 0.2\n",
+            "mu_kinetic",
+        ),
+        (
+            "friction_law = \"direction\"\nmu_kinetic_positive = 0.2\n",
+            "mu_kinetic_negative",
+        ),
+        (
+            "friction_law = \"direction\"\nmu_kinetic_positive = 0.2\nmu_kinetic_negative = 0.3\nmu_static_negative = 0.25\n",
+            "mu_static_negative",
+        ),
+        ("friction_law = \"load\"\nmu_kinetic = 0.2\n", "load_exponent"),
+        (
+            "friction_law = \"load\"\nmu_kinetic = 0.2\nload_exponent = 5\n",
+            "load_exponent",
+        ),
+    ] {
+        let err = spec(&format!("{base}{extra}")).unwrap_err();
+        assert!(err.contains(says), "{extra}: {err}");
+    }
+}
