@@ -315,12 +315,23 @@ pub fn run(args: Args) -> Result<(), Failure> {
     // its deviations as priors (docs/fit.md, "The rig file is a measurement").
     settings.measured = Some(appell::fit::priors::RigMeasurement::from_spec(&spec));
     if args.joint {
+        if args.friction_plot.is_some() {
+            return Err(Failure::Input(anyhow!(
+                "--friction-plot draws one recording's friction figure; with --joint the releases' friction law is in the report's [[Friction law]] section (a joint friction figure is not drawn yet)"
+            )));
+        }
         return run_joint(&args, &opts, &rig, &settings);
     }
     if args.inputs.len() == 1 && args.inputs[0].is_dir() {
-        if args.plot.is_some() || args.friction_plot.is_some() {
+        if let Some(flag) = [
+            (args.plot.is_some(), "--plot"),
+            (args.friction_plot.is_some(), "--friction-plot"),
+        ]
+        .iter()
+        .find_map(|(given, flag)| given.then_some(flag))
+        {
             return Err(Failure::Input(anyhow!(
-                "--plot and --friction-plot draw one recording's fit, and {} is a directory: give one recording, or --joint for the releases' joint figure",
+                "{flag} draws one recording's fit, and {} is a directory: give one recording, or --joint for the releases' joint figure",
                 args.inputs[0].display()
             )));
         }

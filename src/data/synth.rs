@@ -162,6 +162,16 @@ pub fn synthesize(scene: &Scene, opts: &SynthOptions) -> Result<Synthetic, SimEr
     put("gravity", r.gravity);
     put("mu_kinetic", r.mu_kinetic);
     put("mu_static", r.mu_static);
+    // The law's own values, so that a recording's truth names everything the fit estimates.
+    match r.friction_law {
+        crate::model::FrictionLaw::Direction => {
+            put("mu_kinetic_positive", r.mu_kinetic + r.kinetic_split);
+            put("mu_kinetic_negative", r.mu_kinetic - r.kinetic_split);
+            put("mu_kinetic_split", r.kinetic_split);
+        }
+        crate::model::FrictionLaw::Load => put("load_exponent", r.load_exponent),
+        _ => {}
+    }
     put("x0", scene.initial[0]);
     put("theta0", scene.initial[1]);
     put("x_dot0", scene.initial[2]);

@@ -504,6 +504,25 @@ pub struct RegionSummary {
     /// point rig's mu* (r = m1 / m_p, everything that swings at the bob), for comparison.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub point_rig_mu_critical: Option<f64>,
+    /// The rail's friction law (docs/physics.md, "Friction laws").
+    pub friction_law: &'static str,
+    /// Under the direction law: each direction's coefficients and paradox band (a slide toward
+    /// +x meets the band of mu_k+, one toward -x that of mu_k-).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub by_direction: Vec<DirectionBand>,
+}
+
+/// One sliding direction's friction and paradox band under the direction law.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct DirectionBand {
+    /// `+x` or `-x`.
+    pub direction: &'static str,
+    /// The kinetic coefficient sliding that way.
+    pub mu_kinetic: f64,
+    /// The static coefficient holding a slider about to slip that way.
+    pub mu_static: f64,
+    /// The band within 0..180 degrees for slides that way; empty when its mu <= mu*.
+    pub paradox_band_deg: Vec<[f64; 2]>,
 }
 
 impl RegionSummary {
@@ -522,6 +541,28 @@ impl RegionSummary {
                 .pendulum
                 .map(|p| mu_critical(p.point_mass_ratio()))
                 .filter(|&m| m != mu_critical(r)),
+            friction_law: rig.friction_law.name(),
+            by_direction: if rig.friction_law == FrictionLaw::Direction {
+                [("+x", 1.0), ("-x", -1.0)]
+                    .into_iter()
+                    .map(|(direction, s)| DirectionBand {
+                        direction,
+                        mu_kinetic: rig.mu_slide_max_toward(s),
+                        mu_static: rig.static_mu(s),
+                        paradox_band_deg: paradox_band_intervals(
+                            r,
+                            rig.mu_slide_max_toward(s),
+                            0.0,
+                            PI,
+                        )
+                        .into_iter()
+                        .map(|(lo, hi)| [lo.to_degrees(), hi.to_degrees()])
+                        .collect(),
+                    })
+                    .collect()
+            } else {
+                Vec::new()
+            },
         }
     }
 

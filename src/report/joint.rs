@@ -37,6 +37,7 @@ pub fn joint_json(rep: &JointReport) -> Value {
         "shared": shared,
         "shared_covariance": {"names": names, "matrix": cov},
         "nuisances": rep.nuisances.iter().map(|n| n.name()).collect::<Vec<_>>(),
+        "friction_law": rep.friction,
         "releases": rep.releases,
         "left_out": rep.left_out.iter().map(|(n, w)| json!({"recording": n, "error": w})).collect::<Vec<_>>(),
         "consistency_p_value": rep.consistency_p,
@@ -93,6 +94,7 @@ pub fn joint_text(rep: &JointReport) -> String {
         rep.reduced_chi2,
         rep.n_params
     );
+    super::fit::friction_law_text(&mut s, &rep.friction);
     let w = rep
         .releases
         .iter()

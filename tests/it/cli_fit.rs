@@ -263,3 +263,47 @@ fn the_report_opens_with_a_one_line_answer() {
         }
     }
 }
+
+/// `--friction-plot` draws the friction figure of a direction-dependent rail (an SVG with its
+/// axes and both directions) next to the report, which names the law; with `--joint` it is
+/// refused, not ignored.
+#[test]
+fn friction_plot_draws_the_slides_and_the_law() {
+    let tmp = tempfile::tempdir().unwrap();
+    let svg = tmp.path().join("friction.svg");
+    let rec = path("tests/data/friction/direction_equal_s1.csv");
+    let rig = path("tests/data/friction/rigs/equal.toml");
+    let out = appell(&[
+        "fit",
+        &rec,
+        "--rig",
+        &rig,
+        "--friction-plot",
+        svg.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("(direction law)") && text.contains("[[Friction law]] direction"));
+    let figure = std::fs::read_to_string(&svg).unwrap();
+    for want in ["<svg", "sliding speed", "friction coefficient", "toward -x"] {
+        assert!(figure.contains(want), "{want}");
+    }
+    let joint = tmp.path().join("joint.svg");
+    let out = appell(&[
+        "fit",
+        &path("tests/data/friction"),
+        "--joint",
+        "--rig",
+        &rig,
+        "--friction-plot",
+        joint.to_str().unwrap(),
+    ]);
+    assert_eq!(out.status.code(), Some(2));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("--friction-plot"));
+    assert!(!joint.exists());
+}

@@ -17,12 +17,12 @@ use appell::scene::RigFile;
 use rayon::prelude::*;
 use std::path::{Path, PathBuf};
 
-fn repo(rel: &str) -> PathBuf {
+pub(crate) fn repo(rel: &str) -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
 
 /// `recording` fitted with the rig file `rig` read as a measurement (what `appell fit` does).
-fn fit_measured(recording: &Path, rig: &Path) -> FitReport {
+pub(crate) fn fit_measured(recording: &Path, rig: &Path) -> FitReport {
     let rec = read_recording(&[recording.to_owned()], &ReadOptions::default()).expect("reads");
     let (r, spec) = RigFile::load_measured(rig, 0.3).expect("rig file");
     let settings = FitSettings {
@@ -38,7 +38,7 @@ fn fit_exact(recording: &Path, rig: &Rig<f64>) -> FitReport {
     fit(Observations::from(&rec), rig, &FitSettings::default()).expect("fits")
 }
 
-fn flagged(rep: &FitReport) -> bool {
+pub(crate) fn flagged(rep: &FitReport) -> bool {
     rep.adequacy.limited_by_model.is_some() || rep.failed.is_some()
 }
 

@@ -117,6 +117,8 @@ pub struct JointReport {
     pub warnings: Vec<String>,
     /// Levenberg-Marquardt iterations of the joint stages (the single fits not counted).
     pub iterations: u64,
+    /// The friction law the releases share, its parameters and every law's evidence.
+    pub friction: crate::fit::law::FrictionLawResult,
 }
 
 /// Why a joint fit could not run.
@@ -175,7 +177,27 @@ pub fn fit_joint(
         ));
     }
     let mu = shared::carry_mu(&mut shared, mu);
+    // The shared parameters' correlation from their covariance, for the law's section.
+    let k = shared.estimates.len();
+    let correlation = DMatrix::from_fn(k, k, |i, j| {
+        let d = (shared.covariance[(i, i)] * shared.covariance[(j, j)]).sqrt();
+        if d > 0.0 {
+            shared.covariance[(i, j)] / d
+        } else {
+            f64::from(u8::from(i == j))
+        }
+    });
+    let friction = crate::fit::law::friction_law(&crate::fit::law::LawInputs {
+        params: &shared.estimates,
+        correlation: &correlation,
+        models: &model.models,
+        chosen: &model.nuisances,
+        screening: &[],
+        n_rows: 0,
+        forced: settings.friction.is_some(),
+    });
     Ok(JointReport {
+        friction,
         mu_kinetic: mu,
         shared: shared.estimates,
         shared_covariance: shared.covariance,

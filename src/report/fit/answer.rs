@@ -40,10 +40,11 @@ pub fn answer(rep: &FitReport) -> String {
     }
     let d = decimals(mu.stderr).unwrap_or(6);
     let head = format!(
-        "mu_kinetic = {} (95 %: {:.d$} to {:.d$})",
+        "mu_kinetic = {} (95 %: {:.d$} to {:.d$}){}",
         value_pm(mu.value, mu.stderr),
         mu.ci95[0],
-        mu.ci95[1]
+        mu.ci95[1],
+        law_words(rep)
     );
     if rep.adequacy.limited_by_model.is_none() {
         return format!("{head}, model adequate");
@@ -86,6 +87,41 @@ pub fn answer(rep: &FitReport) -> String {
         "{head}, limited by the model: {}; {try_this}",
         why.join(", ")
     )
+}
+
+/// The friction law in a few words when it is not Coulomb's with one coefficient: under the
+/// direction law each direction's coefficient (mu_kinetic is their mean), under the load law
+/// the exponent (mu_kinetic is the coefficient at the static load).
+fn law_words(rep: &FitReport) -> String {
+    let Some(f) = &rep.friction else {
+        return String::new();
+    };
+    let get = |name: &str| f.parameters.iter().find(|p| p.name == name);
+    let law = f.chosen.split('+').next().unwrap_or("");
+    match law {
+        "direction" => match (get("mu_kinetic_positive"), get("mu_kinetic_negative")) {
+            (Some(p), Some(m)) => format!(
+                ", the mean of {} sliding toward +x and {} toward -x (direction law)",
+                value_pm(p.value, p.stderr),
+                value_pm(m.value, m.stderr)
+            ),
+            _ => ", direction law".to_owned(),
+        },
+        "load" => get("load_exponent").map_or_else(
+            || ", load law".to_owned(),
+            |n| {
+                format!(
+                    " at the static load, friction as |N|^{} (load law)",
+                    value_pm(n.value, n.stderr)
+                )
+            },
+        ),
+        "coulomb" if f.chosen.ends_with("+viscous") => ", with viscous rail friction".to_owned(),
+        "coulomb" => String::new(),
+        "static" => ", with mu_static above it".to_owned(),
+        "stribeck" => ", Stribeck law".to_owned(),
+        other => format!(", {other} law"),
+    }
 }
 
 #[cfg(test)]

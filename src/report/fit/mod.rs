@@ -11,7 +11,7 @@ mod text;
 pub use answer::{answer, value_pm};
 pub use figure::FitFigure;
 pub use friction_figure::FrictionFigure;
-pub use text::fit_text;
+pub use text::{fit_text, friction_law_text};
 
 use crate::fit::{Estimate, FitReport, Param, StaticResult};
 use serde_json::{json, Value};

@@ -45,7 +45,7 @@ pub fn fit_text(rep: &FitReport) -> String {
     statistics(&mut s, rep);
     variables(&mut s, rep);
     if let Some(f) = &rep.friction {
-        friction_law(&mut s, f);
+        friction_law_text(&mut s, f);
     }
     uncertainty(&mut s, rep);
     if let Some(p) = &rep.pendulum {
@@ -260,7 +260,7 @@ fn models(s: &mut String, rep: &FitReport) {
 
 /// [[Friction law]]: the law chosen, its parameters, every law's evidence and the notes on
 /// what this recording cannot tell apart.
-fn friction_law(s: &mut String, f: &crate::fit::law::FrictionLawResult) {
+pub fn friction_law_text(s: &mut String, f: &crate::fit::law::FrictionLawResult) {
     let _ = writeln!(
         s,
         "[[Friction law]] {}{}",

@@ -213,6 +213,30 @@ fn paradox_lines(out: &mut String, rig: &Rig<f64>, map: &RegionMap) {
         "critical friction mu* = {:.4} at theta* = {:.2} deg{point}",
         s.mu_critical, s.theta_critical_deg
     );
+    for d in &s.by_direction {
+        let band = if d.paradox_band_deg.is_empty() {
+            format!("no paradox band (mu_k <= mu* = {:.4})", s.mu_critical)
+        } else {
+            let b: Vec<String> = d
+                .paradox_band_deg
+                .iter()
+                .map(|[lo, hi]| format!("{lo:.2}..{hi:.2} deg"))
+                .collect();
+            format!("paradox band {}", b.join(" and "))
+        };
+        let _ = writeln!(
+            out,
+            "sliding toward {}: mu_k = {:.4}, mu_s = {:.4}, {band}",
+            d.direction, d.mu_kinetic, d.mu_static
+        );
+    }
+    if rig.friction_law == crate::model::FrictionLaw::Load {
+        let _ = writeln!(
+            out,
+            "load law (n = {}): the band below is the static load's; the coefficient mu_k (|N| / N_0)^(n - 1) differs where |N| is far from N_0 = (m1 + m2) g",
+            rig.load_exponent
+        );
+    }
     if s.paradox_possible() {
         let bands: Vec<String> = s
             .paradox_band_deg
