@@ -315,11 +315,6 @@ pub fn run(args: Args) -> Result<(), Failure> {
     // its deviations as priors (docs/fit.md, "The rig file is a measurement").
     settings.measured = Some(appell::fit::priors::RigMeasurement::from_spec(&spec));
     if args.joint {
-        if args.friction_plot.is_some() {
-            return Err(Failure::Input(anyhow!(
-                "--friction-plot draws one recording's friction figure; with --joint the releases' friction law is in the report's [[Friction law]] section (a joint friction figure is not drawn yet)"
-            )));
-        }
         return run_joint(&args, &opts, &rig, &settings);
     }
     if args.inputs.len() == 1 && args.inputs[0].is_dir() {
@@ -554,6 +549,27 @@ fn run_joint(
     rep.left_out.extend(unread);
     if let Some(p) = &args.plot {
         render(p, &JointFigure { report: &rep }).map_err(|e| Failure::Run(anyhow!(e)))?;
+    }
+    if let Some(p) = &args.friction_plot {
+        // One colour per release: each release cut into its slides at the joint optimum.
+        let releases = rep
+            .releases
+            .iter()
+            .zip(&rep.parts)
+            .map(|(row, part)| {
+                let name = Path::new(&row.name)
+                    .file_name()
+                    .map_or(row.name.clone(), |n| n.to_string_lossy().into_owned());
+                (name, appell::fit::law::slide_points_of(part, settings))
+            })
+            .collect();
+        let rig = rep.parts.first().map_or(*rig, |p| p.rig);
+        let figure = FrictionFigure {
+            rig: &rig,
+            law: &rep.friction,
+            releases,
+        };
+        render(p, &figure).map_err(|e| Failure::Run(anyhow!(e)))?;
     }
     if args.json {
         let mut v = joint_json(&rep);

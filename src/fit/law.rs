@@ -322,13 +322,20 @@ pub struct SlidePoint {
 /// coefficient is all the rail's friction); speeds and loads from the chosen model's motion,
 /// and the chosen law's value from the same fit of that motion.
 pub fn slide_points(rep: &super::FitReport, settings: &super::FitSettings) -> Vec<SlidePoint> {
+    slide_points_of(&rep.problem, settings)
+}
+
+/// [`slide_points`] of one fitted problem (a single fit's chosen model, or a release of a
+/// joint fit at the joint optimum).
+pub fn slide_points_of(
+    problem: &super::TrajectoryProblem,
+    settings: &super::FitSettings,
+) -> Vec<SlidePoint> {
     use crate::model::{observed_markers, Mode, Shorthands, X_DOT};
-    let problem = &rep.problem;
     let obs = problem.observations();
     let Some(&t_end) = obs.times.last() else {
         return Vec::new();
     };
-    let bounds = super::uncertainty::motion_bounds(&obs.times, &rep.events);
     let coulomb_of = |p: &super::TrajectoryProblem| {
         let mut c = p.clone();
         c.rig.friction_law = crate::model::FrictionLaw::Coulomb;
@@ -355,6 +362,7 @@ pub fn slide_points(rep: &super::FitReport, settings: &super::FitSettings) -> Ve
     if sol.samples.len() != obs.times.len() {
         return Vec::new();
     }
+    let bounds = super::uncertainty::motion_bounds(&obs.times, &sol.events);
     // The chosen model's own motion as a noise-free recording, cut and fitted the same way:
     // its windows' coefficients are what the chosen law says each slide's value is.
     let (slider, bob) = sol

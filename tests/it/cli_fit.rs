@@ -265,8 +265,8 @@ fn the_report_opens_with_a_one_line_answer() {
 }
 
 /// `--friction-plot` draws the friction figure of a direction-dependent rail (an SVG with its
-/// axes and both directions) next to the report, which names the law; with `--joint` it is
-/// refused, not ignored.
+/// axes and both directions) next to the report, which names the law; with `--joint`, one
+/// colour per release.
 #[test]
 fn friction_plot_draws_the_slides_and_the_law() {
     let tmp = tempfile::tempdir().unwrap();
@@ -293,17 +293,33 @@ fn friction_plot_draws_the_slides_and_the_law() {
     for want in ["<svg", "sliding speed", "friction coefficient", "toward -x"] {
         assert!(figure.contains(want), "{want}");
     }
+    // The joint fit's figure: one colour per release.
     let joint = tmp.path().join("joint.svg");
+    let releases = tmp.path().join("releases");
+    std::fs::create_dir(&releases).unwrap();
+    for r in ["std", "mirror"] {
+        let name = format!("campaign_direction_heavy_{r}_s1.csv");
+        std::fs::copy(
+            path(&format!("tests/data/friction/{name}")),
+            releases.join(name),
+        )
+        .unwrap();
+    }
     let out = appell(&[
         "fit",
-        &path("tests/data/friction"),
+        releases.to_str().unwrap(),
         "--joint",
         "--rig",
-        &rig,
+        &path("tests/data/friction/rigs/heavy.toml"),
         "--friction-plot",
         joint.to_str().unwrap(),
     ]);
-    assert_eq!(out.status.code(), Some(2));
-    assert!(String::from_utf8_lossy(&out.stderr).contains("--friction-plot"));
-    assert!(!joint.exists());
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let figure = std::fs::read_to_string(&joint).unwrap();
+    assert!(figure.contains("campaign_direction_heavy_mirror_s1.csv"));
 }

@@ -119,6 +119,9 @@ pub struct JointReport {
     pub iterations: u64,
     /// The friction law the releases share, its parameters and every law's evidence.
     pub friction: crate::fit::law::FrictionLawResult,
+    /// Each release's problem at the joint optimum, in the order of `releases`: what the
+    /// friction figure cuts into slides.
+    pub parts: Vec<crate::fit::TrajectoryProblem>,
 }
 
 /// Why a joint fit could not run.
@@ -197,6 +200,7 @@ pub fn fit_joint(
         forced: settings.friction.is_some(),
     });
     Ok(JointReport {
+        parts: model.problem.parts.clone(),
         friction,
         mu_kinetic: mu,
         shared: shared.estimates,
