@@ -230,16 +230,24 @@ impl Prior {
         Some((self.values[i], self.covariance[(i, i)].max(0.0).sqrt()))
     }
 
-    /// The plan's rig with the fitted values (its friction law Stribeck's when the fit chose
-    /// it), and mu's uncertainty for the robustness draws the fit's: mu_kinetic (and
+    /// The plan's rig with the fitted values (its friction law the fit's: Stribeck's, the
+    /// direction or the load law when the fit chose it), and mu's uncertainty for the robustness draws the fit's: mu_kinetic (and
     /// mu_static when fitted) normal about the values with their standard errors. The rig
     /// they make is checked as any rig ([`check_rig`], [`check_time_scale`]), the errors
     /// naming the fit's JSON and the field its value came from, and so is the plan's work
     /// with it (`plan` names the plan file for that).
     pub fn apply(&self, spec: &mut PlanSpec) -> Result<(), SceneError> {
         use crate::fit::TrajectoryProblem;
-        if self.names.contains(&Param::StribeckVelocity) {
-            spec.rig.friction_law = FrictionLaw::Stribeck;
+        // The law the fit chose: its parameter names it (a split is the direction law's, an
+        // exponent the load law's), so that the plan simulates the rail the fit found.
+        for (q, law) in [
+            (Param::StribeckVelocity, FrictionLaw::Stribeck),
+            (Param::FrictionSplit, FrictionLaw::Direction),
+            (Param::LoadExponent, FrictionLaw::Load),
+        ] {
+            if self.names.contains(&q) {
+                spec.rig.friction_law = law;
+            }
         }
         // The values go in through the fit's own parameter map.
         let mut p = TrajectoryProblem::new(

@@ -385,3 +385,32 @@ fn a_joint_campaign_tells_a_direction_dependent_rail_from_a_tilted_one() {
         assert!((mu.value - 0.22).abs() < 3.0 * mu.stderr, "{law}: {mu:?}");
     }
 }
+
+/// A plan made after a fit takes the law the fit found: a fit's JSON with the direction
+/// law's split gives the plan a direction-dependent rail with that split, and one with the
+/// load law's exponent a load-dependent rail.
+#[test]
+fn a_plan_after_a_fit_simulates_the_law_the_fit_found() {
+    let dir = repo("tests/data/friction");
+    for (rec, rig, law) in [
+        (
+            "direction_equal_s1.csv",
+            "rigs/equal.toml",
+            FrictionLaw::Direction,
+        ),
+        ("load_equal_s1.csv", "rigs/equal.toml", FrictionLaw::Load),
+    ] {
+        let rep = fit_measured(&dir.join(rec), &dir.join(rig));
+        let json = appell::report::fit::fit_json(&rep);
+        let prior =
+            appell::plan::prior::Prior::from_json(&json, std::path::Path::new("fit.json")).unwrap();
+        let mut spec =
+            appell::plan::PlanSpec::from_path(&repo("configs/plan_example.toml")).unwrap();
+        prior.apply(&mut spec).unwrap();
+        assert_eq!(spec.rig.friction_law, law, "{rec}");
+        match law {
+            FrictionLaw::Direction => assert!((spec.rig.kinetic_split - 0.02).abs() < 1e-4),
+            _ => assert!((spec.rig.load_exponent - 0.8).abs() < 1e-2),
+        }
+    }
+}
