@@ -38,6 +38,7 @@ pub fn joint_json(rep: &JointReport) -> Value {
         "shared_covariance": {"names": names, "matrix": cov},
         "nuisances": rep.nuisances.iter().map(|n| n.name()).collect::<Vec<_>>(),
         "friction_law": rep.friction,
+        "implausible": rep.implausible,
         "releases": rep.releases,
         "left_out": rep.left_out.iter().map(|(n, w)| json!({"recording": n, "error": w})).collect::<Vec<_>>(),
         "consistency_p_value": rep.consistency_p,
@@ -67,6 +68,13 @@ pub fn joint_text(rep: &JointReport) -> String {
         e.interval
     );
     let _ = writeln!(s, "{}", rep.sentence);
+    if !rep.implausible.is_empty() {
+        let _ = writeln!(
+            s,
+            "The joint model needs what no real rig has, so the result is limited by the model, not by the noise: {}",
+            rep.implausible.join("; ")
+        );
+    }
     let _ = writeln!(s, "shared by every release:");
     for (q, e) in &rep.shared {
         let _ = writeln!(

@@ -334,7 +334,8 @@ fn the_fit_chooses_the_law_that_made_the_recording() {
 
 /// The heavy rig's campaign (each release and its mirror image, a small and a large swing)
 /// fitted jointly: the direction-dependent rail is found as such with its split, and the
-/// tilted rail as a tilt, the law shared by the four releases.
+/// tilted rail as a tilt, the law shared by the four releases; the tilt, beyond what a
+/// levelled rail has, flags the joint fit.
 #[test]
 fn a_joint_campaign_tells_a_direction_dependent_rail_from_a_tilted_one() {
     let dir = repo("tests/data/friction");
@@ -383,6 +384,13 @@ fn a_joint_campaign_tells_a_direction_dependent_rail_from_a_tilted_one() {
         assert!((e.value - truth).abs() < 3.0 * e.stderr, "{law}: {e:?}");
         let mu = rep.mu_kinetic;
         assert!((mu.value - 0.22).abs() < 3.0 * mu.stderr, "{law}: {mu:?}");
+        // A 1.15 deg tilt is no levelled rail: the joint fit says so, as a single fit does.
+        assert_eq!(
+            rep.implausible.is_empty(),
+            law == "direction",
+            "{law}: {:?}",
+            rep.implausible
+        );
     }
 }
 

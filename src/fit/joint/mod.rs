@@ -122,6 +122,9 @@ pub struct JointReport {
     /// Each release's problem at the joint optimum, in the order of `releases`: what the
     /// friction figure cuts into slides.
     pub parts: Vec<crate::fit::TrajectoryProblem>,
+    /// The joint model's values no real rig has (a tilt on a levelled rail, ...), a sentence
+    /// each: the result is then limited by the model, as a single fit's would be.
+    pub implausible: Vec<String>,
 }
 
 /// Why a joint fit could not run.
@@ -199,7 +202,22 @@ pub fn fit_joint(
         n_rows: 0,
         forced: settings.friction.is_some(),
     });
+    // A shared value (a tilt) is the same in every release: each sentence once.
+    let mut implausible: Vec<String> = Vec::new();
+    for part in &model.problem.parts {
+        for sentence in crate::fit::priors::implausible(part) {
+            if !implausible.contains(&sentence) {
+                implausible.push(sentence);
+            }
+        }
+    }
+    for sentence in &implausible {
+        warnings.push(format!(
+            "the joint model needs what no real rig has, so the result is limited by the model: {sentence}"
+        ));
+    }
     Ok(JointReport {
+        implausible,
         parts: model.problem.parts.clone(),
         friction,
         mu_kinetic: mu,

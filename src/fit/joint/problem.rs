@@ -243,6 +243,11 @@ impl Candidate for JointProblem {
     fn pendulum_given(&self) -> bool {
         self.parts[0].rig.pendulum.is_some()
     }
+    fn implausible(&self) -> bool {
+        self.parts
+            .iter()
+            .any(|p| !crate::fit::priors::implausible(p).is_empty())
+    }
     fn with_nuisance(&self, nu: Nuisance, mu_static: f64) -> Self {
         let parts = self
             .parts
