@@ -676,15 +676,11 @@ pub fn check_rig(path: &Path, rig: &Rig<f64>, origin: RigOrigin) -> Result<(), S
             return Err(bad(q, v, format!("between 0 and {RIG_MAX:e} {unit}")));
         }
     }
-    // The direction and load laws' own ranges (Rig::validate's), on values a fit computed too.
-    if let Err(e) = rig.validate() {
-        if matches!(e, RigError::Law { .. }) {
-            return Err(SceneError::Invalid {
-                path: path.to_owned(),
-                message: e.to_string(),
-            });
-        }
-    }
+    // The direction and load laws' own ranges, on values a fit computed too.
+    rig.validate_law().map_err(|e| SceneError::Invalid {
+        path: path.to_owned(),
+        message: e.to_string(),
+    })?;
     if rig.friction_law == FrictionLaw::Stribeck && !within(rig.stribeck_velocity, RIG_MIN, RIG_MAX)
     {
         return Err(bad(

@@ -51,7 +51,12 @@ const EDGE_TOL: f64 = 1e-12;
 /// of the first quadrant and its mirror in the second, for the largest mu the friction law
 /// reaches (mu_s under Stribeck). Empty when that mu <= mu*.
 pub fn paradox_band_deg(rig: &Rig<f64>) -> Vec<[f64; 2]> {
-    paradox_band_intervals(rig.mass_ratio(), rig.mu_slide_max(), 0.0, PI)
+    band_deg(rig.mass_ratio(), rig.mu_slide_max())
+}
+
+/// The band of friction `mu` at mass ratio `r` within 0..180 degrees, `[lo, hi]` pairs.
+fn band_deg(r: f64, mu: f64) -> Vec<[f64; 2]> {
+    paradox_band_intervals(r, mu, 0.0, PI)
         .into_iter()
         .map(|(lo, hi)| [lo.to_degrees(), hi.to_degrees()])
         .collect()
@@ -549,15 +554,7 @@ impl RegionSummary {
                         direction,
                         mu_kinetic: rig.mu_slide_max_toward(s),
                         mu_static: rig.static_mu(s),
-                        paradox_band_deg: paradox_band_intervals(
-                            r,
-                            rig.mu_slide_max_toward(s),
-                            0.0,
-                            PI,
-                        )
-                        .into_iter()
-                        .map(|(lo, hi)| [lo.to_degrees(), hi.to_degrees()])
-                        .collect(),
+                        paradox_band_deg: band_deg(r, rig.mu_slide_max_toward(s)),
                     })
                     .collect()
             } else {

@@ -567,8 +567,9 @@ impl Rig<f64> {
         self.validate_law()
     }
 
-    /// The checks of the direction and load laws' own values.
-    fn validate_law(&self) -> Result<(), RigError> {
+    /// The checks of the direction and load laws' own values (also applied by
+    /// `scene::check_rig` to the values a fit computed).
+    pub(crate) fn validate_law(&self) -> Result<(), RigError> {
         let law = |key, expected: &str, value| RigError::Law {
             key,
             expected: expected.to_owned(),

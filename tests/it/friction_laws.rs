@@ -3,7 +3,7 @@
 //! mirror symmetry of a direction-dependent rail, each law at its neutral values equal to
 //! Coulomb's bit for bit, and the rig files that select them.
 
-use super::helpers::{assert_slide_matches_oracle, energy_oracle, run, slide_states};
+use super::helpers::{assert_energy_balance, assert_slide_matches_oracle, run, slide_states};
 use super::measured::{fit_measured, flagged, repo};
 use appell::data::{read_recording, ReadOptions};
 use appell::fit::joint::{fit_joint, JointSettings, Release};
@@ -11,7 +11,7 @@ use appell::fit::priors::RigMeasurement;
 use appell::fit::{FitSettings, Nuisance, Observations, Param};
 use appell::model::{FrictionLaw, Rig, Shorthands, State};
 use appell::scene::{RigFile, RigSpec};
-use appell::sim::{EventKind, Method, Outcome, Request, Solution};
+use appell::sim::{Method, Outcome, Request, Solution};
 use rayon::prelude::*;
 use std::f64::consts::PI;
 
@@ -63,35 +63,7 @@ fn accelerations_match_the_independent_oracle_for_each_law() {
 fn energy_balance_closes_with_each_laws_friction_work() {
     for rig in rigs(0.3, 0.4) {
         for (name, r) in laws(rig) {
-            let y0 = [0.0, 0.3, 0.4, 0.0];
-            let times: Vec<f64> = (0..=60).map(|k| k as f64 * 0.05).collect();
-            let sol = run(
-                &r,
-                y0,
-                3.0,
-                1e-12,
-                Method::Dop853,
-                &Request {
-                    sample_times: times,
-                    friction_work: true,
-                    positions_only: false,
-                },
-            );
-            let unit = (r.slider_mass + r.bob_mass) * r.gravity * r.rod_length;
-            let e0 = energy_oracle(&r, &y0);
-            let mut worst: f64 = 0.0;
-            for s in &sol.samples {
-                let (wf, wd) = (s.friction_work.unwrap(), s.damping_work.unwrap());
-                assert!(wf <= 1e-12 && wd <= 1e-12, "{name}: works are dissipative");
-                let de = energy_oracle(&r, &s.state) - e0;
-                worst = worst.max((de - wf - wd).abs() / unit);
-            }
-            assert!(worst < 1e-9, "{name}: worst {worst:e}");
-            assert!(
-                sol.events.iter().any(|e| e.kind == EventKind::Stick),
-                "{name}: the run slides and sticks: {:?}",
-                sol.events
-            );
+            assert_energy_balance(name, &r, Method::Dop853);
         }
     }
 }

@@ -305,3 +305,36 @@ pub fn assert_slide_matches_oracle(name: &str, r: &Rig<f64>, y: &State<f64>, tol
         d.theta_ddot
     );
 }
+
+/// Release `r` from (0, 0.3, 0.4, 0) for 3 s at rtol 1e-12 with `method`, sampling the works
+/// every 50 ms, and check the energy balance E(t) - E(0) = friction work + damping work with
+/// [`energy_oracle`]: both works dissipative, the worst defect below 1e-9 of (m1 + m2) g l,
+/// and the run both slides and sticks. Returns the run for the caller's own checks.
+pub fn assert_energy_balance(name: &str, r: &Rig<f64>, method: Method) -> Solution<f64> {
+    let y0 = [0.0, 0.3, 0.4, 0.0];
+    let times: Vec<f64> = (0..=60).map(|k| k as f64 * 0.05).collect();
+    let request = Request {
+        sample_times: times,
+        friction_work: true,
+        positions_only: false,
+    };
+    let sol = run(r, y0, 3.0, 1e-12, method, &request);
+    let unit = (r.slider_mass + r.bob_mass) * r.gravity * r.rod_length;
+    let e0 = energy_oracle(r, &y0);
+    let mut worst: f64 = 0.0;
+    for s in &sol.samples {
+        let (wf, wd) = (s.friction_work.unwrap(), s.damping_work.unwrap());
+        assert!(wf <= 1e-12 && wd <= 1e-12, "{name}: works are dissipative");
+        let de = energy_oracle(r, &s.state) - e0;
+        worst = worst.max((de - wf - wd).abs() / unit);
+    }
+    assert!(worst < 1e-9, "{name} {method:?}: worst {worst:e}");
+    assert!(
+        sol.events
+            .iter()
+            .any(|e| e.kind == appell::sim::EventKind::Stick),
+        "{name}: the run slides and sticks: {:?}",
+        sol.events
+    );
+    sol
+}
