@@ -130,12 +130,7 @@ mod tests {
     }
 
     fn estimate(value: f64, stderr: f64) -> Estimate {
-        Estimate {
-            value,
-            stderr,
-            ci95: [value - 1.96 * stderr, value + 1.96 * stderr],
-            interval: "wald",
-        }
+        Estimate::wald(value, stderr)
     }
 
     /// Intervals stop at the physical bounds and nowhere else.

@@ -198,6 +198,18 @@ pub struct Estimate {
     pub interval: &'static str,
 }
 
+impl Estimate {
+    /// A Wald estimate: `value` +- 1.96 `stderr`.
+    pub fn wald(value: f64, stderr: f64) -> Estimate {
+        Estimate {
+            value,
+            stderr,
+            ci95: [value - 1.96 * stderr, value + 1.96 * stderr],
+            interval: "wald",
+        }
+    }
+}
+
 /// mu_kinetic's standard error in its parts, each a standard deviation; the total is their
 /// root sum of squares (the reported standard error).
 #[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]

@@ -109,6 +109,13 @@ impl Prior {
 
     /// The prior in a fit's JSON `v` (read from `path`, for messages).
     pub fn from_json(v: &Value, path: &Path) -> Result<Prior, SceneError> {
+        // A fit that failed gave no value: what it knows is no prior.
+        if let Some(why) = v["failed"].as_str() {
+            return Err(invalid(
+                path,
+                format!("failed: the fit gave no value for mu ({why}); plan from a fit that did"),
+            ));
+        }
         let cov = &v["shared_covariance"];
         let names = cov["names"].as_array().ok_or_else(|| {
             invalid(

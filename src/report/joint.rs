@@ -14,9 +14,10 @@ fn estimate_json(e: &Estimate) -> Value {
     json!({"value": e.value, "stderr": e.stderr, "ci95": e.ci95, "interval": e.interval})
 }
 
-/// The joint fit as one JSON object: `mu_kinetic`, `shared` (each shared parameter), the
-/// `shared_covariance` (names and matrix: what the releases know, for `plan --after`), the
-/// `releases` table, the agreement test and the models compared.
+/// The joint fit as one JSON object: `mu_kinetic` (of the releases kept; `null` with `failed`
+/// the reason when the fit failed), `shared` (each shared parameter), the `shared_covariance`
+/// (names and matrix: what the releases know, for `plan --after`), the `releases` kept, those
+/// `set_aside` with their own values and z, the agreement tests and the models compared.
 pub fn joint_json(rep: &JointReport) -> Value {
     let shared: serde_json::Map<String, Value> = rep
         .shared
@@ -33,17 +34,19 @@ pub fn joint_json(rep: &JointReport) -> Value {
         .collect();
     json!({
         "joint": true,
-        "mu_kinetic": estimate_json(&rep.mu_kinetic),
+        "mu_kinetic": if rep.failed.is_some() { Value::Null } else { estimate_json(&rep.mu_kinetic) },
+        "failed": rep.failed,
         "shared": shared,
         "shared_covariance": {"names": names, "matrix": cov},
         "nuisances": rep.nuisances.iter().map(|n| n.name()).collect::<Vec<_>>(),
         "friction_law": rep.friction,
         "implausible": rep.implausible,
         "releases": rep.releases,
+        "set_aside": rep.set_aside,
         "left_out": rep.left_out.iter().map(|(n, w)| json!({"recording": n, "error": w})).collect::<Vec<_>>(),
         "consistency_p_value": rep.consistency_p,
+        "consistency_p_value_all": rep.consistency_p_all,
         "disagreeing": rep.disagreeing,
-        "mu_without_disagreeing": rep.mu_without_disagreeing.as_ref().map(estimate_json),
         "adequacy": {"chi2": rep.chi2, "dof": rep.dof, "reduced_chi2": rep.reduced_chi2},
         "n_params": rep.n_params,
         "models": rep.models,
@@ -57,16 +60,28 @@ pub fn joint_json(rep: &JointReport) -> Value {
 pub fn joint_text(rep: &JointReport) -> String {
     let mut s = String::new();
     let e = &rep.mu_kinetic;
-    let _ = writeln!(
-        s,
-        "joint fit of {} releases: mu_kinetic {:.6} +- {:.2e}, 95% [{:.6}, {:.6}] [{}]",
-        rep.releases.len(),
-        e.value,
-        e.stderr,
-        e.ci95[0],
-        e.ci95[1],
-        e.interval
-    );
+    let aside = match rep.set_aside.len() {
+        0 => String::new(),
+        k => format!(" ({k} set aside)"),
+    };
+    if let Some(why) = &rep.failed {
+        let _ = writeln!(
+            s,
+            "joint fit of {} releases{aside}: FAILED, no value for mu_kinetic: {why}",
+            rep.releases.len()
+        );
+    } else {
+        let _ = writeln!(
+            s,
+            "joint fit of {} releases{aside}: mu_kinetic {:.6} +- {:.2e}, 95% [{:.6}, {:.6}] [{}]",
+            rep.releases.len(),
+            e.value,
+            e.stderr,
+            e.ci95[0],
+            e.ci95[1],
+            e.interval
+        );
+    }
     let _ = writeln!(s, "{}", rep.sentence);
     if !rep.implausible.is_empty() {
         let _ = writeln!(
@@ -75,7 +90,15 @@ pub fn joint_text(rep: &JointReport) -> String {
             rep.implausible.join("; ")
         );
     }
-    let _ = writeln!(s, "shared by every release:");
+    let _ = writeln!(
+        s,
+        "shared by every release{}:",
+        if rep.set_aside.is_empty() {
+            ""
+        } else {
+            " kept"
+        }
+    );
     for (q, e) in &rep.shared {
         let _ = writeln!(
             s,
@@ -115,7 +138,13 @@ pub fn joint_text(rep: &JointReport) -> String {
         "{:<w$} {:>6} {:>5} {:>22} {:>10} {:>8} {:>7}  single fit (its own nuisances)",
         "release", "frames", "trans", "own mu +- se", "rms (m)", "chi2/n", "z"
     );
-    for r in &rep.releases {
+    for (i, r) in rep.releases.iter().chain(&rep.set_aside).enumerate() {
+        if i == rep.releases.len() {
+            let _ = writeln!(
+                s,
+                "set aside (own mu and z under the kept releases' model, chosen without them):"
+            );
+        }
         let own = r.own_mu.map_or("-".to_owned(), |e| {
             format!("{:.5} +- {:.1e}", e.value, e.stderr)
         });
@@ -162,16 +191,21 @@ pub struct JointFigure<'a> {
 
 impl Figure for JointFigure<'_> {
     fn size(&self) -> (u32, u32) {
-        (1000, 250 + 40 * self.report.releases.len().min(40) as u32)
+        (
+            1000,
+            250 + 40 * (self.report.releases.len() + self.report.set_aside.len()).min(40) as u32,
+        )
     }
 
     fn draw<DB: DrawingBackend>(&self, root: &DrawingArea<DB, Shift>) -> Result<(), PlotError> {
         let rep = self.report;
-        let n = rep.releases.len();
+        // The releases kept, then those set aside (red).
+        let rows: Vec<&crate::fit::joint::ReleaseRow> =
+            rep.releases.iter().chain(&rep.set_aside).collect();
+        let n = rows.len();
         let mu = &rep.mu_kinetic;
         let x_range = data_range(
-            rep.releases
-                .iter()
+            rows.iter()
                 .filter_map(|r| r.own_mu)
                 .flat_map(|e| [e.value - 1.96 * e.stderr, e.value + 1.96 * e.stderr])
                 .chain(mu.ci95),
@@ -190,8 +224,7 @@ impl Figure for JointFigure<'_> {
             .y_label_area_size(210)
             .build_cartesian_2d(x_range, -0.5f64..(n as f64 - 0.5))?;
         // File names only: the directory is the same for every release.
-        let names: Vec<String> = rep
-            .releases
+        let names: Vec<String> = rows
             .iter()
             .map(|r| {
                 r.name
@@ -230,7 +263,7 @@ impl Figure for JointFigure<'_> {
             vec![(mu.value, -0.5), (mu.value, n as f64 - 0.5)],
             band.stroke_width(2),
         )))?;
-        for (i, r) in rep.releases.iter().enumerate() {
+        for (i, r) in rows.iter().enumerate() {
             let Some(e) = r.own_mu else { continue };
             let y = (n - 1 - i) as f64;
             let color = if r.agrees { BLACK } else { RED };

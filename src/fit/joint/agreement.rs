@@ -1,15 +1,12 @@
 //! Whether the releases agree on mu_kinetic: each release's own mu with the shared nuisances
-//! held, tested as the single fit tests its windows, and each one's leave-one-out z; when
-//! they disagree, the interval widened by their spread and the sentence that says so.
+//! held, tested as the single fit tests its windows, and each one's leave-one-out z; the
+//! releases' spread, and the sentence that says what the interval holds.
 
-use super::set_aside::mark_disagreeing;
-use super::{JointProblem, ReleaseRow};
-use crate::fit::intervals::widen;
+use super::ReleaseRow;
 use crate::fit::problem::{Param, TrajectoryProblem};
 use crate::fit::solve::solve_loose;
 use crate::fit::uncertainty::{self, WindowFit};
 use crate::fit::{Estimate, FitSettings};
-use rayon::prelude::*;
 
 /// Below this p-value the releases' own mu disagree. Stricter than the single fit's windows
 /// ([`crate::fit::WINDOWS_P`]): a release set aside is named, and its value left out.
@@ -38,15 +35,6 @@ pub(super) fn consistency(pairs: &[(f64, f64)]) -> Option<f64> {
 /// The releases' precision-weighted spread about `mu` ([`uncertainty::window_spread`]).
 fn window_spread_of(pairs: &[(f64, f64)], mu: f64) -> f64 {
     uncertainty::window_spread(&as_windows(pairs), mu)
-}
-
-/// Each release's own mu under `jp`'s shared values, in parallel.
-pub(super) fn own_mus(jp: &JointProblem, settings: &FitSettings) -> Vec<(f64, f64)> {
-    jp.parts
-        .par_iter()
-        .with_max_len(1)
-        .map(|m| own_mu(m, &jp.shared, settings).map_or((f64::NAN, 0.0), |e| (e.value, e.stderr)))
-        .collect()
 }
 
 /// Leave-one-out agreement: each release's own mu against the precision-weighted mean of the
@@ -93,76 +81,59 @@ pub(super) fn own_mu(
     })
 }
 
-/// What the releases' agreement test found.
-pub(super) struct Agreement {
-    /// p-value of the releases' own mu agreeing (`None` with fewer than two usable).
-    pub(super) consistency_p: Option<f64>,
-    /// The releases whose own mu disagrees with the others'.
-    pub(super) disagreeing: Vec<String>,
-    /// mu_kinetic of the other releases fitted jointly without those.
-    pub(super) others: Option<Estimate>,
-    /// One plain sentence on what the interval holds.
-    pub(super) sentence: String,
+/// The sentence on what the interval holds: every release agrees; some were set aside
+/// (`aside`: name, own mu, z under the others' model) and the rest agree; or the releases
+/// disagree and no few of them account for it (`all_p` their p-value).
+pub(super) fn sentence(
+    n_kept: usize,
+    kept_p: Option<f64>,
+    all_p: Option<f64>,
+    aside: &[ReleaseRow],
+    unresolved: bool,
+) -> String {
+    let p = |p: Option<f64>| crate::report::p_is(p.unwrap_or(f64::NAN));
+    if unresolved {
+        return format!(
+            "The releases disagree ({}), and no set of at most half of them, set aside, leaves releases that agree: the interval is widened by the releases' spread, and is the rail's only if every release ran on one rail.",
+            p(all_p)
+        );
+    }
+    if aside.is_empty() {
+        return format!(
+            "The {n_kept} releases agree ({}); the interval is what they support together.",
+            p(kept_p)
+        );
+    }
+    let named: Vec<String> = aside
+        .iter()
+        .map(|r| {
+            r.own_mu.map_or(r.name.clone(), |e| {
+                format!(
+                    "{} (own mu {:.5} +- {:.1e}, z {:+.1})",
+                    r.name, e.value, e.stderr, r.z
+                )
+            })
+        })
+        .collect();
+    format!(
+        "The releases disagree ({}); {} {} set aside: {} off the other {n_kept} under a model chosen without {}. The result is the {n_kept} releases kept, which agree ({}).",
+        p(all_p),
+        named.join(", "),
+        if aside.len() == 1 { "is" } else { "are" },
+        if aside.len() == 1 { "it lies" } else { "each lies" },
+        if aside.len() == 1 { "it" } else { "them" },
+        p(kept_p)
+    )
 }
 
-/// The releases' agreement: the same test and widening as the single fit's windows. Each row
-/// gets its z; when the releases disagree, the releases that do are set aside one at a time
-/// ([`super::set_aside::set_aside`]), their rows marked, and `mu` widened by the releases'
-/// spread.
-pub(super) fn agreement(
-    jp: &JointProblem,
-    rows: &mut [ReleaseRow],
-    mu: &mut Estimate,
-    settings: &FitSettings,
-) -> Agreement {
+/// The releases' precision-weighted spread of own mu about `mu` (their rows'), by which an
+/// interval is widened when they disagree.
+pub(super) fn spread(rows: &[ReleaseRow], mu: f64) -> f64 {
     let pairs: Vec<(f64, f64)> = rows
         .iter()
         .map(|r| r.own_mu.map_or((f64::NAN, 0.0), |e| (e.value, e.stderr)))
         .collect();
-    let consistency_p = consistency(&pairs);
-    let z = leave_one_out(&pairs);
-    rows.iter_mut().zip(&z).for_each(|(r, z)| r.z = *z);
-    if !consistency_p.is_some_and(|pv| pv < AGREE_P) {
-        return Agreement {
-            consistency_p,
-            disagreeing: Vec::new(),
-            others: None,
-            sentence: format!(
-                "The {} releases agree ({}); the interval is what they support together.",
-                rows.len(),
-                crate::report::p_is(consistency_p.unwrap_or(f64::NAN))
-            ),
-        };
-    }
-    // Which releases: the worst set aside in rounds and the rest refitted (an odd
-    // release pulls the shared tilt and so every release's own mu), until the rest agree.
-    let (disagreeing, others) = mark_disagreeing(jp, &z, rows, settings);
-    let spread = window_spread_of(&pairs, mu.value);
-    widen(mu, spread, "releases");
-    let sentence = disagree_sentence(consistency_p, &disagreeing, others);
-    Agreement {
-        consistency_p,
-        disagreeing,
-        others,
-        sentence,
-    }
-}
-
-/// The sentence when the releases disagree (p-value `p`): which lie off the others, mu of the
-/// others, and that the widened interval is the rail's only if every release ran on one rail.
-fn disagree_sentence(p: Option<f64>, disagreeing: &[String], others: Option<Estimate>) -> String {
-    format!(
-        "The releases disagree ({}): {} {} off the others{}; the interval is widened by the releases' spread, and is the rail's only if every release ran on one rail.",
-        crate::report::p_is(p.unwrap_or(f64::NAN)),
-        disagreeing.join(", "),
-        if disagreeing.len() == 1 { "lies" } else { "lie" },
-        others.map_or(String::new(), |e: Estimate| format!(
-            " (without {}, mu_kinetic {:.5} +- {:.1e})",
-            if disagreeing.len() == 1 { "it" } else { "them" },
-            e.value,
-            e.stderr
-        ))
-    )
+    window_spread_of(&pairs, mu)
 }
 
 #[cfg(test)]

@@ -7,13 +7,16 @@
 //! chosen by the single fit's selection ([`select::forward`] over [`Candidate`]).
 //!
 //! The folder's files, in the order [`fit_joint`] runs them: `rigs.rs` releases of another
-//! rig; `singles.rs` the single fits and the joint start; `problem.rs` the joint problem;
-//! `model.rs` the joint model (its fit, nuisances and polish); `shared.rs` the shared
-//! parameters' covariance; `releases.rs` each release under the joint model; `agreement.rs`
-//! the releases' own mu and their agreement; `set_aside.rs` the releases that disagree; this
-//! file the joint fit's settings, report and driver.
+//! rig; `singles.rs` the single fits and the joint start (their consensus nuisances);
+//! `problem.rs` the joint problem; `analysis.rs` one set of releases analysed: `model.rs` the
+//! joint model (its fit, nuisances and polish), `shared.rs` the shared parameters'
+//! covariance, `releases.rs` each release under the joint model, `agreement.rs` the
+//! releases' own mu and their agreement; `set_aside.rs` the releases that disagree, each
+//! judged by a model chosen without it; this file the joint fit's settings, report and
+//! driver.
 
 mod agreement;
+mod analysis;
 mod model;
 mod problem;
 mod releases;
@@ -78,27 +81,34 @@ pub struct ReleaseRow {
     pub agrees: bool,
 }
 
-/// The result of a joint fit.
+/// The result of a joint fit. Its values are those of the releases kept: a release set aside
+/// is listed apart ([`JointReport::set_aside`]) with its own values and the evidence.
 #[derive(Debug, Clone)]
 pub struct JointReport {
-    /// mu_kinetic of the rail, with its interval.
+    /// mu_kinetic of the rail from the releases kept, with its interval.
     pub mu_kinetic: Estimate,
+    /// Why the result is no measurement (`None` when it is one): a joint interval wider than
+    /// a single release's, or mu at its bound 0. The values are then not an answer.
+    pub failed: Option<String>,
     /// Every shared parameter with its estimate (mu_kinetic first).
     pub shared: Vec<(Param, Estimate)>,
     /// Covariance of the shared parameters (the releases' own parameters marginalised):
     /// its inverse is what the releases know of them.
     pub shared_covariance: DMatrix<f64>,
-    /// The releases.
+    /// The releases kept (those the result is of).
     pub releases: Vec<ReleaseRow>,
+    /// The releases set aside: each one's own mu and z under the kept releases' model (a
+    /// model chosen without it), more than 3 standard errors off.
+    pub set_aside: Vec<ReleaseRow>,
     /// Releases that failed and were left out (name, why), with `keep_going`.
     pub left_out: Vec<(String, String)>,
-    /// p-value of the releases' own mu agreeing (chi-square of their spread), with two or
-    /// more releases.
+    /// p-value of the kept releases' own mu agreeing (chi-square of their spread), with two
+    /// or more releases.
     pub consistency_p: Option<f64>,
-    /// The releases whose own mu disagrees with the others'.
+    /// p-value of every release's own mu agreeing under the model chosen on all of them.
+    pub consistency_p_all: Option<f64>,
+    /// The releases set aside, by name.
     pub disagreeing: Vec<String>,
-    /// mu_kinetic of the other releases fitted jointly without those (Wald interval).
-    pub mu_without_disagreeing: Option<Estimate>,
     /// Nuisances in the joint model.
     pub nuisances: Vec<Nuisance>,
     /// Every joint model compared.
@@ -149,9 +159,11 @@ pub enum JointError {
     Joint(String),
 }
 
-/// Fit the releases jointly: each alone first (its start, noise, outliers and own mu), then
-/// all together with the shared parameters tied, the nuisances chosen by the data, and the
-/// releases' agreement tested.
+/// Fit the releases jointly: each alone first (its start, noise, outliers, own mu and
+/// nuisances), then all together from the single fits' consensus, the nuisances chosen by the
+/// data and the releases' agreement tested. Releases that disagree are set aside only when a
+/// model chosen without them still finds them off ([`set_aside`]); the result is then the
+/// other releases', the ones set aside listed apart.
 pub fn fit_joint(
     releases: &[Release],
     rig_guess: &Rig<f64>,
@@ -164,10 +176,24 @@ pub fn fit_joint(
         left_out,
         mut warnings,
     } = singles::fit_singles(releases, rig_guess, settings, joint)?;
-    let start = singles::start(&kept, rig_guess, settings, joint);
-    let model = model::fit_model(start, &kept, settings)?;
-    let mut shared = shared::shared_fit(&model.problem, &model.p, &kept)?;
-    let mut rows = releases::release_rows(&model.problem, &kept, settings);
+    let ctx = analysis::Context {
+        rig_guess,
+        settings,
+        joint,
+    };
+    let set_aside::Outcome {
+        analysis: found,
+        aside,
+        unresolved,
+        all_p: consistency_p_all,
+    } = set_aside::set_aside(&kept, &ctx)?;
+    let analysis::Analysis {
+        model,
+        mut shared,
+        rows,
+        consistency_p,
+        sel,
+    } = found;
     let mut mu = shared.estimates[shared.mu_index].1;
     model_uncertainty(
         &mut mu,
@@ -175,7 +201,17 @@ pub fn fit_joint(
         shared.reduced_chi2.max(1.0),
         &mut warnings,
     );
-    let agreed = agreement::agreement(&model.problem, &mut rows, &mut mu, settings);
+    if unresolved {
+        let spread = agreement::spread(&rows, mu.value);
+        super::intervals::widen(&mut mu, spread, "releases");
+    }
+    let sentence = agreement::sentence(
+        rows.len(),
+        consistency_p,
+        consistency_p_all,
+        &aside,
+        unresolved,
+    );
     if select::misfits(&model.problem, shared.chi2) {
         warnings.push(format!(
             "the joint model misfits the releases (reduced chi-square {:.2}): the interval is the Jacobian's scaled by it",
@@ -183,6 +219,11 @@ pub fn fit_joint(
         ));
     }
     let mu = shared::carry_mu(&mut shared, mu);
+    let single_se: Vec<f64> = sel
+        .iter()
+        .filter_map(|&i| kept[i].1.mu_kinetic.map(|e| e.stderr))
+        .collect();
+    let failed = failure(&mu, single_se);
     // The shared parameters' correlation from their covariance, for the law's section.
     let k = shared.estimates.len();
     let correlation = DMatrix::from_fn(k, k, |i, j| {
@@ -216,26 +257,78 @@ pub fn fit_joint(
             "the joint model needs what no real rig has, so the result is limited by the model: {sentence}"
         ));
     }
+    if let Some(why) = &failed {
+        warnings.insert(0, format!("the joint fit failed: {why}"));
+    }
     Ok(JointReport {
         implausible,
         parts: model.problem.parts.clone(),
         friction,
         mu_kinetic: mu,
+        failed,
         shared: shared.estimates,
         shared_covariance: shared.covariance,
         releases: rows,
+        disagreeing: aside.iter().map(|r| r.name.clone()).collect(),
+        set_aside: aside,
         left_out,
-        consistency_p: agreed.consistency_p,
-        disagreeing: agreed.disagreeing,
-        mu_without_disagreeing: agreed.others,
+        consistency_p,
+        consistency_p_all,
         nuisances: model.nuisances,
         models: model.models,
         chi2: shared.chi2,
         dof: shared.dof,
         reduced_chi2: shared.reduced_chi2,
         n_params: model.p.len(),
-        sentence: agreed.sentence,
+        sentence,
         warnings,
         iterations: model.iterations,
     })
+}
+
+/// Why the joint result `mu` is no measurement, if it is none: its standard error above the
+/// median of the releases' own single fits' (`single`: the releases together know less than
+/// one alone, so the model trades mu against a nuisance), or mu at its bound 0.
+fn failure(mu: &Estimate, mut single: Vec<f64>) -> Option<String> {
+    single.sort_by(f64::total_cmp);
+    let median = single.get(single.len() / 2).copied();
+    if !mu.stderr.is_finite() || !mu.value.is_finite() {
+        return Some("mu_kinetic's standard error is not finite".into());
+    }
+    if mu.value <= 0.0 {
+        return Some(format!(
+            "mu_kinetic is at its bound 0 (+- {:.1e}): the model traded friction against a nuisance",
+            mu.stderr
+        ));
+    }
+    match median {
+        Some(m) if mu.stderr > m => Some(format!(
+            "mu_kinetic's standard error {:.1e} is above a single release's ({m:.1e}, the median): the releases together pin mu down less than one alone, so the joint model trades it against a nuisance",
+            mu.stderr
+        )),
+        _ => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::failure;
+    use crate::fit::Estimate;
+
+    fn est(value: f64, stderr: f64) -> Estimate {
+        Estimate::wald(value, stderr)
+    }
+
+    /// The rules of a failed joint result: wider than the median single release, at the
+    /// bound 0, or not finite; a joint interval narrower than the releases' is a value.
+    #[test]
+    fn a_result_no_narrower_than_one_release_or_at_zero_fails() {
+        let singles = vec![1e-3, 2e-3, 4e-3];
+        assert!(failure(&est(0.25, 5e-4), singles.clone()).is_none());
+        let wide = failure(&est(0.127, 7.1), singles.clone()).unwrap();
+        assert!(wide.contains("above a single release"), "{wide}");
+        let zero = failure(&est(0.0, 4e-4), singles.clone()).unwrap();
+        assert!(zero.contains("bound 0"), "{zero}");
+        assert!(failure(&est(f64::NAN, 1e-3), singles).is_some());
+    }
 }

@@ -1,12 +1,13 @@
-//! The joint model: the releases fitted together from the single fits' start, the nuisances
-//! chosen by the data (the single fit's forward selection over the joint problem), and the
-//! chosen model polished to the solver's full tolerance.
+//! The joint model: the releases fitted together from the single fits' start (their
+//! consensus nuisances in it), the nuisances chosen by the data (the single fit's forward
+//! selection over the joint problem, from the consensus on), and the chosen model polished
+//! to the solver's full tolerance.
 
-use super::singles::Start;
-use super::{JointError, JointProblem, Release};
+use super::singles::{Single, Start};
+use super::{JointError, JointProblem};
 use crate::fit::select::{self, Candidate, ModelRow, Nuisance, SelectOptions};
 use crate::fit::solve::{solve_loose, STAGE_FTOL};
-use crate::fit::{FitReport, FitSettings};
+use crate::fit::FitSettings;
 use nalgebra::DVector;
 
 /// The chosen joint model at its optimum, with the comparison behind it.
@@ -21,19 +22,24 @@ pub(super) struct JointModel {
     pub(super) models: Vec<ModelRow>,
     /// Levenberg-Marquardt iterations spent.
     pub(super) iterations: u64,
+    /// Whether the nuisances were chosen by the data (else the consensus was kept).
+    pub(super) selected: bool,
 }
 
 /// The joint model: the start fitted (loosely: it only starts the selection), the nuisances
-/// chosen, the winner polished.
+/// chosen (with `select`; else the start's consensus kept), the winner polished.
 pub(super) fn fit_model(
     start: Start,
-    kept: &[(&Release, FitReport)],
+    kept: &[&Single],
     settings: &FitSettings,
+    select: bool,
 ) -> Result<JointModel, JointError> {
     let Start {
         problem: jp,
         restarts,
         mu0,
+        consensus,
+        plain,
     } = start;
     let p0 = jp.values();
     let (p, cost, iterations) =
@@ -51,24 +57,127 @@ pub(super) fn fit_model(
         nuisances: Vec::new(),
         models: Vec::new(),
         iterations,
+        selected: select,
     };
-    if settings.nuisances || !settings.with.is_empty() {
-        model = choose_nuisances(model, cost, static_evidence, restarts, mu0, settings);
+    if select && (settings.nuisances || !settings.with.is_empty()) {
+        let from = Origin {
+            cost,
+            static_evidence,
+            restarts,
+            mu0,
+            consensus: consensus.clone(),
+        };
+        model = choose_nuisances(model, from.clone_consensus(), settings);
+        model = drop_unsupported(model, &plain, &from.consensus, mu0, settings);
+    } else {
+        model.nuisances = consensus;
     }
     polish(model, settings)
 }
 
-/// The nuisances chosen by the data from `model` at its optimum (cost `cost`): the single
-/// fit's forward selection, the friction laws offered when a single fit chose one
-/// (`static_evidence`), each release's `restarts` for a misfitting model.
-fn choose_nuisances(
-    model: JointModel,
+/// Where the selection starts: the start's cost, whether a single fit chose a static law,
+/// each release's restart, the start's mu and the consensus nuisances already in the model.
+struct Origin {
     cost: f64,
     static_evidence: bool,
     restarts: Vec<(crate::model::State<f64>, f64)>,
     mu0: f64,
+    consensus: Vec<Nuisance>,
+}
+
+impl Origin {
+    /// The same origin (its restarts copied), for the selection to consume.
+    fn clone_consensus(&self) -> Origin {
+        Origin {
+            cost: self.cost,
+            static_evidence: self.static_evidence,
+            restarts: self.restarts.clone(),
+            mu0: self.mu0,
+            consensus: self.consensus.clone(),
+        }
+    }
+}
+
+/// The consensus nuisances the joint data do not support taken out again: each one the
+/// selection kept (not forced by the user) is dropped when the model without it, fitted from
+/// the current values, has a BIC less than 2 above the model with it (the selection's own
+/// rule for adding one, the other way round). Single fits of one slide each may agree on a
+/// nuisance the releases together do not need.
+fn drop_unsupported(
+    mut model: JointModel,
+    plain: &[crate::fit::problem::TrajectoryProblem],
+    consensus: &[Nuisance],
+    mu0: f64,
     settings: &FitSettings,
 ) -> JointModel {
+    let n = model.problem.n_rows() as f64;
+    let bic = |m: &JointProblem, p: &DVector<f64>| -> Option<f64> {
+        let cost = crate::fit::lm::LeastSquares::normal_equations(m, p)
+            .ok()?
+            .cost;
+        Some(2.0 * cost + m.n_free() as f64 * n.ln())
+    };
+    let forced = settings.forced();
+    for &nu in consensus {
+        if !model.nuisances.contains(&nu) || forced.contains(&nu) {
+            continue;
+        }
+        let Some(with) = bic(&model.problem, &model.p) else {
+            continue;
+        };
+        let keep: Vec<Nuisance> = model
+            .nuisances
+            .iter()
+            .copied()
+            .filter(|c| *c != nu)
+            .collect();
+        let parts = plain
+            .iter()
+            .zip(&model.problem.parts)
+            .map(|(p, cur)| {
+                let mut m = p.clone();
+                for &c in &keep {
+                    m = m.with_nuisance(c, mu0 * 1.1);
+                }
+                m.initial = cur.initial;
+                for q in m.free.clone() {
+                    super::singles::set_param(&mut m, q, cur.get(q));
+                }
+                m
+            })
+            .collect();
+        let without = JointProblem::new(parts, model.problem.same_camera);
+        let Ok((p, _, it)) = solve_loose(
+            &without,
+            without.values(),
+            settings.max_iters,
+            Some(STAGE_FTOL),
+        ) else {
+            continue;
+        };
+        model.iterations += it;
+        if bic(&without, &p).is_some_and(|b| b < with + 2.0) {
+            let mut without = without;
+            without.set_values(&p);
+            model.problem = without;
+            model.p = p;
+            model.nuisances = keep;
+        }
+    }
+    model
+}
+
+/// The nuisances chosen by the data from `model` at its optimum: the single fit's forward
+/// selection from the consensus on, the friction laws offered when a single fit chose one,
+/// each release's restart for a misfitting model.
+fn choose_nuisances(model: JointModel, from: Origin, settings: &FitSettings) -> JointModel {
+    let Origin {
+        cost,
+        static_evidence,
+        restarts,
+        mu0,
+        consensus,
+    } = from;
     let opts = SelectOptions {
         friction_candidates: settings.nuisances,
         static_evidence,
@@ -79,7 +188,7 @@ fn choose_nuisances(
             0
         },
         max_iters: settings.max_iters,
-        already: Vec::new(),
+        already: consensus,
         fresh_start: Some(restarts),
         forced: settings.forced(),
         excluded: settings.excluded(),
@@ -91,6 +200,7 @@ fn choose_nuisances(
         nuisances: sel.chosen,
         models: sel.rows,
         iterations: model.iterations + sel.iterations,
+        selected: true,
     }
 }
 

@@ -2,6 +2,7 @@
 //! nuisances held), its residuals and its mode transitions.
 
 use super::agreement::own_mu;
+use super::singles::Single;
 use super::{JointProblem, Release, ReleaseRow};
 use crate::fit::problem::{Param, TrajectoryProblem};
 use crate::fit::{FitReport, FitSettings};
@@ -12,7 +13,7 @@ use rayon::prelude::*;
 /// agreement test.
 pub(super) fn release_rows(
     jp: &JointProblem,
-    kept: &[(&Release, FitReport)],
+    kept: &[&Single],
     settings: &FitSettings,
 ) -> Vec<ReleaseRow> {
     let shared_params = jp.shared.clone();
@@ -20,12 +21,12 @@ pub(super) fn release_rows(
         .par_iter()
         .zip(kept.par_iter())
         .with_max_len(1)
-        .map(|(m, (r, rep))| release_row(m, r, rep, &shared_params, settings))
+        .map(|(m, single)| release_row(m, single.0, &single.1, &shared_params, settings))
         .collect()
 }
 
 /// Release `r`'s row: `m` its part of the joint model, `rep` its single fit.
-fn release_row(
+pub(super) fn release_row(
     m: &TrajectoryProblem,
     r: &Release,
     rep: &FitReport,

@@ -2,11 +2,12 @@
 //! Jacobian's, scaled by the reduced chi-square when above one, or the block covariance over
 //! each release's stretches of frames when larger), the shared estimates and their covariance.
 
-use super::{JointError, JointProblem, Release};
+use super::singles::Single;
+use super::{JointError, JointProblem};
 use crate::fit::intervals::within_bounds;
 use crate::fit::problem::Param;
 use crate::fit::uncertainty;
-use crate::fit::{Estimate, FitReport};
+use crate::fit::Estimate;
 use nalgebra::{DMatrix, DVector};
 
 /// The shared parameters' estimates and covariance, and the joint model's chi-square.
@@ -31,7 +32,7 @@ pub(super) struct SharedFit {
 pub(super) fn shared_fit(
     jp: &JointProblem,
     p: &DVector<f64>,
-    kept: &[(&Release, FitReport)],
+    kept: &[&Single],
 ) -> Result<SharedFit, JointError> {
     let blocks: Vec<usize> = kept
         .iter()

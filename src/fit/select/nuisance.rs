@@ -110,7 +110,7 @@ impl Nuisance {
     /// mu_static is not offered on top of it (Stribeck on top of mu_static replaces it:
     /// [`Nuisance::supersedes`]); the full bob offset contains the offset across the rod; a
     /// rig has one friction law (Stribeck, direction or load).
-    pub(super) fn conflicts(self, other: Nuisance) -> bool {
+    pub(crate) fn conflicts(self, other: Nuisance) -> bool {
         use Nuisance::*;
         matches!(
             (self, other),
