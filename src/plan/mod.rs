@@ -41,8 +41,18 @@ pub struct Proposal {
     pub draws: usize,
     /// Predicted standard error of mu_kinetic (fit of mu and the initial state).
     pub predicted_mu_stderr: f64,
+    /// Whether the claimed robustness reaches the plan's `min_robustness`.
+    pub meets_min_robustness: bool,
     /// Samples of the nominal run at the frame rate (for figures).
     pub samples: Vec<Sample<f64>>,
+}
+
+impl Proposal {
+    /// Whether the proposal is ranked: its robustness reaches the plan's `min_robustness` and
+    /// a recording of it pins mu down (a finite predicted standard error).
+    pub fn ranked(&self) -> bool {
+        self.meets_min_robustness && self.predicted_mu_stderr.is_finite()
+    }
 }
 
 /// What the plan cannot do, and the closest thing it can.
@@ -57,15 +67,63 @@ pub struct Nearest {
     pub robustness: Option<f64>,
 }
 
+/// A side of an allowed range.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Limit {
+    /// The range's smallest value.
+    Lower,
+    /// The range's largest value.
+    Upper,
+}
+
+impl std::fmt::Display for Limit {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            Limit::Lower => "lower",
+            Limit::Upper => "upper",
+        })
+    }
+}
+
+/// The best proposal at a limit of the release box: a wider range there may do better.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct AtLimit {
+    /// The plan file's key of the range (`release.theta_deg`, `release.theta_dot`,
+    /// `release.x_dot`).
+    pub quantity: &'static str,
+    /// Which end of the range.
+    pub limit: Limit,
+    /// The limit, in the key's unit.
+    pub bound: f64,
+    /// The proposal's value, in the key's unit.
+    pub value: f64,
+}
+
+/// A release closer than this fraction of a range to one of its ends is at that limit.
+pub const AT_LIMIT_FRACTION: f64 = 0.015;
+
 /// The planner's answer.
 #[derive(Debug, Clone)]
 pub struct PlanReport {
-    /// Whether some release meets every criterion with the required robustness.
+    /// Whether some release meets every criterion with the required robustness (that is,
+    /// whether `proposals` has any).
     pub feasible: bool,
     /// The targets.
     pub targets: Vec<Target>,
-    /// Proposals, best first (feasible ones by predicted stderr, then the rest by robustness).
+    /// Ranked proposals, best first by predicted stderr: only releases whose claimed
+    /// robustness reaches `min_robustness` (and whose mu is identifiable).
     pub proposals: Vec<Proposal>,
+    /// The search's other choices, listed apart and never ranked: below `min_robustness` in
+    /// the fresh check (or mu not identifiable), most robust first; only when fewer than
+    /// `top` proposals are ranked, and at most as many as fill the list up to `top`.
+    pub unranked: Vec<Proposal>,
+    /// The plan's `min_robustness`.
+    pub min_robustness: f64,
+    /// The release box (theta rad, theta' rad/s, x' m/s), as the plan file allows.
+    pub release_box: [[f64; 2]; 3],
+    /// The limits of the box the best proposal sits at (empty when none).
+    pub at_limit: Vec<AtLimit>,
     /// When infeasible: why, and the nearest achievable.
     pub nearest: Option<Nearest>,
     /// Facts worth knowing (paradox threshold and the like).
@@ -116,6 +174,10 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
             feasible: false,
             targets: spec.goal.targets.clone(),
             proposals: Vec::new(),
+            unranked: Vec::new(),
+            min_robustness: min_rob,
+            release_box: ranges,
+            at_limit: Vec::new(),
             nearest: Some(nearest),
             notes,
             evaluated,
@@ -133,55 +195,62 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
     let mut pool = refined;
     pool.extend(grid_found.iter().copied());
     pool.sort_by(|a, b| a.objective(min_rob).total_cmp(&b.objective(min_rob)));
-    let chosen = distinct(&pool, &ranges, spec.search.top);
+    let top = spec.search.top;
+    let chosen = distinct(&pool, &ranges, top);
     // The claim comes from fresh draws, so selection on the search's draws cannot inflate it.
     let check = Draws::new(
         spec.search.verify_draws,
         spec.search.seed.wrapping_add(0x5eed),
     );
-    let frames = spec.camera.frame_times();
-    let mut proposals = chosen
-        .par_iter()
-        .map(|c| {
-            let passed = ev.passes(&c.release, &check);
-            let y0 = ev.initial(&c.release);
-            let request = Request {
-                sample_times: frames.clone(),
-                friction_work: false,
-                positions_only: false,
-            };
-            let (sol, nominal) =
-                ev.run(&spec.rig, &y0, &request)
-                    .ok_or_else(|| PlanError::Simulation {
-                        initial: y0,
-                        message: "the nominal run failed".into(),
-                    })?;
-            Ok(Proposal {
-                initial: y0,
-                events: sol.events,
-                nominal,
-                robustness: search::robustness_lower_bound(passed, check.len()),
-                robustness_observed: passed as f64 / check.len() as f64,
-                draws: check.len(),
-                predicted_mu_stderr: c.stderr,
-                samples: sol.samples,
-            })
-        })
-        .collect::<Result<Vec<_>, PlanError>>()?;
+    let check_all = |cs: &[Candidate]| {
+        cs.par_iter()
+            .map(|c| checked(&ev, &check, c))
+            .collect::<Result<Vec<_>, PlanError>>()
+    };
+    let mut all = check_all(&chosen)?;
+    // A release failing the fresh check leaves a place free: once more, the best candidates
+    // away from every release checked so far (a failed one's neighbours would likely fail too).
+    let ranked = all.iter().filter(|p| p.ranked()).count();
+    if ranked < all.len() {
+        let checked: Vec<ReleaseValues> = all
+            .iter()
+            .map(|p| search::release_values(&p.initial))
+            .collect();
+        let rest: Vec<Candidate> = pool
+            .iter()
+            .filter(|c| far_from(&ranges, &checked, &c.release))
+            .copied()
+            .collect();
+        let second = distinct(&rest, &ranges, top - ranked);
+        all.extend(check_all(&second)?);
+    }
     bar.finish_and_clear();
-    let good = |p: &Proposal| p.robustness >= min_rob && p.predicted_mu_stderr.is_finite();
-    proposals.sort_by(|a, b| {
-        good(b).cmp(&good(a)).then_with(|| {
-            if good(a) {
-                a.predicted_mu_stderr.total_cmp(&b.predicted_mu_stderr)
-            } else {
-                b.robustness.total_cmp(&a.robustness)
-            }
-        })
-    });
-    let feasible = proposals.first().is_some_and(good);
+    // Only releases meeting the plan's own rule are ranked. The others fill the list up to
+    // `top`, apart and unranked (the most robust first, away from the ranked ones and from each
+    // other); with `top` ranked ones they are dropped.
+    let (mut proposals, mut failed): (Vec<Proposal>, Vec<Proposal>) =
+        all.into_iter().partition(Proposal::ranked);
+    proposals.sort_by(|a, b| a.predicted_mu_stderr.total_cmp(&b.predicted_mu_stderr));
+    failed.sort_by(|a, b| b.robustness.total_cmp(&a.robustness));
+    let mut taken: Vec<ReleaseValues> = proposals
+        .iter()
+        .map(|p| search::release_values(&p.initial))
+        .collect();
+    let mut unranked = Vec::new();
+    for p in failed {
+        let r = search::release_values(&p.initial);
+        if proposals.len() + unranked.len() < top && far_from(&ranges, &taken, &r) {
+            taken.push(r);
+            unranked.push(p);
+        }
+    }
+    let feasible = !proposals.is_empty();
+    let at_limit = proposals
+        .first()
+        .map_or_else(Vec::new, |p| at_limit(&ranges, &p.initial));
+    notes.extend(at_limit.iter().map(at_limit_note));
     let nearest = (!feasible).then(|| {
-        let best = &proposals[0];
+        let best = &unranked[0];
         Nearest {
             message: format!(
                 "every target shows at the nominal friction, but no release in the feasible set reaches robustness {:.2}: the best, theta = {:.1} deg, theta' = {:.2} rad/s, x' = {:.3} m/s, shows them in {:.0}% of {} draws; narrow the uncertainty of mu, reduce the release error, or widen the release ranges",
@@ -203,6 +272,10 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
         feasible,
         targets: spec.goal.targets.clone(),
         proposals,
+        unranked,
+        min_robustness: min_rob,
+        release_box: ranges,
+        at_limit,
         nearest,
         notes,
         evaluated,
@@ -219,17 +292,56 @@ fn prior_mu_stderr(spec: &PlanSpec) -> Option<f64> {
         .map(|(_, se)| se)
 }
 
-/// Candidates (sorted best first) at least half a grid cell apart, so the proposals differ.
+/// The fresh check of a candidate: its robustness over `check` and its nominal run sampled
+/// at the frames, for the report.
+fn checked(ev: &Evaluator, check: &Draws, c: &Candidate) -> Result<Proposal, PlanError> {
+    let spec = ev.spec;
+    let passed = ev.passes(&c.release, check);
+    let y0 = ev.initial(&c.release);
+    let request = Request {
+        sample_times: spec.camera.frame_times(),
+        friction_work: false,
+        positions_only: false,
+    };
+    let (sol, nominal) = ev
+        .run(&spec.rig, &y0, &request)
+        .ok_or_else(|| PlanError::Simulation {
+            initial: y0,
+            message: "the nominal run failed".into(),
+        })?;
+    let robustness = search::robustness_lower_bound(passed, check.len());
+    Ok(Proposal {
+        initial: y0,
+        events: sol.events,
+        nominal,
+        robustness,
+        meets_min_robustness: robustness >= spec.goal.min_robustness,
+        robustness_observed: passed as f64 / check.len() as f64,
+        draws: check.len(),
+        predicted_mu_stderr: c.stderr,
+        samples: sol.samples,
+    })
+}
+
+/// Whether `r` is at least [`search::MIN_SEPARATION`] of the box's diagonal from each of
+/// `taken`.
+fn far_from<'a>(
+    ranges: &[[f64; 2]; 3],
+    taken: impl IntoIterator<Item = &'a ReleaseValues>,
+    r: &ReleaseValues,
+) -> bool {
+    taken
+        .into_iter()
+        .all(|t| search::box_distance(ranges, t, r) >= search::MIN_SEPARATION)
+}
+
+/// Up to `n` candidates, greedily from the best of `sorted` (best first), each at least
+/// [`search::MIN_SEPARATION`] of the box's diagonal from every one taken before, so that the
+/// proposals lie in different regions of the release space, not on top of each other.
 fn distinct(sorted: &[Candidate], ranges: &[[f64; 2]; 3], n: usize) -> Vec<Candidate> {
     let mut out: Vec<Candidate> = Vec::new();
     for c in sorted {
-        let far = out.iter().all(|o| {
-            (0..3).any(|k| {
-                let w = ranges[k][1] - ranges[k][0];
-                w > 0.0 && (o.release[k] - c.release[k]).abs() > 0.04 * w
-            })
-        });
-        if far {
+        if far_from(ranges, out.iter().map(|o| &o.release), &c.release) {
             out.push(*c);
         }
         if out.len() == n {
@@ -237,6 +349,46 @@ fn distinct(sorted: &[Candidate], ranges: &[[f64; 2]; 3], n: usize) -> Vec<Candi
         }
     }
     out
+}
+
+/// The limits of the release box (theta, theta', x') that `initial` lies at, within
+/// [`AT_LIMIT_FRACTION`] of the range; quantities the plan fixes are never at a limit.
+pub fn at_limit(ranges: &[[f64; 2]; 3], initial: &State<f64>) -> Vec<AtLimit> {
+    let keys = ["release.theta_deg", "release.theta_dot", "release.x_dot"];
+    let values = search::release_values(initial);
+    let mut out = Vec::new();
+    for ((&quantity, &[lo, hi]), &v) in keys.iter().zip(ranges).zip(&values) {
+        let tol = AT_LIMIT_FRACTION * (hi - lo);
+        if tol <= 0.0 {
+            continue;
+        }
+        let unit = |x: f64| {
+            if quantity == keys[0] {
+                x.to_degrees()
+            } else {
+                x
+            }
+        };
+        for (limit, bound) in [(Limit::Lower, lo), (Limit::Upper, hi)] {
+            if (v - bound).abs() <= tol {
+                out.push(AtLimit {
+                    quantity,
+                    limit,
+                    bound: unit(bound),
+                    value: unit(v),
+                });
+            }
+        }
+    }
+    out
+}
+
+/// The note of a limit the best proposal sits at.
+fn at_limit_note(a: &AtLimit) -> String {
+    format!(
+        "the best proposal (#1) lies at the {} limit of {} ({:.3}, the limit {:.3}): a release beyond it may pin mu down better; widen {} if the rig allows",
+        a.limit, a.quantity, a.value, a.bound, a.quantity
+    )
 }
 
 /// The paradox threshold of the rig, and for a sudden-stop target what mass ratio it needs.

@@ -291,6 +291,36 @@ pub fn release_box(spec: &PlanSpec) -> [[f64; 2]; 3] {
     [r.theta, r.theta_dot, r.x_dot]
 }
 
+/// The release values of an initial state (x, theta, x', theta'): (theta, theta', x').
+pub fn release_values(y: &State<f64>) -> ReleaseValues {
+    [y[1], y[3], y[2]]
+}
+
+/// How far apart proposals must be, as a fraction of the release box's diagonal (see
+/// [`box_distance`]): one eighth, so that no two proposals are near-copies (the old rule let
+/// five releases sit 0.5 rad/s apart on one edge of a 4 rad/s range) while a box still holds
+/// several.
+pub const MIN_SEPARATION: f64 = 0.125;
+
+/// The distance between two releases as a fraction of the release box's diagonal: each varied
+/// quantity's difference divided by its allowed range, then the Euclidean length divided by
+/// sqrt(number of varied quantities), so opposite corners are 1 apart. Quantities the plan
+/// fixes (a range of zero width) do not count; with none varied every distance is 0.
+pub fn box_distance(ranges: &[[f64; 2]; 3], a: &ReleaseValues, b: &ReleaseValues) -> f64 {
+    let (sum, varied) = ranges
+        .iter()
+        .zip(a.iter().zip(b))
+        .filter(|([lo, hi], _)| hi > lo)
+        .fold((0.0, 0usize), |(sum, n), ([lo, hi], (x, y))| {
+            (sum + ((x - y) / (hi - lo)).powi(2), n + 1)
+        });
+    if varied == 0 {
+        0.0
+    } else {
+        (sum / varied as f64).sqrt()
+    }
+}
+
 /// Nelder-Mead's cost: the objective over the box scaled to the unit cube, with releases
 /// outside the box (or failing at the nominal friction) priced out.
 struct Refine<'e, 'a> {
@@ -420,6 +450,17 @@ mod tests {
         let a = robustness_lower_bound(90, 100);
         let b = robustness_lower_bound(900, 1000);
         assert!(a < b && b < 0.9);
+    }
+
+    #[test]
+    fn box_distance_is_a_fraction_of_the_diagonal() {
+        let ranges = [[0.0, 2.0], [-1.0, 1.0], [0.5, 0.5]];
+        let corner = box_distance(&ranges, &[0.0, -1.0, 0.5], &[2.0, 1.0, 0.5]);
+        assert!((corner - 1.0).abs() < 1e-12);
+        // A fixed quantity does not count; half of one of two ranges is sqrt(1/8) of the diagonal.
+        let half = box_distance(&ranges, &[1.0, 0.0, 0.5], &[1.0, 1.0, 9.0]);
+        assert!((half - 0.125f64.sqrt()).abs() < 1e-12);
+        assert_eq!(box_distance(&[[1.0, 1.0]; 3], &[0.0; 3], &[5.0; 3]), 0.0);
     }
 
     #[test]

@@ -134,13 +134,13 @@ fn default_min_slide_px() -> f64 {
 fn default_min_frames() -> f64 {
     10.0
 }
-/// The most simulations a plan's search may ask for (grid releases x (1 + draws) + top x
-/// verify_draws): about a minute of work on one core.
+/// The most simulations a plan's search may ask for (grid releases x (1 + draws) + 2 x top x
+/// verify_draws and the rest of [`PlanSpec::runs`]): about a minute of work on one core.
 pub const MAX_PLAN_RUNS: f64 = 1e6;
 
 /// The most work a plan may ask for, in frames (or integration steps, when a run has more of
 /// them) summed over every simulation its search may run: each run costs its frames (samples
-/// and the checks on them) or its steps. The example plan is 1.8e7 and takes 0.25 s on two
+/// and the checks on them) or its steps. The example plan is 2.0e7 and takes 0.25 s on two
 /// cores; 2e9 is about 30 s on one. A fine grid with a 10^6-frame camera (2e11) took about 20
 /// minutes before it was counted this way.
 pub const MAX_PLAN_WORK: f64 = 2e9;
@@ -853,8 +853,8 @@ impl SearchSpec {
 impl PlanSpec {
     /// The simulations the search may run over the release grid: grid releases x (1 +
     /// draws), the refinement of up to four of them (Nelder-Mead, up to 30 iterations of a
-    /// few evaluations each, every one with the draws), the fresh checks (top x
-    /// verify_draws) and, when nothing works, the nearest release's seven wider grids.
+    /// few evaluations each, every one with the draws), the fresh checks (up to 2 x top x
+    /// verify_draws: a second round replaces releases failing the first) and, when nothing works, the nearest release's seven wider grids.
     /// Returns (grid releases, simulations).
     pub fn runs(&self) -> (f64, f64) {
         let s = &self.search;
@@ -873,7 +873,8 @@ impl PlanSpec {
         let grid = grid_of(s.grid_points, false);
         let refine = 4.0 * 60.0 * draws;
         let nearest = 7.0 * grid_of(s.grid_points.max(13) + 8, true) * 2.0;
-        let runs = grid * draws + (s.top as f64) * (s.verify_draws as f64) + refine + nearest;
+        let checks = 2.0 * (s.top as f64) * (s.verify_draws as f64);
+        let runs = grid * draws + checks + refine + nearest;
         (grid, runs)
     }
 
@@ -890,11 +891,11 @@ impl PlanSpec {
                 path,
                 "search",
                 &format!(
-                    "at most {MAX_PLAN_RUNS:e} simulations (grid releases x (1 + draws) + top x verify_draws + the refinement and the nearest release's grids; here {grid} x (1 + {}) + {} x {} and {:.0} more)",
+                    "at most {MAX_PLAN_RUNS:e} simulations (grid releases x (1 + draws) + 2 x top x verify_draws + the refinement and the nearest release's grids; here {grid} x (1 + {}) + 2 x {} x {} and {:.0} more)",
                     s.draws,
                     s.top,
                     s.verify_draws,
-                    runs - grid * (1.0 + s.draws as f64) - (s.top * s.verify_draws) as f64
+                    runs - grid * (1.0 + s.draws as f64) - (2 * s.top * s.verify_draws) as f64
                 ),
                 runs,
             ));

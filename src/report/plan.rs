@@ -50,7 +50,36 @@ fn finite(v: f64) -> Value {
     }
 }
 
-fn proposal_json(report: &PlanReport, rank: usize, p: &Proposal) -> Value {
+/// Every proposal with its label: the ranked ones `#1`, `#2`, ... then the unranked ones
+/// `(a)`, `(b)`, ..., with whether it is ranked.
+pub fn labelled(report: &PlanReport) -> Vec<(String, &Proposal, bool)> {
+    let ranked = report
+        .proposals
+        .iter()
+        .enumerate()
+        .map(|(i, p)| (format!("#{}", i + 1), p, true));
+    let letters = ('a'..='z').chain(std::iter::repeat('?'));
+    let unranked = report
+        .unranked
+        .iter()
+        .zip(letters)
+        .map(|(p, c)| (format!("({c})"), p, false));
+    ranked.chain(unranked).collect()
+}
+
+/// Why an unranked proposal is not ranked.
+fn why_unranked(report: &PlanReport, p: &Proposal) -> String {
+    if p.meets_min_robustness {
+        "mu not identifiable from it (infinite predicted stderr)".to_owned()
+    } else {
+        format!(
+            "below the plan's min_robustness {:.3}",
+            report.min_robustness
+        )
+    }
+}
+
+fn proposal_json(report: &PlanReport, rank: Option<usize>, p: &Proposal) -> Value {
     let y = p.initial;
     let mut v = json!({
         "rank": rank,
@@ -58,6 +87,7 @@ fn proposal_json(report: &PlanReport, rank: usize, p: &Proposal) -> Value {
         "theta_deg": y[1].to_degrees(),
         "target": target_label(report),
         "robustness": p.robustness,
+        "meets_min_robustness": p.meets_min_robustness,
         "robustness_observed": p.robustness_observed,
         "draws": p.draws,
         "predicted_mu_stderr": finite(p.predicted_mu_stderr),
@@ -77,18 +107,37 @@ fn proposal_json(report: &PlanReport, rank: usize, p: &Proposal) -> Value {
     v
 }
 
-/// The plan as one JSON object: `feasible`, `targets`, `proposals` (best first), `nearest`
-/// (null when feasible), `notes`, `evaluated`.
+/// The plan as one JSON object: `feasible`, `targets`, `min_robustness`, `release_box`,
+/// `proposals` (ranked, best first, all meeting `min_robustness`), `unranked` (the others,
+/// `rank` null, `meets_min_robustness` false unless mu is not identifiable), `at_limit`,
+/// `nearest` (null when feasible), `notes`, `evaluated`.
 pub fn plan_json(report: &PlanReport) -> Value {
+    let [theta, theta_dot, x_dot] = report.release_box;
     json!({
         "feasible": report.feasible,
         "targets": report.targets.iter().map(|t| t.to_string()).collect::<Vec<_>>(),
+        "min_robustness": report.min_robustness,
+        "release_box": {
+            "theta_deg": theta.map(f64::to_degrees),
+            "theta_dot": theta_dot,
+            "x_dot": x_dot,
+        },
         "proposals": report
             .proposals
             .iter()
             .enumerate()
-            .map(|(i, p)| proposal_json(report, i + 1, p))
+            .map(|(i, p)| proposal_json(report, Some(i + 1), p))
             .collect::<Vec<_>>(),
+        "unranked": report
+            .unranked
+            .iter()
+            .map(|p| {
+                let mut v = proposal_json(report, None, p);
+                v["why_unranked"] = json!(why_unranked(report, p));
+                v
+            })
+            .collect::<Vec<_>>(),
+        "at_limit": report.at_limit,
         "nearest": report.nearest.as_ref().map(|n| json!({
             "message": n.message,
             "release": n.release.map(|y| json!({"x": y[0], "theta": y[1], "x_dot": y[2], "theta_dot": y[3]})),
@@ -119,13 +168,21 @@ pub fn plan_table(report: &PlanReport) -> String {
             n.message
         );
     }
-    if report.proposals.is_empty() {
+    let all = labelled(report);
+    if all.is_empty() {
         let _ = writeln!(
             s,
             "no proposals ({} releases tried at the nominal friction)",
             report.evaluated
         );
         return s;
+    }
+    if report.proposals.is_empty() {
+        let _ = writeln!(
+            s,
+            "no ranked proposals: none reaches min_robustness {:.3}",
+            report.min_robustness
+        );
     }
     let _ = writeln!(
         s,
@@ -139,12 +196,19 @@ pub fn plan_table(report: &PlanReport) -> String {
         "rail [mm]",
         "events"
     );
-    for (i, p) in report.proposals.iter().enumerate() {
+    for (k, (label, p, ranked)) in all.iter().enumerate() {
+        if !ranked && (k == 0 || all[k - 1].2) {
+            let _ = writeln!(
+                s,
+                "not ranked, listed apart (under min_robustness {:.3}, or mu not identifiable; do not count on these):",
+                report.min_robustness
+            );
+        }
         let y = p.initial;
         let _ = writeln!(
             s,
             "{:>4} {:>11.2} {:>13.3} {:>10.4} {:>11} {:>14} {:>10.1} {:>10}",
-            i + 1,
+            label,
             y[1].to_degrees(),
             y[3],
             y[2],
@@ -154,11 +218,15 @@ pub fn plan_table(report: &PlanReport) -> String {
             p.events.len()
         );
     }
-    for (i, p) in report.proposals.iter().enumerate() {
+    for (label, p, ranked) in &all {
         let _ = writeln!(
             s,
-            "\n#{} robustness {:.3} (one-sided 95% bound; observed {:.3} of {} draws), predicted stderr(mu) {:.3e}{}",
-            i + 1,
+            "\n{label}{} robustness {:.3} (one-sided 95% bound; observed {:.3} of {} draws), predicted stderr(mu) {:.3e}{}",
+            if *ranked {
+                String::new()
+            } else {
+                format!(" NOT RANKED ({}):", why_unranked(report, p))
+            },
             p.robustness,
             p.robustness_observed,
             p.draws,
@@ -206,8 +274,9 @@ pub fn plan_table(report: &PlanReport) -> String {
 
 /// The proposals' nominal runs over the regions of `appell regions` (stick region and its
 /// boundary |c| = mu_s |b|, both slide directions when there is a paradox band), coloured by
-/// mode; each release labelled with its rank (#1 the best, drawn thicker), and each
-/// proposal's release, robustness and predicted stderr(mu) in the legend column.
+/// mode, with the release box the plan allows drawn dashed; each release labelled with its
+/// rank (#1 the best, drawn thicker; unranked ones (a), (b), ...), and each proposal's
+/// release, robustness and predicted stderr(mu) in the legend column.
 pub struct PlanFigure<'a> {
     /// The plan.
     pub report: &'a PlanReport,
@@ -215,10 +284,9 @@ pub struct PlanFigure<'a> {
 
 impl PlanFigure<'_> {
     fn trajectories(&self) -> Vec<Trajectory> {
-        self.report
-            .proposals
-            .iter()
-            .map(|p| Trajectory {
+        labelled(self.report)
+            .into_iter()
+            .map(|(_, p, _)| Trajectory {
                 initial: p.initial,
                 samples: p.samples.clone(),
                 stopped_at_paradox: p
@@ -231,10 +299,35 @@ impl PlanFigure<'_> {
             .collect()
     }
 
-    /// One line per proposal: rank, release, robustness, predicted stderr(mu).
+    /// One line per proposal: rank, release, robustness, predicted stderr(mu); the allowed
+    /// box first.
     pub fn proposal_notes(&self) -> Vec<String> {
-        let mut out = vec![format!("targets: {}", target_label(self.report))];
-        if self.report.proposals.is_empty() {
+        let [theta, theta_dot, x_dot] = self.report.release_box;
+        let push = if x_dot[1] > x_dot[0] {
+            format!(
+                "; x'0 {:.3}..{:.3} m/s (not shown in this plane)",
+                x_dot[0], x_dot[1]
+            )
+        } else {
+            String::new()
+        };
+        let mut out = vec![
+            format!("targets: {}", target_label(self.report)),
+            format!(
+                "allowed releases (dashed box): theta0 {:.1}..{:.1} deg, theta'0 {:.2}..{:.2} rad/s{push}",
+                theta[0].to_degrees(),
+                theta[1].to_degrees(),
+                theta_dot[0],
+                theta_dot[1]
+            ),
+        ];
+        out.extend(self.report.at_limit.iter().map(|a| {
+            format!(
+                "#1 is at the {} limit of {} ({:.3}): widen it if the rig allows",
+                a.limit, a.quantity, a.bound
+            )
+        }));
+        if self.report.proposals.is_empty() && self.report.unranked.is_empty() {
             out.push(format!(
                 "no proposals{}",
                 self.report
@@ -243,16 +336,20 @@ impl PlanFigure<'_> {
                     .map_or(String::new(), |n| format!(": {}", n.message))
             ));
         }
-        for (i, p) in self.report.proposals.iter().enumerate() {
+        for (label, p, ranked) in labelled(self.report) {
             let y = p.initial;
             let push = if y[2] == 0.0 {
                 String::new()
             } else {
                 format!(", x'0 = {:.3} m/s", y[2])
             };
+            let why = if ranked {
+                String::new()
+            } else {
+                format!(" not ranked ({});", why_unranked(self.report, p))
+            };
             out.push(format!(
-                "#{}: theta0 = {:.1} deg, theta'0 = {:.2} rad/s{push}; robustness >= {:.3}, stderr(mu) = {:.2e}",
-                i + 1,
+                "{label}:{why} theta0 = {:.1} deg, theta'0 = {:.2} rad/s{push}; robustness >= {:.3}, stderr(mu) = {:.2e}",
                 y[1].to_degrees(),
                 y[3],
                 p.robustness,
@@ -279,10 +376,15 @@ impl PlanFigure<'_> {
         let rig = &self.report.rig;
         let map = RegionMap::new(rig, &figure_window(rig));
         let trajectories = self.trajectories();
+        let [theta, theta_dot, _] = self.report.release_box;
         let figure = RegionFigure {
-            labels: (1..=trajectories.len()).map(|k| format!("#{k}")).collect(),
+            labels: labelled(self.report)
+                .into_iter()
+                .map(|(label, _, _)| label)
+                .collect(),
             notes: self.proposal_notes(),
-            emphasise_first: true,
+            emphasise_first: !self.report.proposals.is_empty(),
+            release_box: Some([theta, theta_dot]),
             ..RegionFigure::new(rig, &map, &trajectories)
         };
         f(&figure)

@@ -248,3 +248,140 @@ fn cli_bad_plan_file_names_the_key() {
         "{err}"
     );
 }
+
+/// The release box of a plan file, read from its TOML (not through the planner): the ranges
+/// of theta (deg), theta' and x', in the order of `release_point`.
+fn box_of(toml_text: &str) -> [[f64; 2]; 3] {
+    let v: toml::Value = toml::from_str(toml_text).unwrap();
+    let range = |key: &str| -> [f64; 2] {
+        let a = v["release"][key].as_array().unwrap();
+        [a[0].as_float().unwrap(), a[1].as_float().unwrap()]
+    };
+    [range("theta_deg"), range("theta_dot"), range("x_dot")]
+}
+
+/// A proposal's release from the JSON: theta (deg), theta', x'.
+fn release_point(p: &serde_json::Value) -> [f64; 3] {
+    let f = |k: &str| p["initial"][k].as_f64().unwrap();
+    [f("theta").to_degrees(), f("theta_dot"), f("x_dot")]
+}
+
+fn plan_json_of(path: &Path) -> serde_json::Value {
+    let out = appell(&["plan", path.to_str().unwrap(), "--json"]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}
+
+/// Issue 37: a plan keeps its own `min_robustness`. The campaign plan (a push either way)
+/// has releases that fail the fresh check: none of them is ranked with the ones that pass,
+/// each is marked and listed apart after them, and the verdict agrees.
+#[test]
+fn no_release_below_min_robustness_is_ranked() {
+    let path = config("plan_campaign.toml");
+    let min: f64 = toml::from_str::<toml::Value>(&std::fs::read_to_string(&path).unwrap()).unwrap()
+        ["goal"]["min_robustness"]
+        .as_float()
+        .unwrap();
+    let v = plan_json_of(&path);
+    let ranked = v["proposals"].as_array().unwrap();
+    let unranked = v["unranked"].as_array().unwrap();
+    assert!(!unranked.is_empty(), "the case the test is for: {v}");
+    assert_eq!(v["feasible"], !ranked.is_empty());
+    for (i, p) in ranked.iter().enumerate() {
+        assert!(p["robustness"].as_f64().unwrap() >= min, "{p}");
+        assert_eq!(p["meets_min_robustness"], true);
+        assert_eq!(p["rank"], i + 1);
+    }
+    let se: Vec<f64> = ranked
+        .iter()
+        .map(|p| p["predicted_mu_stderr"].as_f64().unwrap())
+        .collect();
+    assert!(
+        se.windows(2).all(|w| w[0] <= w[1]),
+        "ranked by stderr: {se:?}"
+    );
+    for p in unranked {
+        assert!(p["robustness"].as_f64().unwrap() < min, "{p}");
+        assert_eq!(p["meets_min_robustness"], false);
+        assert!(p["rank"].is_null());
+    }
+    // The table lists them after every ranked row, under a line that says so.
+    let out = appell(&["plan", path.to_str().unwrap()]);
+    let table = String::from_utf8_lossy(&out.stdout);
+    let apart = table.find("not ranked").expect("a line setting them apart");
+    let last_ranked = format!("#{}", ranked.len());
+    assert!(table.find(&last_ranked).unwrap() < apart, "{table}");
+    assert!(table[apart..].contains("(a)"), "{table}");
+}
+
+/// Issue 37: proposals (ranked or not) lie in different regions of the release box, at least
+/// one eighth of its diagonal apart (each quantity's difference over its allowed range).
+#[test]
+fn proposals_are_not_near_copies() {
+    for name in ["plan_example.toml", "plan_campaign.toml"] {
+        let path = config(name);
+        let b = box_of(&std::fs::read_to_string(&path).unwrap());
+        let v = plan_json_of(&path);
+        let points: Vec<[f64; 3]> = v["proposals"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .chain(v["unranked"].as_array().unwrap())
+            .map(release_point)
+            .collect();
+        assert!(points.len() >= 3, "{name}: {v}");
+        let varied: Vec<usize> = (0..3).filter(|&k| b[k][1] > b[k][0]).collect();
+        for (i, p) in points.iter().enumerate() {
+            for q in &points[i + 1..] {
+                let sum: f64 = varied
+                    .iter()
+                    .map(|&k| ((p[k] - q[k]) / (b[k][1] - b[k][0])).powi(2))
+                    .sum();
+                let d = (sum / varied.len() as f64).sqrt();
+                assert!(
+                    d >= 0.125 - 1e-9,
+                    "{name}: {p:?} and {q:?} are {d:.3} apart"
+                );
+            }
+        }
+    }
+}
+
+/// Issue 37: with the example's box (theta from -20 deg) the best release sits at the
+/// box's lower theta limit and the plan says so; with theta allowed from -60 deg the best
+/// is inside the box and nothing is said.
+#[test]
+fn best_release_at_a_limit_of_the_box_is_noted() {
+    let tmp = tempfile::tempdir().unwrap();
+    let tight = std::fs::read_to_string(config("plan_example.toml")).unwrap();
+    let wide = tight.replace("theta_deg = [-20.0, 80.0]", "theta_deg = [-60.0, 80.0]");
+    assert_ne!(tight, wide);
+    let near = |v: f64, bound: f64, [lo, hi]: [f64; 2]| (v - bound).abs() <= 0.015 * (hi - lo);
+    for (text, at_limit) in [(&tight, true), (&wide, false)] {
+        let path = tmp.path().join("plan.toml");
+        std::fs::write(&path, text).unwrap();
+        let b = box_of(text);
+        let v = plan_json_of(&path);
+        let best = release_point(&v["proposals"][0]);
+        let limits = v["at_limit"].as_array().unwrap();
+        let notes = v["notes"].to_string();
+        // Every limit the best release is within 1.5% of a range from is reported, no other.
+        for k in (0..3).filter(|&k| b[k][1] > b[k][0]) {
+            for (side, bound) in [("lower", b[k][0]), ("upper", b[k][1])] {
+                let key = ["release.theta_deg", "release.theta_dot", "release.x_dot"][k];
+                let listed = limits
+                    .iter()
+                    .any(|l| l["quantity"] == key && l["limit"] == side);
+                assert_eq!(listed, near(best[k], bound, b[k]), "{key} {side}: {v}");
+                assert_eq!(listed, notes.contains(&format!("{side} limit of {key}")));
+            }
+        }
+        let theta_low = near(best[0], b[0][0], b[0]);
+        assert_eq!(theta_low, at_limit, "best {best:?}");
+        assert_eq!(limits.is_empty(), !at_limit, "{v}");
+    }
+}

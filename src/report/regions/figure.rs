@@ -32,6 +32,7 @@ const Q_ZERO: RGBColor = RGBColor(150, 0, 150);
 const EDGE: RGBColor = RGBColor(90, 90, 90);
 const OTHER_SLIDE: RGBColor = RGBColor(175, 175, 175);
 const JUMP: RGBColor = RGBColor(200, 0, 0);
+const RELEASE_BOX: RGBColor = RGBColor(160, 110, 0);
 
 /// Width of the legend column beside the panels (px), and its text width (characters).
 const LEGEND_WIDTH: u32 = 360;
@@ -67,6 +68,9 @@ pub struct RegionFigure<'a> {
     pub notes: Vec<String>,
     /// Draw the first trajectory thicker than the others (the plan's best proposal).
     pub emphasise_first: bool,
+    /// The releases a plan allows, ranges of (theta rad, theta' rad/s): drawn as a dashed box
+    /// (clipped to the window). `None`: no box.
+    pub release_box: Option<[[f64; 2]; 2]>,
 }
 
 impl<'a> RegionFigure<'a> {
@@ -79,6 +83,7 @@ impl<'a> RegionFigure<'a> {
             labels: Vec::new(),
             notes: Vec::new(),
             emphasise_first: false,
+            release_box: None,
         }
     }
 
@@ -185,6 +190,12 @@ impl<'a> RegionFigure<'a> {
                 "sliding in direction s: two solutions".to_owned(),
             ));
             out.push((Swatch::Dashed(EDGE), "band edge mu_k |a| = D".to_owned()));
+        }
+        if self.release_box.is_some() {
+            out.push((
+                Swatch::Dashed(RELEASE_BOX),
+                "allowed releases: the plan's theta and theta' ranges".to_owned(),
+            ));
         }
         if !self.trajectories.is_empty() {
             out.push((
@@ -310,8 +321,32 @@ impl RegionFigure<'_> {
             .bold_line_style(BLACK.mix(0.12))
             .draw()?;
         self.draw_curves(&mut chart, s)?;
+        self.draw_release_box(&mut chart)?;
         self.draw_trajectories(&mut chart, s)?;
         self.draw_releases(&mut chart)
+    }
+
+    /// The plan's release box, dashed, clipped to the window.
+    fn draw_release_box<DB: DrawingBackend>(
+        &self,
+        chart: &mut Plane<'_, DB>,
+    ) -> Result<(), PlotError> {
+        let Some([theta, theta_dot]) = self.release_box else {
+            return Ok(());
+        };
+        let win = &self.map.window;
+        let deg = |t: f64| t.clamp(win.theta_min, win.theta_max).to_degrees();
+        let w = |v: f64| v.clamp(-win.w_max, win.w_max);
+        let (t0, t1) = (deg(theta[0]), deg(theta[1]));
+        let (w0, w1) = (w(theta_dot[0]), w(theta_dot[1]));
+        let corners = vec![(t0, w0), (t1, w0), (t1, w1), (t0, w1), (t0, w0)];
+        chart.draw_series(DashedLineSeries::new(
+            corners,
+            8,
+            5,
+            RELEASE_BOX.stroke_width(2),
+        ))?;
+        Ok(())
     }
 
     /// The shaded regions, one column per degree, exact in theta' within each column; the
@@ -420,10 +455,11 @@ impl RegionFigure<'_> {
         Ok(())
     }
 
-    /// Release dots and labels last, so no curve hides them. Labels are stacked in rank order
-    /// in a column left of the leftmost labelled release (right of the rightmost when there is
-    /// no room), each joined to its dot by a thin leader line, so releases a few pixels apart
-    /// keep readable labels.
+    /// Release dots and labels last, so no curve hides them. Labels are stacked in a column
+    /// left of the leftmost labelled release (right of the rightmost when there is no room),
+    /// in the order of their dots from top to bottom so that the leaders do not cross, each
+    /// joined to its dot by a thin leader line, so releases a few pixels apart keep readable
+    /// labels.
     fn draw_releases<DB: DrawingBackend>(
         &self,
         chart: &mut Plane<'_, DB>,
@@ -444,6 +480,7 @@ impl RegionFigure<'_> {
                 labelled.push((label, chart.backend_coord(&p)));
             }
         }
+        labelled.sort_by_key(|(_, dot)| dot.1);
         if !labelled.is_empty() {
             let plot = chart.plotting_area();
             let (x_px, y_px) = plot.get_pixel_range();
