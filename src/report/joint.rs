@@ -214,8 +214,15 @@ impl Figure for JointFigure<'_> {
         let mut chart = ChartBuilder::on(root)
             .caption(
                 format!(
-                    "mu_kinetic of each release (95 %) and the joint {:.6} [{:.6}, {:.6}]",
-                    mu.value, mu.ci95[0], mu.ci95[1]
+                    "mu_kinetic of each release (95 %) and the joint {:.6} [{:.6}, {:.6}]{}",
+                    mu.value,
+                    mu.ci95[0],
+                    mu.ci95[1],
+                    if rep.set_aside.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" of the {} kept (red: set aside)", rep.releases.len())
+                    }
                 ),
                 ("sans-serif", 20),
             )
