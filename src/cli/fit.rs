@@ -582,5 +582,9 @@ fn run_joint(
             outln!("figure written to {}", p.display());
         }
     }
+    // A failed result is reported in full, and is no answer: exit 1 with the reason.
+    if let Some(why) = &rep.failed {
+        return Err(Failure::Run(anyhow!("the joint fit failed: {why}")));
+    }
     Ok(())
 }

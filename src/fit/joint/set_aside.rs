@@ -67,7 +67,7 @@ fn single_z(kept: &[Single]) -> Vec<f64> {
 /// joint model `a` fits worst (the largest chi-square per residual: a release on another tilt
 /// may keep its own mu and pull the shared tilt instead), the one whose single fit lies
 /// farthest from the others' (`zs`; one off by mu alone was already tried when it is more
-/// than 3 off, [`by_single_fits`]), and the one whose own mu lies farthest off under `a`.
+/// than 3 off, [`set_aside`]), and the one whose own mu lies farthest off under `a`.
 fn candidates(a: &Analysis, zs: &[f64], out: &[usize]) -> Vec<usize> {
     let by_single = (0..zs.len())
         .filter(|i| !out.contains(i))
@@ -94,43 +94,32 @@ fn candidates(a: &Analysis, zs: &[f64], out: &[usize]) -> Vec<usize> {
     c
 }
 
-/// The releases set aside. While the releases kept disagree: the first round tries the
-/// [`candidates`] in turn, each with the model re-chosen on the rest, and keeps the first
-/// whose rest agrees and which lies off it (or else the one whose rest agrees best); later rounds set aside as many more as are out (1, 1, 2, 4: the analyses
-/// are logarithmic in the releases), the worst under the last rest's model, up to half.
-/// Then each release set aside is judged by the rest's model, and one within 3 standard
-/// errors of it is taken back (the rest re-analysed without it once). When the rest still
-/// disagree, or every release comes back, the search is unresolved and every release's
-/// analysis stands.
+/// The releases set aside.
+/// 1. The single fits alone may point at releases (a single fit's mu more than 3 of its
+///    standard errors from the others' weighted median, at most half, the largest first):
+///    they are set aside first and the rest analysed with the model chosen on them.
+/// 2. Otherwise every release is looked at under the consensus model (the model is chosen on
+///    all of them only when they agree there: a model chosen on every release, odd ones
+///    among them, is the costliest step and the least useful). When they disagree, the
+///    [`candidates`] are tried in turn, each with the model chosen again on the rest; the
+///    first whose rest agrees and which lies off it is kept (else the one whose rest agrees
+///    best).
+/// 3. While the rest disagree, as many more as are out are set aside (1, 1, 2, 4: the
+///    analyses are logarithmic in the releases), the worst under the last rest's model, up to
+///    half; each rest is looked at under the consensus model first.
+/// 4. Each release set aside is judged by the rest's model ([`score`]); one that is not off
+///    it is taken back (the rest analysed once more).
+///
+/// When the rest still disagree, or every release comes back, nothing is set aside: every
+/// release with the model chosen on all of them (unresolved unless they agree there).
 pub(super) fn set_aside(kept: &[Single], ctx: &Context) -> Result<Outcome, JointError> {
     let n = kept.len();
     let cap = (n / 2).min(n.saturating_sub(2));
-    let zs = single_z(kept);
-    if cap > 0 {
-        if let Some(found) = by_single_fits(kept, &zs, cap, ctx) {
-            return Ok(found);
-        }
-    }
     let all: Vec<usize> = (0..n).collect();
-    // A quick look first: every release under the single fits' consensus model. When they
-    // agree there, the model is chosen on all of them; when they do not, it ranks the
-    // candidates, and the model is chosen only on the sets tried (a model chosen on every
-    // release, the odd one among them, is the most costly and the least useful).
-    let quick = analyse(kept, &all, ctx, false)?;
-    let first = if quick.agree() {
-        analyse(kept, &all, ctx, true)?
-    } else {
-        quick
-    };
-    let all_p = first.consistency_p;
-    // Every release's analysis, the model chosen on all (when the search finds no set).
-    // No set found: every release with the model chosen on all of them (when only the quick
-    // look found them disagreeing, that model may agree after all).
-    let unresolved = |first: Analysis| -> Result<Outcome, JointError> {
-        let analysis = if first.model.selected {
-            first
-        } else {
-            analyse(kept, &all, ctx, true)?
+    let whole = |pre: Option<Analysis>| -> Result<Outcome, JointError> {
+        let analysis = match pre {
+            Some(a) if a.model.selected => a,
+            _ => analyse(kept, &all, ctx, true)?,
         };
         Ok(Outcome {
             all_p: analysis.consistency_p,
@@ -139,124 +128,99 @@ pub(super) fn set_aside(kept: &[Single], ctx: &Context) -> Result<Outcome, Joint
             aside: Vec::new(),
         })
     };
-    if first.agree() {
-        return Ok(Outcome {
-            analysis: first,
-            aside: Vec::new(),
-            unresolved: false,
-            all_p,
-        });
-    }
-    if cap == 0 {
-        return unresolved(first);
-    }
-    let mut out: Vec<usize> = Vec::new();
+    let zs = single_z(kept);
+    let mut out: Vec<usize> = (0..n).filter(|&i| zs[i].abs() > 3.0).collect();
+    out.sort_by(|&a, &b| zs[b].abs().total_cmp(&zs[a].abs()));
+    out.truncate(cap);
     let mut rest: Option<Analysis> = None;
-    while out.len() < cap {
-        let cur = rest.as_ref().unwrap_or(&first);
-        if rest.is_some() && cur.agree() {
-            break;
-        }
-        if out.is_empty() {
-            let mut best: Option<(usize, Analysis, (bool, f64, f64))> = None;
-            for c in candidates(cur, &zs, &out) {
-                let Ok(a) = analyse(kept, &others(n, &[c]), ctx, true) else {
-                    continue;
-                };
-                let z = score(kept, c, &a, ctx).z.abs();
-                let key = (a.agree(), a.consistency_p.unwrap_or(1.0), z);
-                let better = best.as_ref().is_none_or(|(_, _, k)| {
-                    (key.0, key.1, key.2).partial_cmp(&(k.0, k.1, k.2))
-                        == Some(std::cmp::Ordering::Greater)
-                });
-                if better {
-                    best = Some((c, a, key));
-                }
-                // A rest that agrees and a release off it: no other candidate can do better
-                // than agree (each try is a model chosen again).
-                if best.as_ref().is_some_and(|b| b.2 .0 && b.2 .2 > 3.0) {
-                    break;
-                }
-            }
-            let Some((c, a, _)) = best else {
-                return unresolved(first);
-            };
-            out.push(c);
-            rest = Some(a);
+    if !out.is_empty() {
+        rest = analyse(kept, &others(n, &out), ctx, true).ok();
+    }
+    // Every release's look, when the search started from it.
+    let mut first: Option<Analysis> = None;
+    if rest.is_none() {
+        out.clear();
+        let quick = analyse(kept, &all, ctx, false)?;
+        let f = if quick.agree() {
+            analyse(kept, &all, ctx, true)?
         } else {
-            let batch = out.len().min(cap - out.len());
-            let mut worst: Vec<(usize, f64)> = cur
-                .sel
-                .iter()
-                .zip(&cur.rows)
-                .map(|(&i, r)| (i, r.z))
-                .collect();
-            worst.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
-            out.extend(worst.into_iter().take(batch).map(|w| w.0));
-            match analyse(kept, &others(n, &out), ctx, true) {
-                Ok(a) => rest = Some(a),
-                Err(_) => return unresolved(first),
+            quick
+        };
+        if f.agree() || cap == 0 {
+            return whole(Some(f));
+        }
+        let mut best: Option<(usize, Analysis, (bool, f64, f64))> = None;
+        for c in candidates(&f, &zs, &out) {
+            let Ok(a) = analyse(kept, &others(n, &[c]), ctx, true) else {
+                continue;
+            };
+            let z = score(kept, c, &a, ctx).z.abs();
+            let key = (a.agree(), a.consistency_p.unwrap_or(1.0), z);
+            let better = best
+                .as_ref()
+                .is_none_or(|(_, _, k)| key.partial_cmp(k) == Some(std::cmp::Ordering::Greater));
+            if better {
+                best = Some((c, a, key));
+            }
+            // A rest that agrees and a release off it: no other candidate can do better
+            // than agree (each try is a model chosen again).
+            if best.as_ref().is_some_and(|b| b.2 .0 && b.2 .2 > 3.0) {
+                break;
             }
         }
+        let Some((c, a, _)) = best else {
+            return whole(Some(f));
+        };
+        out.push(c);
+        rest = Some(a);
+        first = Some(f);
+    }
+    while out.len() < cap && !rest.as_ref().is_some_and(Analysis::agree) {
+        let Some(cur) = rest.take() else { break };
+        let batch = out.len().min(cap - out.len());
+        let mut worst: Vec<(usize, f64)> = cur
+            .sel
+            .iter()
+            .zip(&cur.rows)
+            .map(|(&i, r)| (i, r.z))
+            .collect();
+        worst.sort_by(|a, b| b.1.abs().total_cmp(&a.1.abs()));
+        out.extend(worst.into_iter().take(batch).map(|w| w.0));
+        // The consensus model first (a rest that still holds odd releases misfits, and
+        // choosing its model is the costliest step of all); the model is chosen only on a
+        // rest that agrees there.
+        rest = match analyse(kept, &others(n, &out), ctx, false) {
+            Ok(q) if q.agree() => analyse(kept, &others(n, &out), ctx, true).ok(),
+            other => other.ok(),
+        };
     }
     let Some(mut cur) = rest.filter(Analysis::agree) else {
-        return unresolved(first);
+        return whole(first);
     };
     let mut aside = judge(kept, &out, &cur, ctx);
     if aside.iter().any(|r| r.agrees) {
         out = still_off(out, &aside);
         if out.is_empty() {
-            return unresolved(first);
+            return whole(first);
         }
         cur = analyse(kept, &others(n, &out), ctx, true)?;
         aside = judge(kept, &out, &cur, ctx);
         if !cur.agree() || aside.iter().any(|r| r.agrees) {
-            return unresolved(first);
+            return whole(first);
         }
     }
+    let pairs: Vec<(f64, f64)> = cur
+        .rows
+        .iter()
+        .chain(&aside)
+        .map(|r| r.own_mu.map_or((f64::NAN, 0.0), |e| (e.value, e.stderr)))
+        .collect();
     Ok(Outcome {
+        all_p: consistency(&pairs),
         analysis: cur,
         aside,
         unresolved: false,
-        all_p,
     })
-}
-
-/// The quick way, when the single fits alone point at releases (|z| above 3 against the
-/// others' weighted median, at most `cap`, the largest first): the rest analysed without
-/// them, each judged by the rest's model; one within 3 standard errors of it is taken back
-/// (the rest analysed once more). The outcome when the rest agree and every release left
-/// out lies off them; otherwise `None`, and the search starts from every release.
-fn by_single_fits(kept: &[Single], zs: &[f64], cap: usize, ctx: &Context) -> Option<Outcome> {
-    let mut out: Vec<usize> = (0..kept.len()).filter(|&i| zs[i].abs() > 3.0).collect();
-    out.sort_by(|&a, &b| zs[b].abs().total_cmp(&zs[a].abs()));
-    out.truncate(cap);
-    for _ in 0..2 {
-        if out.is_empty() {
-            return None;
-        }
-        let rest = analyse(kept, &others(kept.len(), &out), ctx, true).ok()?;
-        if !rest.agree() {
-            return None;
-        }
-        let aside = judge(kept, &out, &rest, ctx);
-        if aside.iter().all(|r| !r.agrees) {
-            let pairs: Vec<(f64, f64)> = rest
-                .rows
-                .iter()
-                .chain(&aside)
-                .map(|r| r.own_mu.map_or((f64::NAN, 0.0), |e| (e.value, e.stderr)))
-                .collect();
-            return Some(Outcome {
-                all_p: consistency(&pairs),
-                analysis: rest,
-                aside,
-                unresolved: false,
-            });
-        }
-        out = still_off(out, &aside);
-    }
-    None
 }
 
 /// The releases of `out` whose judgement (`aside`, in the same order) finds them off.
