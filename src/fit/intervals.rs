@@ -133,6 +133,32 @@ mod tests {
         Estimate::wald(value, stderr)
     }
 
+    /// The solver's steps stay inside the time-scale bound the commands check: damping,
+    /// viscous friction and a mass ratio pushed far beyond it come back to a rig the
+    /// integrator runs at its bound, not beyond.
+    #[test]
+    fn steps_stay_inside_the_time_scale_bound() {
+        use crate::fit::lm::LeastSquares;
+        for (q, wild) in [
+            (Param::PivotDamping, 1e3),
+            (Param::ViscousFriction, 1e4),
+            (Param::MassRatio, 1e-6),
+        ] {
+            let m = problem(vec![Param::MuKinetic, q]);
+            let mut p = nalgebra::DVector::from_vec(vec![0.3, wild]);
+            m.project(&mut p);
+            let mut at = m.clone();
+            at.set_values(&p);
+            let rate = crate::scene::rig_time_rate(&at.rig);
+            assert!(
+                rate <= crate::scene::MAX_RIG_RATE * (1.0 + 1e-9),
+                "{q:?} {wild} -> {} gives a rate {rate}",
+                p[1]
+            );
+            assert!(rate > 0.5 * crate::scene::MAX_RIG_RATE, "{q:?}: {rate}");
+        }
+    }
+
     /// Intervals stop at the physical bounds and nowhere else.
     #[test]
     fn intervals_stop_at_the_physical_bounds() {

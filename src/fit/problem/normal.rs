@@ -313,9 +313,23 @@ impl LeastSquares for TrajectoryProblem {
         // and bob a lab builds (a bare uniform rod has L = 2l/3).
         let l = self.rig.marker_length;
         clamp(p, Param::PendulumLength, 0.5 * l, 2.0 * l);
-        clamp(p, Param::MassRatio, 1e-4, 1e4);
-        clamp(p, Param::PivotDamping, 0.0, f64::INFINITY);
-        clamp(p, Param::ViscousFriction, 0.0, f64::INFINITY);
+        // Inside the time-scale bound every command checks before integrating
+        // (`scene::MAX_RIG_RATE`): a fit that stepped its own values into a stiffer rig (a
+        // pivot damping of 1e3, a bob a thousand times the slider) took the integrator
+        // minutes per iteration.
+        let rate = crate::scene::MAX_RIG_RATE;
+        let (m1, m2) = (self.rig.slider_mass, self.rig.bob_mass);
+        let len = self.rig.rod_length;
+        let swing = rate * rate * len / self.rig.gravity - 1.0;
+        let r_min = if swing > 0.0 { 1.0 / swing } else { 1e4 };
+        clamp(p, Param::MassRatio, r_min.max(1e-4), 1e4);
+        clamp(
+            p,
+            Param::PivotDamping,
+            0.0,
+            rate * m2 * len * len / (1.0 + m2 / m1),
+        );
+        clamp(p, Param::ViscousFriction, 0.0, rate * m1);
         clamp(p, Param::StribeckVelocity, 1e-4, 10.0);
         // Each direction's coefficient at least 0; an exponent within the rig's range.
         clamp(p, Param::FrictionSplit, -mu_k, mu_k);
