@@ -26,6 +26,13 @@ fn as_windows(pairs: &[(f64, f64)]) -> Vec<WindowFit> {
         .collect()
 }
 
+/// The rows' own (mu, se), (NaN, 0) where a release has none: what the tests below take.
+pub(super) fn own_pairs<'a>(rows: impl IntoIterator<Item = &'a ReleaseRow>) -> Vec<(f64, f64)> {
+    rows.into_iter()
+        .map(|r| r.own_mu.map_or((f64::NAN, 0.0), |e| (e.value, e.stderr)))
+        .collect()
+}
+
 /// p-value of the releases' own mu agreeing: the single fit's windows test
 /// ([`uncertainty::window_consistency`]).
 pub(super) fn consistency(pairs: &[(f64, f64)]) -> Option<f64> {
@@ -72,13 +79,7 @@ pub(super) fn own_mu(
     m.set_values(&p);
     let a = uncertainty::assess(&m, &p, f64::INFINITY).ok()?;
     let i = m.free.iter().position(|q| *q == Param::MuKinetic)?;
-    let se = a.se[i].max(a.se_block[i]);
-    Some(Estimate {
-        value: p[i],
-        stderr: se,
-        ci95: [p[i] - 1.96 * se, p[i] + 1.96 * se],
-        interval: "wald",
-    })
+    Some(Estimate::wald(p[i], a.se[i].max(a.se_block[i])))
 }
 
 /// The sentence on what the interval holds: every release agrees; some were set aside
@@ -129,11 +130,7 @@ pub(super) fn sentence(
 /// The releases' precision-weighted spread of own mu about `mu` (their rows'), by which an
 /// interval is widened when they disagree.
 pub(super) fn spread(rows: &[ReleaseRow], mu: f64) -> f64 {
-    let pairs: Vec<(f64, f64)> = rows
-        .iter()
-        .map(|r| r.own_mu.map_or((f64::NAN, 0.0), |e| (e.value, e.stderr)))
-        .collect();
-    window_spread_of(&pairs, mu)
+    window_spread_of(&own_pairs(rows), mu)
 }
 
 #[cfg(test)]

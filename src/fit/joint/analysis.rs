@@ -3,7 +3,7 @@
 //! set-aside search ([`super::set_aside`]) runs one per set of releases it tries, so a release
 //! is judged against a model chosen without it.
 
-use super::agreement::{consistency, leave_one_out, AGREE_P};
+use super::agreement::{consistency, leave_one_out, own_pairs, AGREE_P};
 use super::model::{self, JointModel};
 use super::releases::{release_row, release_rows};
 use super::shared::{self, SharedFit};
@@ -65,10 +65,7 @@ pub(super) fn analyse(
     let model = model::fit_model(start, &sub, ctx.settings, select)?;
     let shared = shared::shared_fit(&model.problem, &model.p, &sub)?;
     let mut rows = release_rows(&model.problem, &sub, ctx.settings);
-    let pairs: Vec<(f64, f64)> = rows
-        .iter()
-        .map(|r| r.own_mu.map_or((f64::NAN, 0.0), |e| (e.value, e.stderr)))
-        .collect();
+    let pairs = own_pairs(&rows);
     let consistency_p = consistency(&pairs);
     for (r, z) in rows.iter_mut().zip(leave_one_out(&pairs)) {
         r.z = z;
@@ -117,13 +114,16 @@ pub(super) fn score(kept: &[Single], i: usize, a: &Analysis, ctx: &Context) -> R
     row.z = row
         .own_mu
         .map_or(0.0, |e| (e.value - mu.value) / e.stderr.hypot(mu.stderr));
-    let per_row = |r: &ReleaseRow| r.chi2 / r.n_residuals.max(1) as f64;
-    let worst_in = a.rows.iter().map(per_row).fold(0.0, f64::max);
+    let worst_in = a
+        .rows
+        .iter()
+        .map(ReleaseRow::chi2_per_residual)
+        .fold(0.0, f64::max);
     let single = rep.mu_kinetic;
     let z_single = single.map_or(0.0, |e| (e.value - mu.value) / e.stderr.hypot(mu.stderr));
     let off_by_mu = row.z.abs() > 3.0 && z_single.abs() > 3.0;
     let known_better = single.is_some_and(|e| mu.stderr < e.stderr);
-    let off_by_fit = known_better && per_row(&row) > (2.0 * worst_in).max(2.0);
+    let off_by_fit = known_better && row.chi2_per_residual() > (2.0 * worst_in).max(2.0);
     row.agrees = !(off_by_mu || off_by_fit);
     row
 }

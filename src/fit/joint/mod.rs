@@ -81,6 +81,13 @@ pub struct ReleaseRow {
     pub agrees: bool,
 }
 
+impl ReleaseRow {
+    /// Chi-square per residual row under the model the row is of.
+    pub fn chi2_per_residual(&self) -> f64 {
+        self.chi2 / self.n_residuals.max(1) as f64
+    }
+}
+
 /// The result of a joint fit. Its values are those of the releases kept: a release set aside
 /// is listed apart ([`JointReport::set_aside`]) with its own values and the evidence.
 #[derive(Debug, Clone)]

@@ -67,8 +67,8 @@ pub(super) fn fit_model(
             mu0,
             consensus: consensus.clone(),
         };
-        model = choose_nuisances(model, from.clone_consensus(), settings);
-        model = drop_unsupported(model, &plain, &from.consensus, mu0, settings);
+        model = choose_nuisances(model, from, settings);
+        model = drop_unsupported(model, &plain, &consensus, mu0, settings);
     } else {
         model.nuisances = consensus;
     }
@@ -83,19 +83,6 @@ struct Origin {
     restarts: Vec<(crate::model::State<f64>, f64)>,
     mu0: f64,
     consensus: Vec<Nuisance>,
-}
-
-impl Origin {
-    /// The same origin (its restarts copied), for the selection to consume.
-    fn clone_consensus(&self) -> Origin {
-        Origin {
-            cost: self.cost,
-            static_evidence: self.static_evidence,
-            restarts: self.restarts.clone(),
-            mu0: self.mu0,
-            consensus: self.consensus.clone(),
-        }
-    }
 }
 
 /// The consensus nuisances the joint data do not support taken out again: each one the

@@ -4,7 +4,7 @@
 //! odd one (a friction law that differs by direction, a marker lag) and made clean releases
 //! look odd; a model chosen without it does not.
 
-use super::agreement::consistency;
+use super::agreement::{consistency, own_pairs};
 use super::analysis::{analyse, score, Analysis, Context};
 use super::singles::Single;
 use super::{JointError, ReleaseRow};
@@ -72,12 +72,11 @@ fn candidates(a: &Analysis, zs: &[f64], out: &[usize]) -> Vec<usize> {
     let by_single = (0..zs.len())
         .filter(|i| !out.contains(i))
         .max_by(|&x, &y| zs[x].abs().total_cmp(&zs[y].abs()));
-    let per_row = |r: &ReleaseRow| r.chi2 / r.n_residuals.max(1) as f64;
     let worst_fit = a
         .rows
         .iter()
         .zip(&a.sel)
-        .max_by(|x, y| per_row(x.0).total_cmp(&per_row(y.0)))
+        .max_by(|x, y| x.0.chi2_per_residual().total_cmp(&y.0.chi2_per_residual()))
         .map(|(_, &i)| i);
     let by_joint = a
         .rows
@@ -154,18 +153,19 @@ pub(super) fn set_aside(kept: &[Single], ctx: &Context) -> Result<Outcome, Joint
             let Ok(a) = analyse(kept, &others(n, &[c]), ctx, true) else {
                 continue;
             };
-            let z = score(kept, c, &a, ctx).z.abs();
-            let key = (a.agree(), a.consistency_p.unwrap_or(1.0), z);
+            let judged = score(kept, c, &a, ctx);
+            // A rest that agrees and a release its model finds off ([`score`]'s rule): no
+            // other candidate can do better (each try is a model chosen again).
+            if a.agree() && !judged.agrees {
+                best = Some((c, a, (true, f64::INFINITY, f64::INFINITY)));
+                break;
+            }
+            let key = (a.agree(), a.consistency_p.unwrap_or(1.0), judged.z.abs());
             let better = best
                 .as_ref()
                 .is_none_or(|(_, _, k)| key.partial_cmp(k) == Some(std::cmp::Ordering::Greater));
             if better {
                 best = Some((c, a, key));
-            }
-            // A rest that agrees and a release off it: no other candidate can do better
-            // than agree (each try is a model chosen again).
-            if best.as_ref().is_some_and(|b| b.2 .0 && b.2 .2 > 3.0) {
-                break;
             }
         }
         let Some((c, a, _)) = best else {
@@ -209,14 +209,8 @@ pub(super) fn set_aside(kept: &[Single], ctx: &Context) -> Result<Outcome, Joint
             return whole(first);
         }
     }
-    let pairs: Vec<(f64, f64)> = cur
-        .rows
-        .iter()
-        .chain(&aside)
-        .map(|r| r.own_mu.map_or((f64::NAN, 0.0), |e| (e.value, e.stderr)))
-        .collect();
     Ok(Outcome {
-        all_p: consistency(&pairs),
+        all_p: consistency(&own_pairs(cur.rows.iter().chain(&aside))),
         analysis: cur,
         aside,
         unresolved: false,
