@@ -106,6 +106,9 @@ pub struct FitSettings {
     pub options: Options,
     /// Most Levenberg-Marquardt iterations per fit.
     pub max_iters: u64,
+    /// Iterations a start of a candidate model gets before those far behind the round's best
+    /// are left where they stopped (0: every candidate fitted to the end; see the selection).
+    pub first_iters: u64,
     /// Known noise per marker (slider, bob), m; `None`: measured from the tracks.
     pub noise: Option<[f64; 2]>,
     /// Let the data add physics and camera nuisances (tilt, damping, friction laws, scale,
@@ -171,6 +174,7 @@ impl Default for FitSettings {
                 ..Options::default()
             },
             max_iters: 60,
+            first_iters: 15,
             noise: None,
             nuisances: true,
             windows: true,

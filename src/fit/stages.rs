@@ -136,6 +136,7 @@ pub(super) fn nuisances(
             0
         },
         max_iters: settings.max_iters,
+        first_iters: settings.first_iters,
         already: if f.problem.free.contains(&Param::MuStatic) {
             vec![Nuisance::StaticFriction]
         } else {

@@ -175,6 +175,7 @@ fn choose_nuisances(model: JointModel, from: Origin, settings: &FitSettings) -> 
             0
         },
         max_iters: settings.max_iters,
+        first_iters: settings.first_iters,
         already: consensus,
         fresh_start: Some(restarts),
         forced: settings.forced(),

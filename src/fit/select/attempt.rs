@@ -5,6 +5,7 @@ use super::{chi2_of, Candidate, ModelRow, SelectOptions};
 use crate::fit::problem::Param;
 use crate::fit::solve::{solve_loose, Solved, STAGE_FTOL};
 use nalgebra::DVector;
+use std::cell::Cell;
 
 /// A candidate's fit: to a relative cost decrease of [`STAGE_FTOL`], which settles its
 /// chi-square to far below a unit (the criterion's differences that matter are units), while
@@ -15,15 +16,25 @@ fn solve_candidate<M: Candidate>(m: &M, p0: DVector<f64>, max_iters: u64) -> Sol
 }
 
 /// Solve `m` from its values and, when `fresh` is given, also from a restart; the lower
-/// cost wins. Iterations of both count.
-fn solve_starts<M: Candidate>(m: &M, fresh: Option<&M::Start>, max_iters: u64) -> Solved {
-    let a = solve_candidate(m, m.values(), max_iters);
+/// cost wins. Iterations of both count. `capped` is set when a solve used all `max_iters`.
+fn solve_starts<M: Candidate>(
+    m: &M,
+    fresh: Option<&M::Start>,
+    max_iters: u64,
+    capped: &Cell<bool>,
+) -> Solved {
+    let solve = |m: &M| {
+        let got = solve_candidate(m, m.values(), max_iters);
+        if got.as_ref().is_ok_and(|g| g.2 >= max_iters) {
+            capped.set(true);
+        }
+        got
+    };
+    let a = solve(m);
     let Some(start) = fresh else {
         return a;
     };
-    let f = m.restarted(start);
-    let b = solve_candidate(&f, f.values(), max_iters);
-    better(a, b)
+    better(a, solve(&m.restarted(start)))
 }
 
 /// Under misfit, when a candidate's best fit `got` moved a measured rig value beyond 3 of its
@@ -79,6 +90,9 @@ fn nested_slack(parent_chi2: f64) -> f64 {
 /// A failed candidate: why, the chi-square it reached (NaN when none) and the iterations.
 pub(super) type Failure = (String, f64, u64);
 
+/// A candidate's fit: its optimum, cost and iterations, or why it failed.
+pub(super) type Outcome = Result<(DVector<f64>, f64, u64), Failure>;
+
 /// Fit candidate `m` from its own start (and `fresh` when given). A candidate that nests the
 /// current model (`parent`: that model's chi-square) yet ends worse than it has not converged:
 /// it is retried, longer and from the data's start, and is a failure when it still ends
@@ -88,9 +102,34 @@ pub(super) fn fit_candidate<M: Candidate>(
     fresh: Option<&M::Start>,
     opts: &SelectOptions<M::Start>,
     parent: Option<f64>,
-) -> Result<(DVector<f64>, f64, u64), Failure> {
+) -> Outcome {
+    fit_candidate_within(m, fresh, opts, parent, opts.max_iters).0
+}
+
+/// [`fit_candidate`] with at most `max_iters` iterations a start (twice that for a retry),
+/// and whether a start used them all (its chi-square is then only an upper bound).
+pub(super) fn fit_candidate_within<M: Candidate>(
+    m: &M,
+    fresh: Option<&M::Start>,
+    opts: &SelectOptions<M::Start>,
+    parent: Option<f64>,
+    max_iters: u64,
+) -> (Outcome, bool) {
+    let capped = Cell::new(false);
+    let got = fit_capped(m, fresh, opts, parent, max_iters, &capped);
+    (got, capped.get())
+}
+
+fn fit_capped<M: Candidate>(
+    m: &M,
+    fresh: Option<&M::Start>,
+    opts: &SelectOptions<M::Start>,
+    parent: Option<f64>,
+    max_iters: u64,
+    capped: &Cell<bool>,
+) -> Outcome {
     let worse = |cost: f64| parent.is_some_and(|c| chi2_of(cost) > c + nested_slack(c));
-    let first = solve_starts(m, fresh, opts.max_iters);
+    let first = solve_starts(m, fresh, max_iters, capped);
     let (mut best, mut iters) = match first {
         Ok((q, cost, it)) if !worse(cost) => return Ok((q, cost, it)),
         Ok((q, cost, it)) => (Some((q, cost)), it),
@@ -116,8 +155,11 @@ pub(super) fn fit_candidate<M: Candidate>(
     }
     let mut last_err = String::from("no start converged");
     for (r, p0) in retries {
-        match solve_candidate(&r, p0, 2 * opts.max_iters) {
+        match solve_candidate(&r, p0, 2 * max_iters) {
             Ok((q, cost, it)) => {
+                if it >= 2 * max_iters {
+                    capped.set(true);
+                }
                 iters += it;
                 if best.as_ref().is_none_or(|b| cost < b.1) {
                     best = Some((q, cost));

@@ -50,6 +50,10 @@ pub struct ModelRow {
     /// Whether its values hold one no real rig has (a nuisance beyond its plausible range):
     /// it is then no adequate description, and carries no weight in mu's model uncertainty.
     pub implausible: bool,
+    /// Whether its fit was stopped far behind the round's best model before converging (the
+    /// selection's first pass): its chi-square is then an upper bound.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub stopped_early: bool,
 }
 
 /// The outcome of forward selection: the chosen problem and optimum, the nuisances it holds
@@ -84,6 +88,9 @@ pub struct SelectOptions<S> {
     pub max_added: usize,
     /// Most Levenberg-Marquardt iterations per fit.
     pub max_iters: u64,
+    /// Iterations a start of a round's candidate gets first; one stopped then is fitted to
+    /// the end only when near the round's best (0: every candidate to the end).
+    pub first_iters: u64,
     /// Nuisances the model holds already (not offered again).
     pub already: Vec<Nuisance>,
     /// A second start for each candidate, used while the current model misfits: the data's

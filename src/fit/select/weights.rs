@@ -111,6 +111,7 @@ mod tests {
             weight: 0.0,
             path: false,
             implausible: false,
+            stopped_early: false,
         }
     }
 

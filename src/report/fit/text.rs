@@ -235,7 +235,7 @@ fn models(s: &mut String, rep: &FitReport) {
         for m in rep.models.iter().filter(|m| m.failed.is_none()) {
             let _ = writeln!(
                 s,
-                "  {} {:<36} k {:>2}  chi2 {:>12.1}  BIC {:>12.1}  dBIC {:>+10.1}  weight {:.3}  mu_kinetic {:.5}",
+                "  {} {:<36} k {:>2}  chi2 {:>12.1}  BIC {:>12.1}  dBIC {:>+10.1}  weight {:.3}  mu_kinetic {:.5}{}",
                 if m.chosen { "*" } else { " " },
                 m.name,
                 m.free.len(),
@@ -243,7 +243,12 @@ fn models(s: &mut String, rep: &FitReport) {
                 m.bic,
                 m.delta_bic,
                 m.weight,
-                m.mu_kinetic
+                m.mu_kinetic,
+                if m.stopped_early {
+                    "  (stopped far behind the best: chi2 at most)"
+                } else {
+                    ""
+                }
             );
         }
         for m in rep.models.iter().filter(|m| m.failed.is_some()) {
