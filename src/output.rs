@@ -135,7 +135,7 @@ pub fn write_atomic(
         if !meta.is_file() {
             let mut buf = Vec::new();
             fill(&mut buf)?;
-            let mut f = std::fs::OpenOptions::new().write(true).open(path)?;
+            let mut f = open_special(path, &meta)?;
             f.write_all(&buf)?;
             return f.flush();
         }
@@ -186,6 +186,36 @@ pub fn write_atomic(
     let result = result.and_then(|()| tmp.persist(&target).map(drop).map_err(|e| e.error));
     register(&tmp_path, false);
     result
+}
+
+/// Open a special file for writing. A named pipe is opened without waiting for a reader
+/// (a pipe nobody reads held the command in `open` for ever) and then written to as usual.
+fn open_special(path: &Path, meta: &std::fs::Metadata) -> std::io::Result<std::fs::File> {
+    use std::os::unix::fs::{FileTypeExt, OpenOptionsExt};
+    use std::os::unix::io::AsRawFd;
+    if !meta.file_type().is_fifo() {
+        return std::fs::OpenOptions::new().write(true).open(path);
+    }
+    let f = std::fs::OpenOptions::new()
+        .write(true)
+        .custom_flags(libc::O_NONBLOCK)
+        .open(path)
+        .map_err(|e| {
+            if e.raw_os_error() == Some(libc::ENXIO) {
+                // Not BrokenPipe: that is a reader gone, which ends a command quietly.
+                std::io::Error::other("the output is a named pipe that nobody reads")
+            } else {
+                e
+            }
+        })?;
+    // Blocking again for the writes, as to any pipe.
+    // SAFETY: fcntl on a descriptor this function owns, with flags it read from it.
+    let fd = f.as_raw_fd();
+    let flags = unsafe { libc::fcntl(fd, libc::F_GETFL) };
+    if flags < 0 || unsafe { libc::fcntl(fd, libc::F_SETFL, flags & !libc::O_NONBLOCK) } < 0 {
+        return Err(std::io::Error::last_os_error());
+    }
+    Ok(f)
 }
 
 /// A temporary directory (random name, created exclusively under the system's temporary

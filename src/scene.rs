@@ -547,6 +547,36 @@ enum Quantity {
 }
 
 impl RigOrigin<'_> {
+    /// [`Rig::validate_law`]'s error worded for where the values came from: a fit's values
+    /// are named by their place in its JSON (`shared.load_exponent.value`), a direction's
+    /// coefficient by the two values it is made of.
+    fn law_message(&self, e: crate::model::RigError) -> String {
+        let (
+            RigOrigin::Fit { section, .. },
+            crate::model::RigError::Law {
+                key,
+                expected,
+                value,
+            },
+        ) = (self, &e)
+        else {
+            return e.to_string();
+        };
+        let from = "(a value the fit computed, read from the fit JSON)";
+        match *key {
+            "load_exponent" => {
+                format!("{section}.load_exponent.value {from} must be {expected}, got {value}")
+            }
+            "mu_kinetic_positive" | "mu_kinetic_negative" | "kinetic split" => format!(
+                "the kinetic coefficient {key} = {section}.mu_kinetic.value {} {section}.mu_kinetic_split.value {from} must be {expected}, got {value}",
+                if *key == "mu_kinetic_negative" { "-" } else { "+" }
+            ),
+            _ => format!(
+                "{key}, from {section}.mu_kinetic.value, {section}.mu_kinetic_split.value and the plan's mu_static {from}, must be {expected}, got {value}"
+            ),
+        }
+    }
+
     /// The field a quantity of `rig` is named by, and the value to show (a fit's own value
     /// where it fitted the quantity, so a mass ratio of -1 shows as -1, not as the NaN it
     /// makes of the masses).
@@ -556,7 +586,7 @@ impl RigOrigin<'_> {
             RigOrigin::File { friction } => {
                 let name = match q {
                     Quantity::MarkerLength => "rig.rod_length".into(),
-                    Quantity::Length if rigid => "the pendulum's equivalent length L = J / (m_p d) (from rig.rod_length and the pendulum's keys)".into(),
+                    Quantity::Length if rigid => "the pendulum's equivalent length L = J / (m_p d) (from rig.rod_length, rig.bob_mass, rig.rod_mass and rig.bob_radius, or rig.pendulum_mass, rig.pendulum_com and rig.pendulum_inertia)".into(),
                     Quantity::Length => "rig.rod_length".into(),
                     Quantity::MassRatio if rigid => "the equivalent mass ratio r' = (m1 + m_p - m_e) / m_e (from rig.slider_mass and the pendulum's keys)".into(),
                     Quantity::MassRatio => "the mass ratio rig.slider_mass / rig.bob_mass".into(),
@@ -679,7 +709,7 @@ pub fn check_rig(path: &Path, rig: &Rig<f64>, origin: RigOrigin) -> Result<(), S
     // The direction and load laws' own ranges, on values a fit computed too.
     rig.validate_law().map_err(|e| SceneError::Invalid {
         path: path.to_owned(),
-        message: e.to_string(),
+        message: origin.law_message(e),
     })?;
     if rig.friction_law == FrictionLaw::Stribeck && !within(rig.stribeck_velocity, RIG_MIN, RIG_MAX)
     {
@@ -729,9 +759,14 @@ pub fn rig_time_rate(rig: &Rig<f64>) -> f64 {
 /// and synth (scenes), regions (rig files), fits (after the rig is compared with the
 /// recording) and plans (the plan's rig, and again with a fit's values).
 pub fn check_time_scale(path: &Path, rig: &Rig<f64>, origin: RigOrigin) -> Result<(), SceneError> {
-    let (rate, q) = rig_rate(rig);
+    let (rate, mut q) = rig_rate(rig);
     if rate <= MAX_RIG_RATE {
         return Ok(());
+    }
+    // A swing too fast on a pendulum that would pass with equal masses: the masses' ratio
+    // sets it (a 1e-9 kg slider under a 1e9 kg bob), not the length.
+    if q == Quantity::Length && (2.0 * rig.gravity / rig.rod_length).sqrt() <= MAX_RIG_RATE {
+        q = Quantity::MassRatio;
     }
     let what = match q {
         Quantity::PivotDamping => "c_p (1 + m2/m1) / (m2 L^2)",
@@ -741,6 +776,7 @@ pub fn check_time_scale(path: &Path, rig: &Rig<f64>, origin: RigOrigin) -> Resul
     let value = match q {
         Quantity::PivotDamping => rig.pivot_damping,
         Quantity::Viscous => rig.viscous_friction,
+        Quantity::MassRatio => rig.mass_ratio(),
         _ => rig.rod_length,
     };
     let (name, value) = origin.name(q, rig, value);
@@ -770,6 +806,7 @@ pub fn check_rig_range(path: &Path, r: &RigSpec) -> Result<(), SceneError> {
         ("rig.bob_mass", r.bob_mass),
         ("rig.pendulum_mass", r.pendulum_mass),
         ("rig.pendulum_com", r.pendulum_com),
+        ("rig.pendulum_inertia", r.pendulum_inertia),
     ] {
         if let Some(v) = v {
             check(path, within(v), key, &range, v)?;

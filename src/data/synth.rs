@@ -53,11 +53,15 @@ impl SynthOptions {
                 Err(format!("{name} must be a finite number > 0, got {v}"))
             }
         };
+        // A length far beyond any rig and camera, yet small enough that the recording's
+        // coordinates stay ones every reader takes (1e300 wrote a file no command would read).
         let nonneg = |name: &str, v: f64| {
-            if v.is_finite() && v >= 0.0 {
+            if v.is_finite() && (0.0..=MAX_SYNTH_LENGTH).contains(&v) {
                 Ok(())
             } else {
-                Err(format!("{name} must be a finite number >= 0, got {v}"))
+                Err(format!(
+                    "{name} must be a length from 0 to {MAX_SYNTH_LENGTH} m, got {v:?}"
+                ))
             }
         };
         let prob = |name: &str, v: f64| {
@@ -77,6 +81,10 @@ impl SynthOptions {
         nonneg("--outlier-size", self.outlier_size)
     }
 }
+
+/// The largest noise or outlier distance (m) `synth` adds: a thousand metres, beyond any
+/// rig and camera.
+pub const MAX_SYNTH_LENGTH: f64 = 1e3;
 
 /// A synthetic recording and the truth it was made with.
 #[derive(Debug, Clone)]

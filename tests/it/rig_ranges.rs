@@ -136,6 +136,39 @@ fn plan_after_refuses_fit_values_outside_the_rig_ranges() {
         );
     }
     assert!(!d.join("plan.svg").exists());
+    // A law's values are named where the fit JSON holds them (the messages named
+    // `rig.load_exponent` and a derived `rig.mu_kinetic_negative` no JSON has).
+    for (key, value, names) in [
+        (
+            "load_exponent",
+            5.0,
+            &["shared.load_exponent.value", "between 0.3 and 2", "got 5"][..],
+        ),
+        (
+            "mu_kinetic_split",
+            10.0,
+            &[
+                "shared.mu_kinetic.value - shared.mu_kinetic_split.value",
+                ">= 0",
+            ][..],
+        ),
+    ] {
+        let fit = fit_json(d, &format!("{key}.json"), |v| {
+            v["shared"][key] = serde_json::json!({ "value": value });
+            let cov = &mut v["shared_covariance"];
+            cov["names"].as_array_mut().unwrap().push(key.into());
+            let m = cov["matrix"].as_array_mut().unwrap();
+            for row in m.iter_mut() {
+                row.as_array_mut().unwrap().push(0.0.into());
+            }
+            let mut last = vec![serde_json::json!(0.0); 5];
+            last.push(serde_json::json!(1e-4));
+            m.push(last.into());
+        });
+        let mut all = vec![s(&fit).leak() as &str];
+        all.extend_from_slice(names);
+        refused(&plan_after(&fit, &[]), &all);
+    }
 }
 
 /// Class 2: the covariance of `plan --after`'s JSON. A variance of 1e308 printed "+- inf", a
@@ -327,7 +360,8 @@ fn stiff_rigs_are_refused_before_integrating() {
         &["regions".into(), s(&damped)],
         &[&s(&damped), "rig.pivot_damping", "time scale"],
     );
-    // A rigid body whose equivalent length L = J / (m_p d) is 1e-9 m.
+    // A rigid body whose equivalent length L = J / (m_p d) is 1e-9 m, every key within its
+    // range (J = 1e-9 kg m^2 is the least, and J >= m_p d^2).
     let tiny = edited(
         rig,
         d,
@@ -336,9 +370,9 @@ fn stiff_rigs_are_refused_before_integrating() {
             ("bob_mass", None),
             ("rod_mass", None),
             ("bob_radius", None),
-            ("pendulum_mass", Some("0.12")),
+            ("pendulum_mass", Some("1e9")),
             ("pendulum_com", Some("1e-9")),
-            ("pendulum_inertia", Some("1.2e-19")),
+            ("pendulum_inertia", Some("1e-9")),
             ("mu_kinetic", Some("0.3")),
         ],
         "[rig]",
@@ -346,6 +380,39 @@ fn stiff_rigs_are_refused_before_integrating() {
     refused(
         &["regions".into(), s(&tiny)],
         &[&s(&tiny), "equivalent length", "time scale"],
+    );
+    // A key out of its range is named itself, not through what is computed from it.
+    let inertia = edited(
+        rig,
+        d,
+        "inertia.toml",
+        &[
+            ("bob_mass", None),
+            ("rod_mass", None),
+            ("bob_radius", None),
+            ("pendulum_mass", Some("0.12")),
+            ("pendulum_com", Some("0.3")),
+            ("pendulum_inertia", Some("1e300")),
+            ("mu_kinetic", Some("0.3")),
+        ],
+        "[rig]",
+    );
+    refused(
+        &["regions".into(), s(&inertia)],
+        &[&s(&inertia), "rig.pendulum_inertia", "got 1e300"],
+    );
+    // A swing made fast by the masses (a 1e-9 kg slider under a 1e9 kg bob on a 0.3 m rod)
+    // names the mass ratio, not the rod.
+    let masses = edited(
+        "configs/paper_rest_horizontal.toml",
+        d,
+        "masses.toml",
+        &[("slider_mass", Some("1e-9")), ("bob_mass", Some("1e9"))],
+        "[rig]",
+    );
+    refused(
+        &["simulate".into(), s(&masses)],
+        &[&s(&masses), "rig.slider_mass / rig.bob_mass", "time scale"],
     );
     let scene = edited(
         "configs/paper_rest_horizontal.toml",

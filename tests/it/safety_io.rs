@@ -482,3 +482,64 @@ fn outputs_to_stdout_work_into_pipes() {
     assert!(text.starts_with("t,slider_x"), "{text}");
     assert!(stderr(&out).contains("wrote"), "{}", stderr(&out));
 }
+
+/// A named pipe as the output: written when someone reads it, and an exit 1 with the reason
+/// at once when nobody does (the command waited in `open` for ever); the pipe stays.
+#[test]
+fn a_named_pipe_nobody_reads_is_an_error_not_a_hang() {
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("out.csv");
+    let made = Command::new("mkfifo").arg(&fifo).status().unwrap();
+    assert!(made.success());
+    let scene = s(&root("configs/paper_rest_horizontal.toml"));
+    let out = run_within(&["simulate", &scene, "--out", &s(&fifo)], SECONDS);
+    no_panic(&out);
+    assert_eq!(out.status.code(), Some(1), "{}", stderr(&out));
+    assert!(
+        stderr(&out).contains("out.csv") && stderr(&out).contains("named pipe that nobody reads"),
+        "{}",
+        stderr(&out)
+    );
+    use std::os::unix::fs::FileTypeExt;
+    assert!(std::fs::metadata(&fifo).unwrap().file_type().is_fifo());
+    // With a reader, the whole trajectory arrives.
+    let path = fifo.clone();
+    let reader = std::thread::spawn(move || std::fs::read_to_string(path).unwrap());
+    let mut tries = 0;
+    let out = loop {
+        let out = run_within(&["simulate", &scene, "--out", &s(&fifo)], SECONDS);
+        // The reader may not have opened its end yet: try again briefly.
+        if out.status.code() == Some(0) || tries == 50 {
+            break out;
+        }
+        tries += 1;
+        std::thread::sleep(Duration::from_millis(20));
+    };
+    assert_eq!(out.status.code(), Some(0), "{}", stderr(&out));
+    let text = reader.join().unwrap();
+    assert!(text.starts_with("t,") && text.lines().count() > 1000);
+}
+
+/// `synth --noise` and `--outlier-size` are lengths a rig and camera can have: 1e300 wrote
+/// a recording of coordinates near 1e300 that no command would read, with exit 0.
+#[test]
+fn synth_noise_beyond_any_camera_is_refused() {
+    let dir = tempfile::tempdir().unwrap();
+    let out_csv = dir.path().join("out.csv");
+    let scene = s(&root("configs/paper_rest_horizontal.toml"));
+    for (flag, extra) in [("--noise", None), ("--outlier-size", Some("--outliers"))] {
+        let mut args = vec!["synth", &scene, out_csv.to_str().unwrap(), flag, "1e300"];
+        if let Some(e) = extra {
+            args.extend([e, "0.1"]);
+        }
+        let out = run_within(&args, SECONDS);
+        no_panic(&out);
+        assert_eq!(out.status.code(), Some(2), "{}", stderr(&out));
+        assert!(
+            stderr(&out).contains(flag) && stderr(&out).contains("got 1e300"),
+            "{}",
+            stderr(&out)
+        );
+        assert!(!out_csv.exists());
+    }
+}
