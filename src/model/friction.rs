@@ -168,6 +168,16 @@ fn load_root(d: f64, k: f64, n: f64, rhs: f64) -> Option<f64> {
     }
     let h = |u: f64| d * u + k * u.powf(n) - rhs;
     let (mut lo, mut hi) = (0.0, rhs / d);
+    if k < 0.0 && n > 1.0 {
+        // h rises to its peak at u* = (d / (-k n))^(1 / (n - 1)) and falls for ever after:
+        // the root of the branch that meets Coulomb's is below u*, and there is none when
+        // h(u*) <= 0 (doubling the bracket in search of it cost 64 powf a call).
+        let peak = (d / (-k * n)).powf(1.0 / (n - 1.0));
+        if !(peak.is_finite() && h(peak) > 0.0) {
+            return None;
+        }
+        hi = peak;
+    }
     // h(rhs / d) = k (rhs / d)^n >= 0 when k >= 0; otherwise widen.
     let mut widened = 0;
     while h(hi) <= 0.0 {
@@ -185,8 +195,10 @@ fn load_root(d: f64, k: f64, n: f64, rhs: f64) -> Option<f64> {
         0.5 * hi
     };
     for _ in 0..LOAD_ROOT_ITERS {
-        let hu = h(u);
-        if hu == 0.0 {
+        let ku = k * u.powf(n);
+        let hu = d * u + ku - rhs;
+        // Zero to rounding (h's terms carry errors of a few ulps): no step can do better.
+        if hu.abs() <= 4.0 * f64::EPSILON * (d * u + ku.abs() + rhs) {
             return Some(u);
         }
         if hu > 0.0 {
@@ -224,6 +236,13 @@ mod tests {
             // Relative to the largest term: the two terms may nearly cancel.
             assert!(h.abs() <= 1e-14 * rhs.max(d * u), "h = {h} at u = {u}");
         }
+        // k < 0 and n > 1: h peaks at u* = (d / (-k n))^2 = 7.1 for these, where it is
+        // 0.65 above zero for rhs = 0.3 (the root is the one below u*) and under zero for
+        // rhs = 2 (no root: the load law's own paradox).
+        let u = load_root(0.4, -0.1, 1.5, 0.3).expect("a root below the peak");
+        assert!(u < (0.4f64 / 0.15).powi(2));
+        assert!((0.4 * u - 0.1 * u.powf(1.5) - 0.3).abs() <= 1e-14);
+        assert_eq!(load_root(0.4, -0.1, 1.5, 2.0), None);
         let u = load_root(0.15, 0.03, 1.0, 0.9).unwrap();
         assert!((u - 0.9 / 0.18).abs() <= 1e-15 * u);
         assert_eq!(load_root(0.15, 0.03, 0.8, -0.1), None);

@@ -569,3 +569,35 @@ fn a_release_on_another_tilt_is_set_aside() {
         assert!((tilt.value / tilt.stderr).abs() < 3.0, "{tilt:?}");
     }
 }
+
+/// Releases of two rigs given with one rig file: two of the heavy rig the file describes
+/// (c12) and two of a light rig (c16). The light rig's releases agree and pin mu down, so
+/// the heavy ones were set aside and the light rig's mu reported with exit 0, its mass
+/// ratio 0.349 against the file's 1.87 +- 0.064. The rig file is a measurement: the result
+/// now fails (exit 1), saying the releases kept are not of the rig the file describes.
+#[test]
+fn releases_kept_off_the_rig_file_fail_the_joint_fit() {
+    let heavy = "tests/data/campaign37/c12_rigid_heavy_odd_mu";
+    let light = "tests/data/campaign37/c16_rigid_light_odd_tilt";
+    let mut cmd = Command::new(env!("CARGO_BIN_EXE_appell"));
+    cmd.args(["fit", "--joint", "--json", "--no-profile", "--rig"])
+        .arg(repo(&format!("{heavy}/rig_measured.toml")));
+    for f in [
+        format!("{heavy}/release_01.csv"),
+        format!("{heavy}/release_02.csv"),
+        format!("{light}/release_01.csv"),
+        format!("{light}/release_02.csv"),
+    ] {
+        cmd.arg("--release").arg(repo(&f));
+    }
+    let out = cmd.output().unwrap();
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let why = v["failed"].as_str().expect("failed");
+    assert!(
+        why.contains("equivalent_mass_ratio") && why.contains("not of the rig the rig file"),
+        "{why}"
+    );
+    assert!(v["mu_kinetic"].is_null(), "{}", v["mu_kinetic"]);
+}

@@ -230,7 +230,10 @@ pub fn fit_joint(
         .iter()
         .filter_map(|&i| kept[i].1.mu_kinetic.map(|e| e.stderr))
         .collect();
-    let failed = failure(&mu, single_se);
+    let failed = failure(&mu, single_se).or_else(|| {
+        off_the_rig_file(&shared.estimates, &model.problem.parts, &mut warnings)
+            .filter(|_| !aside.is_empty())
+    });
     // The shared parameters' correlation from their covariance, for the law's section.
     let k = shared.estimates.len();
     let correlation = DMatrix::from_fn(k, k, |i, j| {
@@ -290,6 +293,53 @@ pub fn fit_joint(
         sentence,
         warnings,
         iterations: model.iterations,
+    })
+}
+
+/// How many of the rig file's deviations a shared rod length or mass ratio may lie from the
+/// file's value before a joint result that set releases aside fails: the kept releases are
+/// then of another rig than the file describes, and those set aside may be the file's.
+const OFF_RIG_FILE: f64 = 5.0;
+
+/// The rig file as a measurement against the releases kept: each shared rod length or mass
+/// ratio beyond 3 of the file's deviations gets a warning (as a single fit's does), and the
+/// worst beyond [`OFF_RIG_FILE`] is returned as the reason the result fails when releases
+/// were set aside (half a campaign from another rig kept the other rig's releases and set
+/// the file's aside: its mass ratio 0.349 against the file's 1.87 +- 0.064, exit 0).
+fn off_the_rig_file(
+    shared: &[(Param, Estimate)],
+    parts: &[super::problem::TrajectoryProblem],
+    warnings: &mut Vec<String>,
+) -> Option<String> {
+    let mut worst: Option<(f64, String)> = None;
+    for (q, e) in shared {
+        if !matches!(q, Param::RodLength | Param::MassRatio) {
+            continue;
+        }
+        let Some(pr) = parts.iter().find_map(|p| p.prior_on(*q)) else {
+            continue;
+        };
+        let z = (e.value - pr.centre) / pr.sd;
+        if z.abs() <= 3.0 {
+            continue;
+        }
+        let said = format!(
+            "the releases kept put {} at {:.6} +- {:.1e}, {z:.1} of the rig file's deviations from its {:.6} +- {:.1e}",
+            q.name(),
+            e.value,
+            e.stderr,
+            pr.centre,
+            pr.sd
+        );
+        warnings.push(format!(
+            "{said}: check the rig file (the fit used the releases' value)"
+        ));
+        if z.abs() > OFF_RIG_FILE && worst.as_ref().is_none_or(|w| z.abs() > w.0) {
+            worst = Some((z.abs(), said));
+        }
+    }
+    worst.map(|(_, said)| {
+        format!("{said}: they are not of the rig the rig file describes, and the releases set aside may be")
     })
 }
 
