@@ -396,15 +396,20 @@ pub fn run(args: Args) -> Result<(), Failure> {
         &settings,
         args.plot.is_some(),
     )?;
+    // The report first: a figure that cannot be written must not cost the result.
+    if args.json {
+        let mut v = fit_json(&rep);
+        provenance(&mut v, &args.inputs, &args.rig);
+        outln!("{v}");
+    } else {
+        out!("{}", fit_text(&rep));
+    }
     if let Some(p) = &args.plot {
-        render(
-            p,
-            &FitFigure {
-                obs: &obs,
-                report: &rep,
-            },
-        )
-        .map_err(|e| Failure::Run(anyhow!(e)))?;
+        let figure = FitFigure {
+            obs: &obs,
+            report: &rep,
+        };
+        written(p, render(p, &figure), args.json)?;
     }
     if let Some(p) = &args.friction_plot {
         let Some(law) = &rep.friction else {
@@ -420,19 +425,25 @@ pub fn run(args: Args) -> Result<(), Failure> {
                 appell::fit::law::slide_points(&rep, &settings),
             )],
         };
-        render(p, &figure).map_err(|e| Failure::Run(anyhow!(e)))?;
-    }
-    if args.json {
-        let mut v = fit_json(&rep);
-        provenance(&mut v, &args.inputs, &args.rig);
-        outln!("{v}");
-    } else {
-        out!("{}", fit_text(&rep));
-        for p in [&args.plot, &args.friction_plot].into_iter().flatten() {
-            outln!("figure written to {}", p.display());
-        }
+        written(p, render(p, &figure), args.json)?;
     }
     Ok(())
+}
+
+/// A figure's outcome after the report: a line saying where it went (text reports), or the
+/// error, exit 1, the report already printed.
+fn written<E: std::fmt::Display>(p: &Path, r: Result<(), E>, json: bool) -> Result<(), Failure> {
+    match r {
+        Ok(()) => {
+            if !json {
+                outln!("figure written to {}", p.display());
+            }
+            Ok(())
+        }
+        Err(e) => Err(Failure::Run(anyhow!(
+            "{e} (the report above is complete; only the figure is missing)"
+        ))),
+    }
 }
 
 /// What a fit's JSON was made from: the recordings read, the rig file, and this tool's
@@ -547,8 +558,17 @@ fn run_joint(
         e => Failure::Run(anyhow!(e)),
     })?;
     rep.left_out.extend(unread);
+    // The report first: a figure that cannot be written must not cost the result.
+    if args.json {
+        let mut v = joint_json(&rep);
+        let inputs: Vec<PathBuf> = paths.iter().flatten().cloned().collect();
+        provenance(&mut v, &inputs, &args.rig);
+        outln!("{v}");
+    } else {
+        out!("{}", joint_text(&rep));
+    }
     if let Some(p) = &args.plot {
-        render(p, &JointFigure { report: &rep }).map_err(|e| Failure::Run(anyhow!(e)))?;
+        written(p, render(p, &JointFigure { report: &rep }), args.json)?;
     }
     if let Some(p) = &args.friction_plot {
         // One colour per release: each release cut into its slides at the joint optimum.
@@ -569,18 +589,7 @@ fn run_joint(
             law: &rep.friction,
             releases,
         };
-        render(p, &figure).map_err(|e| Failure::Run(anyhow!(e)))?;
-    }
-    if args.json {
-        let mut v = joint_json(&rep);
-        let inputs: Vec<PathBuf> = paths.iter().flatten().cloned().collect();
-        provenance(&mut v, &inputs, &args.rig);
-        outln!("{v}");
-    } else {
-        out!("{}", joint_text(&rep));
-        for p in [&args.plot, &args.friction_plot].into_iter().flatten() {
-            outln!("figure written to {}", p.display());
-        }
+        written(p, render(p, &figure), args.json)?;
     }
     // A failed result is reported in full, and is no answer: exit 1 with the reason.
     if let Some(why) = &rep.failed {

@@ -108,7 +108,7 @@ pub fn joint_text(rep: &JointReport) -> String {
             e.stderr,
             e.ci95[0],
             e.ci95[1],
-            q.unit()
+            crate::report::unit_of(*q, e.value)
         );
     }
     let nuis: Vec<&str> = rep.nuisances.iter().map(|n| n.name()).collect();

@@ -23,6 +23,16 @@ pub fn p_is(p: f64) -> String {
     }
 }
 
+/// The unit a report prints after a parameter's value: a tilt, fitted in radians, is also
+/// given in degrees, the unit of the rig file's `rail_tilt_deg` a lab reads it against.
+pub fn unit_of(q: crate::fit::Param, value: f64) -> String {
+    if q == crate::fit::Param::RailTilt {
+        format!("rad ({:.3} deg)", value.to_degrees())
+    } else {
+        q.unit().to_owned()
+    }
+}
+
 /// A standard error as a percentage of its value with two significant digits (`0.0014%`,
 /// `0.12%`, `3.4%`, `210%`; never `0.00%`), `-` for a value of zero.
 pub fn percent_of(se: f64, value: f64) -> String {

@@ -323,3 +323,39 @@ fn friction_plot_draws_the_slides_and_the_law() {
     let figure = std::fs::read_to_string(&joint).unwrap();
     assert!(figure.contains("campaign_direction_heavy_mirror_s1.csv"));
 }
+
+/// A figure that cannot be written does not cost the result: the whole report is printed
+/// (text and JSON), then the error names the path and the command exits 1. It used to exit 1
+/// with nothing but the error.
+#[test]
+fn a_plot_that_cannot_be_written_keeps_the_report() {
+    let dir = tempfile::tempdir().unwrap();
+    let bad = dir.path().join("no_such_dir").join("fit.svg");
+    let bad = bad.to_str().unwrap();
+    let rec = path("data/example_recording.mcap");
+    let rig = path("configs/rig_example.toml");
+    for json in [false, true] {
+        let mut args = vec!["fit", &rec, "--rig", &rig, "--no-profile", "--plot", bad];
+        if json {
+            args.push("--json");
+        }
+        let out = appell(&args);
+        let (stdout, stderr) = (
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr),
+        );
+        assert_eq!(out.status.code(), Some(1), "{stderr}");
+        assert!(
+            stderr.contains("no_such_dir") && stderr.contains("report above"),
+            "{stderr}"
+        );
+        if json {
+            let v: serde_json::Value = serde_json::from_str(stdout.trim()).unwrap();
+            assert!(v["mu_kinetic"]["value"].is_f64(), "{v}");
+        } else {
+            assert!(stdout.starts_with("mu_kinetic = "), "{stdout}");
+            assert!(stdout.contains("[[Fit statistics]]"), "{stdout}");
+            assert!(!stdout.contains("figure written"), "{stdout}");
+        }
+    }
+}

@@ -166,7 +166,7 @@ fn variables(s: &mut String, rep: &FitReport) {
             e.ci95[1],
             e.interval,
             start,
-            p.unit()
+            crate::report::unit_of(*p, e.value)
         );
     }
     // mu_static tied to mu_kinetic is said once, below, with what the data allow.
@@ -176,7 +176,12 @@ fn variables(s: &mut String, rep: &FitReport) {
         if *p == Param::MuStatic && static_said {
             continue;
         }
-        let _ = writeln!(s, "    {:<20} {v:>14.8} (fixed) {}", p.name(), p.unit());
+        let _ = writeln!(
+            s,
+            "    {:<20} {v:>14.8} (fixed) {}",
+            p.name(),
+            crate::report::unit_of(*p, *v)
+        );
     }
     match (&rep.mu_kinetic, &rep.mu_static) {
         (None, StaticResult::LowerBound(b)) => {
