@@ -79,7 +79,6 @@ script's draw loop; and every campaign regenerated into a temporary directory by
 
 import argparse
 import filecmp
-import hashlib
 import json
 import math
 import os
@@ -236,15 +235,10 @@ def write_rig_toml(out, spec):
         fh.write(body)
 
 
-def file_sha256(path):
-    with open(path, "rb") as fh:
-        return hashlib.sha256(fh.read()).hexdigest()
-
-
 def versions():
     return dict(
         python=platform.python_version(), numpy=np.__version__, scipy=scipy.__version__,
-        scripts={os.path.join("scripts", f): file_sha256(os.path.join(HERE, f))[:16]
+        scripts={os.path.join("scripts", f): cg.file_sha256(os.path.join(HERE, f))[:16]
                  for f in ("campaign_sweep_generator.py", "campaign_generator.py",
                            "misspec_generator.py", "rigid_generator.py",
                            "measured_rig_generator.py")},

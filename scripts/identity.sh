@@ -1,10 +1,11 @@
 #!/bin/bash
-# usage: identity.sh BIN OUTDIR   -- run from a checkout root (reads tests/data, configs, data, ../shared)
+# usage: identity.sh BIN OUTDIR [EXTRA_DIR]   -- run from a checkout root (reads tests/data, configs, data,
+# and recordings of your own in EXTRA_DIR when given)
 # Writes every observable output of BIN on the shipped files into OUTDIR; compare two OUTDIRs with diff -r.
 B=$(readlink -f $1); O=$(readlink -f $2); rm -rf $O; mkdir -p $O/conv $O/sim $O/fit $O/misc
 W=$(mktemp -d)
 n=0
-for f in $(find tests/data ../shared/data data -type f \( -name '*.csv' -o -name '*.tsv' -o -name '*.txt' -o -name '*.mcap' -o -name '*.h5' -o -name '*.xml' -o -name '*.trk' \) -not -path '*/fuzz/*' | sort); do
+for f in $(find tests/data data ${3:+"$3"} -type f \( -name '*.csv' -o -name '*.tsv' -o -name '*.txt' -o -name '*.mcap' -o -name '*.h5' -o -name '*.xml' -o -name '*.trk' \) -not -path '*/fuzz/*' | sort); do
   k=$(echo $f | tr '/.' '__')
   $B convert $f $W/out.csv > $O/conv/$k.stdout 2> $O/conv/$k.stderr; echo $? > $O/conv/$k.rc
   [ -f $W/out.csv ] && mv $W/out.csv $O/conv/$k.csv

@@ -563,16 +563,19 @@ impl RigOrigin<'_> {
             return e.to_string();
         };
         let from = "(a value the fit computed, read from the fit JSON)";
+        // The JSON's names are the parameters' own.
+        let (mu, split) = (Param::MuKinetic.name(), Param::FrictionSplit.name());
         match *key {
-            "load_exponent" => {
-                format!("{section}.load_exponent.value {from} must be {expected}, got {value}")
-            }
-            "mu_kinetic_positive" | "mu_kinetic_negative" | "kinetic split" => format!(
-                "the kinetic coefficient {key} = {section}.mu_kinetic.value {} {section}.mu_kinetic_split.value {from} must be {expected}, got {value}",
+            "load_exponent" => format!(
+                "{section}.{}.value {from} must be {expected}, got {value}",
+                Param::LoadExponent.name()
+            ),
+            "mu_kinetic_positive" | "mu_kinetic_negative" => format!(
+                "the kinetic coefficient {key} = {section}.{mu}.value {} {section}.{split}.value {from} must be {expected}, got {value}",
                 if *key == "mu_kinetic_negative" { "-" } else { "+" }
             ),
             _ => format!(
-                "{key}, from {section}.mu_kinetic.value, {section}.mu_kinetic_split.value and the plan's mu_static {from}, must be {expected}, got {value}"
+                "{key}, from {section}.{mu}.value, {section}.{split}.value and the plan's mu_static {from}, must be {expected}, got {value}"
             ),
         }
     }
@@ -722,6 +725,11 @@ pub fn check_rig(path: &Path, rig: &Rig<f64>, origin: RigOrigin) -> Result<(), S
     Ok(())
 }
 
+/// The pendulum's swing rate sqrt(g (1 + m2/m1) / L) with the slider free, `free` = 1 + m2/m1.
+fn swing_rate(rig: &Rig<f64>, free: f64) -> f64 {
+    (rig.gravity * free / rig.rod_length).sqrt()
+}
+
 /// The rig's fastest rate (1/s) and the quantity that sets it: the pendulum's swing with the
 /// slider free, sqrt(g (1 + m2/m1) / L); the pivot damping's c_p (1 + m2/m1) / (m2 L^2); the
 /// rail's viscous friction c_v / m1 (the dynamics' point rig: m2 and L a rigid pendulum's
@@ -730,7 +738,7 @@ fn rig_rate(rig: &Rig<f64>) -> (f64, Quantity) {
     let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);
     let free = 1.0 + m2 / m1;
     [
-        ((rig.gravity * free / l).sqrt(), Quantity::Length),
+        (swing_rate(rig, free), Quantity::Length),
         (
             rig.pivot_damping * free / (m2 * l * l),
             Quantity::PivotDamping,
@@ -765,7 +773,7 @@ pub fn check_time_scale(path: &Path, rig: &Rig<f64>, origin: RigOrigin) -> Resul
     }
     // A swing too fast on a pendulum that would pass with equal masses: the masses' ratio
     // sets it (a 1e-9 kg slider under a 1e9 kg bob), not the length.
-    if q == Quantity::Length && (2.0 * rig.gravity / rig.rod_length).sqrt() <= MAX_RIG_RATE {
+    if q == Quantity::Length && swing_rate(rig, 2.0) <= MAX_RIG_RATE {
         q = Quantity::MassRatio;
     }
     let what = match q {

@@ -246,6 +246,44 @@ pub struct RigValue {
     pub z: f64,
 }
 
+impl RigValue {
+    /// The rig file's measured values among fitted `params` (the rod length and the mass
+    /// ratio), `prior_on` giving the file's prior on each.
+    pub(crate) fn of<'a>(
+        params: &[(Param, Estimate)],
+        prior_on: impl Fn(Param) -> Option<&'a priors::Prior>,
+    ) -> Vec<RigValue> {
+        params
+            .iter()
+            .filter(|(q, _)| matches!(q, Param::RodLength | Param::MassRatio))
+            .filter_map(|(q, e)| {
+                let pr = prior_on(*q)?;
+                Some(RigValue {
+                    param: q.name(),
+                    file: pr.centre,
+                    sd: pr.sd,
+                    value: e.value,
+                    stderr: e.stderr,
+                    z: (e.value - pr.centre) / pr.sd,
+                })
+            })
+            .collect()
+    }
+
+    /// Whether the data moved it beyond 3 of the file's deviations: worth a warning.
+    pub(crate) fn off(&self) -> bool {
+        self.z.abs() > 3.0
+    }
+
+    /// What `who` ("the recording puts") says of it, for warnings.
+    pub(crate) fn said(&self, who: &str) -> String {
+        format!(
+            "{who} {} at {:.6} +- {:.1e}, {:.1} of the rig file's deviations from its {:.6} +- {:.1e}",
+            self.param, self.value, self.stderr, self.z, self.file, self.sd
+        )
+    }
+}
+
 /// What the recording says about mu_static.
 #[derive(Debug, Clone, PartialEq)]
 pub enum StaticResult {

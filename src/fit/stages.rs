@@ -791,26 +791,12 @@ pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
             total,
         }
     });
-    let rig_values: Vec<RigValue> = est
-        .params
-        .iter()
-        .filter_map(|(q, e)| {
-            let pr = problem.prior_on(*q)?;
-            matches!(q, Param::RodLength | Param::MassRatio).then(|| RigValue {
-                param: q.name(),
-                file: pr.centre,
-                sd: pr.sd,
-                value: e.value,
-                stderr: e.stderr,
-                z: (e.value - pr.centre) / pr.sd,
-            })
-        })
-        .collect();
+    let rig_values = RigValue::of(&est.params, |q| problem.prior_on(q));
     let mut warnings = f.warnings;
-    for r in rig_values.iter().filter(|r| r.z.abs() > 3.0) {
+    for r in rig_values.iter().filter(|r| r.off()) {
         warnings.push(format!(
-            "the recording puts {} at {:.6} +- {:.1e}, {:.1} of the rig file's deviations from its {:.6} +- {:.1e}: check the rig file (the fit used the recording's value)",
-            r.param, r.value, r.stderr, r.z, r.file, r.sd
+            "{}: check the rig file (the fit used the recording's value)",
+            r.said("the recording puts")
         ));
     }
     let friction = identifiable.then(|| {

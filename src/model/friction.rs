@@ -195,7 +195,9 @@ fn load_root(d: f64, k: f64, n: f64, rhs: f64) -> Option<f64> {
         0.5 * hi
     };
     for _ in 0..LOAD_ROOT_ITERS {
-        let ku = k * u.powf(n);
+        // One powf an iteration: u^n = u u^(n-1), and the slope needs u^(n-1) too.
+        let un1 = u.powf(n - 1.0);
+        let ku = k * u * un1;
         let hu = d * u + ku - rhs;
         // Zero to rounding (h's terms carry errors of a few ulps): no step can do better.
         if hu.abs() <= 4.0 * f64::EPSILON * (d * u + ku.abs() + rhs) {
@@ -206,7 +208,7 @@ fn load_root(d: f64, k: f64, n: f64, rhs: f64) -> Option<f64> {
         } else {
             lo = u;
         }
-        let slope = d + k * n * u.powf(n - 1.0);
+        let slope = d + k * n * un1;
         let mut next = u - hu / slope;
         if !(next > lo && next < hi) {
             next = 0.5 * (lo + hi);

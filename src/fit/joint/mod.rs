@@ -31,7 +31,7 @@ pub use rigs::other_rigs;
 use super::intervals::model_uncertainty;
 use super::problem::{Observations, Param};
 use super::select::{self, ModelRow, Nuisance};
-use super::{Estimate, FitError, FitSettings};
+use super::{Estimate, FitError, FitSettings, RigValue};
 use crate::model::Rig;
 use nalgebra::DMatrix;
 use serde::Serialize;
@@ -230,10 +230,9 @@ pub fn fit_joint(
         .iter()
         .filter_map(|&i| kept[i].1.mu_kinetic.map(|e| e.stderr))
         .collect();
-    let failed = failure(&mu, single_se).or_else(|| {
-        off_the_rig_file(&shared.estimates, &model.problem.parts, &mut warnings)
-            .filter(|_| !aside.is_empty())
-    });
+    // Warned of whether or not the result fails for another reason.
+    let off_rig = off_the_rig_file(&shared.estimates, &model.problem.parts, &mut warnings);
+    let failed = failure(&mu, single_se).or(off_rig.filter(|_| !aside.is_empty()));
     // The shared parameters' correlation from their covariance, for the law's section.
     let k = shared.estimates.len();
     let correlation = DMatrix::from_fn(k, k, |i, j| {
@@ -311,36 +310,23 @@ fn off_the_rig_file(
     parts: &[super::problem::TrajectoryProblem],
     warnings: &mut Vec<String>,
 ) -> Option<String> {
-    let mut worst: Option<(f64, String)> = None;
-    for (q, e) in shared {
-        if !matches!(q, Param::RodLength | Param::MassRatio) {
-            continue;
-        }
-        let Some(pr) = parts.iter().find_map(|p| p.prior_on(*q)) else {
-            continue;
-        };
-        let z = (e.value - pr.centre) / pr.sd;
-        if z.abs() <= 3.0 {
-            continue;
-        }
-        let said = format!(
-            "the releases kept put {} at {:.6} +- {:.1e}, {z:.1} of the rig file's deviations from its {:.6} +- {:.1e}",
-            q.name(),
-            e.value,
-            e.stderr,
-            pr.centre,
-            pr.sd
-        );
+    let values = RigValue::of(shared, |q| parts.iter().find_map(|p| p.prior_on(q)));
+    for r in values.iter().filter(|r| r.off()) {
         warnings.push(format!(
-            "{said}: check the rig file (the fit used the releases' value)"
+            "{}: check the rig file (the fit used the releases' value)",
+            r.said("the releases kept put")
         ));
-        if z.abs() > OFF_RIG_FILE && worst.as_ref().is_none_or(|w| z.abs() > w.0) {
-            worst = Some((z.abs(), said));
-        }
     }
-    worst.map(|(_, said)| {
-        format!("{said}: they are not of the rig the rig file describes, and the releases set aside may be")
-    })
+    values
+        .iter()
+        .filter(|r| r.z.abs() > OFF_RIG_FILE)
+        .max_by(|a, b| a.z.abs().total_cmp(&b.z.abs()))
+        .map(|r| {
+            format!(
+                "{}: they are not of the rig the rig file describes, and the releases set aside may be",
+                r.said("the releases kept put")
+            )
+        })
 }
 
 /// Why the joint result `mu` is no measurement, if it is none: its standard error above the

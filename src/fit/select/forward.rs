@@ -344,14 +344,14 @@ fn fit_jobs<M: Candidate>(
     crit: &Criterion,
 ) -> Vec<Fitted<M>> {
     let (cur_problem, _, cur_chi2) = &s.current;
+    let budget = match opts.first_iters {
+        0 => opts.max_iters,
+        n => n.min(opts.max_iters),
+    };
     let run = |jobs: Vec<Job<M>>| {
         jobs.into_par_iter()
             .with_max_len(1)
             .map(|(set, m, parent)| {
-                let budget = match opts.first_iters {
-                    0 => opts.max_iters,
-                    n => n.min(opts.max_iters),
-                };
                 let (solved, capped) = fit_candidate_within(&m, fresh, opts, parent, budget);
                 (set, m, solved, capped && budget < opts.max_iters, parent)
             })
@@ -388,24 +388,12 @@ fn finish_near<M: Candidate>(
     opts: &SelectOptions<M::Start>,
     crit: &Criterion,
 ) {
-    let bic_of = |m: &M, solved: &Outcome| {
-        solved.as_ref().map_or(f64::INFINITY, |(_, cost, _)| {
-            crit.bic(m.n_free(), chi2_of(*cost))
-        })
-    };
-    let best = fits
-        .iter()
-        .map(|f| bic_of(&f.1, &f.2))
-        .fold(f64::INFINITY, f64::min);
-    let best_chi2 = fits
-        .iter()
-        .filter_map(|f| f.2.as_ref().ok().map(|(_, cost, _)| chi2_of(*cost)))
-        .fold(f64::INFINITY, f64::min);
-    let margin = HELD_MARGIN.max(FAR_SHARE * best_chi2);
+    let near = near_best(fits.iter().map(|f| (&f.1, &f.2)), FAR_SHARE, crit);
     fits.par_iter_mut()
         .with_max_len(1)
-        .filter(|f| f.3 && (f.2.is_err() || bic_of(&f.1, &f.2) <= best + margin))
-        .for_each(|(_, m, solved, capped, parent)| {
+        .zip(near)
+        .filter(|(f, near)| f.3 && (f.2.is_err() || *near))
+        .for_each(|((_, m, solved, capped, parent), _)| {
             // On from where it stopped (the better start's point), or afresh when it failed.
             let (again, spent) = match solved {
                 Ok((q, _, it)) => {
@@ -420,6 +408,27 @@ fn finish_near<M: Candidate>(
         });
 }
 
+/// For each fitted candidate, whether its criterion is within `share` of the round's best
+/// chi-square (or [`HELD_MARGIN`], when more) of the best criterion; a failed one is not.
+fn near_best<'a, M: Candidate + 'a>(
+    fits: impl Iterator<Item = (&'a M, &'a Outcome)> + Clone,
+    share: f64,
+    crit: &Criterion,
+) -> Vec<bool> {
+    let bic_of = |(m, solved): (&M, &Outcome)| {
+        solved.as_ref().map_or(f64::INFINITY, |(_, cost, _)| {
+            crit.bic(m.n_free(), chi2_of(*cost))
+        })
+    };
+    let best = fits.clone().map(bic_of).fold(f64::INFINITY, f64::min);
+    let best_chi2 = fits
+        .clone()
+        .filter_map(|(_, s)| s.as_ref().ok().map(|(_, cost, _)| chi2_of(*cost)))
+        .fold(f64::INFINITY, f64::min);
+    let margin = HELD_MARGIN.max(share * best_chi2);
+    fits.map(|f| bic_of(f) <= best + margin).collect()
+}
+
 /// The held-rig start ([`held_rig_start`]) for each fitted candidate within [`HELD_MARGIN`]
 /// of the round's best criterion, in parallel.
 fn held_starts<M: Candidate>(
@@ -428,18 +437,7 @@ fn held_starts<M: Candidate>(
     opts: &SelectOptions<M::Start>,
     crit: &Criterion,
 ) {
-    let bic_of = |f: &Fitted<M>| {
-        f.2.as_ref().map_or(f64::INFINITY, |(_, cost, _)| {
-            crit.bic(f.1.n_free(), chi2_of(*cost))
-        })
-    };
-    let best = fits.iter().map(bic_of).fold(f64::INFINITY, f64::min);
-    let best_chi2 = fits
-        .iter()
-        .filter_map(|f| f.2.as_ref().ok().map(|(_, cost, _)| chi2_of(*cost)))
-        .fold(f64::INFINITY, f64::min);
-    let margin = HELD_MARGIN.max(HELD_SHARE * best_chi2);
-    let near: Vec<bool> = fits.iter().map(|f| bic_of(f) <= best + margin).collect();
+    let near = near_best(fits.iter().map(|f| (&f.1, &f.2)), HELD_SHARE, crit);
     fits.par_iter_mut()
         .with_max_len(1)
         .zip(near)
