@@ -30,8 +30,9 @@ pub struct RigSpec {
     pub pendulum_com: Option<f64>,
     /// The pendulum's moment of inertia about the pivot (kg m^2).
     pub pendulum_inertia: Option<f64>,
-    /// Gravity (m/s^2).
-    pub gravity: f64,
+    /// Gravity (m/s^2); when left out, [`EARTH_GRAVITY`] (a fit can take Earth's at the lab's
+    /// latitude instead, [`normal_gravity`]).
+    pub gravity: Option<f64>,
     /// Kinetic friction coefficient (required in scenes; a starting guess in rig files for
     /// fitting, where it may be left out).
     pub mu_kinetic: Option<f64>,
@@ -72,9 +73,17 @@ pub struct RigSpec {
     pub rod_mass_sd: Option<f64>,
     /// Standard deviation of `bob_radius` (m); default 0.5 mm.
     pub bob_radius_sd: Option<f64>,
+    /// Standard deviation of `gravity` (m/s^2) for the fit; default 0 (held as typed), 0.015
+    /// when `gravity` is left out.
+    pub gravity_sd: Option<f64>,
 }
 
 impl RigSpec {
+    /// The rig's gravity: the file's `gravity`, or [`EARTH_GRAVITY`].
+    pub fn gravity(&self) -> f64 {
+        self.gravity.unwrap_or(EARTH_GRAVITY)
+    }
+
     /// The validated rig.
     pub fn rig(&self) -> Result<Rig<f64>, RigError> {
         let law = self.friction_law.unwrap_or_default();
@@ -82,7 +91,7 @@ impl RigSpec {
         let mut rig = self.pendulum_keys().rig(
             self.slider_mass,
             self.rod_length,
-            self.gravity,
+            self.gravity(),
             friction.mu_kinetic,
             Some(friction.mu_static),
         )?;
@@ -475,6 +484,35 @@ pub const RIG_MAX: f64 = 1e9;
 /// fit for minutes to a meaningless answer.
 pub const GRAVITY_RANGE: [f64; 2] = [0.1, 30.0];
 
+/// The gravity of a rig file without `gravity` (m/s^2): Earth's, rounded. At sea level Earth's
+/// is 9.780 at the equator to 9.832 at the poles, so the default is within 0.3 % anywhere a lab
+/// stands, and a fit says so (a fitted mu carries that 0.3 %, see [`RigFile::load_measured`]).
+pub const EARTH_GRAVITY: f64 = 9.81;
+
+/// The standard deviation of [`EARTH_GRAVITY`] for a rig file without `gravity` (m/s^2): the
+/// spread of a uniform 9.780 to 9.832, the equator to the poles.
+pub const EARTH_GRAVITY_SD: f64 = 0.015;
+/// The standard deviation of [`normal_gravity`] at a known site (m/s^2): local anomalies.
+pub const SITE_GRAVITY_SD: f64 = 0.003;
+
+/// The latitudes (deg) and altitudes (m) [`normal_gravity`] takes: the Earth's, from the Dead
+/// Sea's shore to the highest observatories.
+pub const LATITUDE_RANGE: [f64; 2] = [-90.0, 90.0];
+/// See [`LATITUDE_RANGE`].
+pub const ALTITUDE_RANGE: [f64; 2] = [-500.0, 6000.0];
+
+/// Earth's normal gravity (m/s^2) at a geodetic latitude (deg) and an altitude above the
+/// ellipsoid (m): the WGS 84 Somigliana formula with the free-air gradient. Local anomalies
+/// (mountains, dense rock) are below 0.03 %, a tenth of what the latitude alone changes.
+pub fn normal_gravity(latitude_deg: f64, altitude_m: f64) -> f64 {
+    // WGS 84: equatorial gravity, Somigliana's constant k and the first eccentricity squared.
+    const G_E: f64 = 9.780_325_335_9;
+    const K: f64 = 0.001_931_852_652_41;
+    const E2: f64 = 0.006_694_379_990_13;
+    let s2 = latitude_deg.to_radians().sin().powi(2);
+    G_E * (1.0 + K * s2) / (1.0 - E2 * s2).sqrt() - 3.086e-6 * altitude_m
+}
+
 /// Check `rig.gravity` against [`GRAVITY_RANGE`]: every file with a rig (scene, rig file,
 /// plan) calls it, so simulate, fit, regions and plan refuse alike.
 pub fn check_gravity(path: &Path, gravity: f64) -> Result<(), SceneError> {
@@ -841,13 +879,14 @@ pub fn check_rig_range(path: &Path, r: &RigSpec) -> Result<(), SceneError> {
         &range,
         r.rod_length,
     )?;
-    check_gravity(path, r.gravity)?;
+    check_gravity(path, r.gravity())?;
     for (key, sd, value) in [
         ("rig.rod_length_sd", r.rod_length_sd, Some(r.rod_length)),
         ("rig.slider_mass_sd", r.slider_mass_sd, Some(r.slider_mass)),
         ("rig.bob_mass_sd", r.bob_mass_sd, r.bob_mass),
         ("rig.rod_mass_sd", r.rod_mass_sd, r.rod_mass),
         ("rig.bob_radius_sd", r.bob_radius_sd, r.bob_radius),
+        ("rig.gravity_sd", r.gravity_sd, Some(r.gravity())),
     ] {
         if let Some(sd) = sd {
             let value = value.unwrap_or(0.0);
@@ -1031,11 +1070,45 @@ impl RigFile {
     /// [`RigFile::load_for_fit`] with the `[rig]` section as written (its measurement
     /// uncertainties: `*_sd` keys).
     pub fn load_measured(path: &Path, mu_guess: f64) -> Result<(Rig<f64>, RigSpec), SceneError> {
+        Self::load_on_earth(path, mu_guess, None).map(|(rig, spec, _)| (rig, spec))
+    }
+
+    /// [`RigFile::load_measured`] for a fit on Earth: a file without `gravity` takes Earth's
+    /// normal gravity at `site` (latitude in deg, altitude in m; [`normal_gravity`]) or else
+    /// [`EARTH_GRAVITY`], and the third value is the note the fit reports about it (`None`
+    /// when the file gives gravity).
+    pub fn load_on_earth(
+        path: &Path,
+        mu_guess: f64,
+        site: Option<(f64, f64)>,
+    ) -> Result<(Rig<f64>, RigSpec, Option<String>), SceneError> {
         let file: RigFile = parse_toml(&read_text(path, MAX_TOML_BYTES)?, path)?;
-        let spec = file.rig.with_guess(mu_guess);
+        let mut measured = file.rig;
+        // Gravity is a measured value like the rod and the masses: the fit takes it with a
+        // prior of this deviation, and the recording (its swings) pins it far better.
+        let note = match (measured.gravity, site) {
+            (Some(_), _) => None,
+            (None, Some((lat, alt))) => {
+                let g = normal_gravity(lat, alt);
+                measured.gravity = Some(g);
+                measured.gravity_sd = measured.gravity_sd.or(Some(SITE_GRAVITY_SD));
+                Some(format!(
+                    "{}: rig.gravity not given: {g:.4} +- {SITE_GRAVITY_SD} m/s^2, Earth's normal gravity at latitude {lat} deg and altitude {alt} m (WGS 84; local anomalies are below 0.03 %), fitted with the rod and the masses",
+                    path.display()
+                ))
+            }
+            (None, None) => {
+                measured.gravity_sd = measured.gravity_sd.or(Some(EARTH_GRAVITY_SD));
+                Some(format!(
+                    "{}: rig.gravity not given: {EARTH_GRAVITY} +- {EARTH_GRAVITY_SD} m/s^2 (Earth's is 9.780 at the equator to 9.832 at the poles), fitted with the rod and the masses; give rig.gravity or --latitude to narrow it",
+                    path.display()
+                ))
+            }
+        };
+        let spec = measured.with_guess(mu_guess);
         // The time scale is checked by the fit once the rig is compared with the recording
         // (a rod its markers contradict is the better message).
-        Ok((spec.checked(path)?, file.rig))
+        Ok((spec.checked(path)?, measured, note))
     }
 
     /// Parse and validate rig-file text, its time scale included; `path` only labels errors.
@@ -1044,5 +1117,25 @@ impl RigFile {
         let rig = file.rig.checked(path)?;
         check_time_scale(path, &rig, RigOrigin::File { friction: "rig" })?;
         Ok(rig)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn normal_gravity_matches_the_published_values() {
+        // WGS 84's own table: 9.7803253359 at the equator, 9.8321849379 at the poles; the
+        // free-air gradient 0.3086 mGal/m.
+        assert!((normal_gravity(0.0, 0.0) - 9.780_325_335_9).abs() < 1e-9);
+        assert!((normal_gravity(90.0, 0.0) - 9.832_184_937_9).abs() < 1e-8);
+        assert!((normal_gravity(-90.0, 0.0) - normal_gravity(90.0, 0.0)).abs() < 1e-12);
+        assert!((normal_gravity(45.0, 0.0) - 9.806_2).abs() < 1e-3);
+        assert!((normal_gravity(45.0, 1000.0) - normal_gravity(45.0, 0.0) + 3.086e-3).abs() < 1e-9);
+        // The default is Earth's within 0.3 % at any latitude.
+        for lat in [0.0, 30.0, 60.0, 90.0] {
+            assert!((normal_gravity(lat, 0.0) / EARTH_GRAVITY - 1.0).abs() < 3.1e-3);
+        }
     }
 }

@@ -49,6 +49,13 @@ pub struct Args {
     /// Rig file: the [rig] section of a scene; mu values there are only starting guesses.
     #[arg(long, value_name = "RIG.toml")]
     rig: PathBuf,
+    /// The lab's latitude (deg, -90 to 90): a rig file without `gravity` takes Earth's normal
+    /// gravity there instead of 9.81 m/s^2 (a file's `gravity` is used as written).
+    #[arg(long, value_name = "DEG", allow_negative_numbers = true, value_parser = latitude)]
+    latitude: Option<f64>,
+    /// The lab's altitude (m) with --latitude (default 0, sea level).
+    #[arg(long, value_name = "M", requires = "latitude", allow_negative_numbers = true, value_parser = altitude)]
+    altitude: Option<f64>,
     /// Print JSON (one object; one line per recording for a directory).
     #[arg(long)]
     json: bool,
@@ -118,6 +125,24 @@ fn nuisance(name: &str) -> Result<Nuisance, String> {
             let names: Vec<&str> = Nuisance::ALL.iter().map(|n| n.name()).collect();
             format!("expected one of {}", names.join(", "))
         })
+}
+
+/// A number within `[lo, hi]`, for `--latitude` and `--altitude`.
+fn within(text: &str, [lo, hi]: [f64; 2], unit: &str) -> Result<f64, String> {
+    match text.trim().parse::<f64>() {
+        Ok(v) if (lo..=hi).contains(&v) => Ok(v),
+        _ => Err(format!("expected a number of {unit} from {lo} to {hi}")),
+    }
+}
+
+/// Parse `--latitude` (deg).
+fn latitude(text: &str) -> Result<f64, String> {
+    within(text, appell::scene::LATITUDE_RANGE, "degrees")
+}
+
+/// Parse `--altitude` (m).
+fn altitude(text: &str) -> Result<f64, String> {
+    within(text, appell::scene::ALTITUDE_RANGE, "metres")
 }
 
 /// Parse `--noise`: metres, or pixels (`px` suffix) times the recording's --scale.
@@ -305,15 +330,18 @@ pub fn run(args: Args) -> Result<(), Failure> {
         .recording
         .resolve()
         .map_err(|e| Failure::Input(anyhow!(e)))?;
-    let (rig, spec) =
-        RigFile::load_measured(&args.rig, 0.3).map_err(|e| Failure::Input(e.into()))?;
+    let site = args.latitude.map(|lat| (lat, args.altitude.unwrap_or(0.0)));
+    let (rig, spec, gravity_note) =
+        RigFile::load_on_earth(&args.rig, 0.3, site).map_err(|e| Failure::Input(e.into()))?;
     let mut settings = settings(&args).map_err(|e| Failure::Input(anyhow!(e)))?;
     for p in [&args.plot, &args.friction_plot].into_iter().flatten() {
         appell::report::plot::ImageFormat::from_path(p).map_err(|e| Failure::Input(e.into()))?;
     }
     // The rig file is the measurement it is: its rod length and mass ratio are fitted with
     // its deviations as priors (docs/fit.md, "The rig file is a measurement").
-    settings.measured = Some(appell::fit::priors::RigMeasurement::from_spec(&spec));
+    let mut measured = appell::fit::priors::RigMeasurement::from_spec(&spec);
+    measured.notes.extend(gravity_note);
+    settings.measured = Some(measured);
     if args.joint {
         return run_joint(&args, &opts, &rig, &settings);
     }

@@ -26,7 +26,13 @@ pub fn calibrate(
                 return Err("no frame shows both markers, so --rod-length cannot set the scale: give --scale".into());
             }
             let m = median(&mut d);
-            (l / m, format!("from --rod-length {l} m over a median of {m} file units"))
+            (
+                l / m,
+                format!(
+                    "from --rod-length {l} m over a median of {} file units",
+                    significant(m)
+                ),
+            )
         }
         (None, None, None) => {
             return Err("the file's positions have no units (pixels): give --scale METRES_PER_UNIT or --rod-length METRES".into())
@@ -251,6 +257,13 @@ fn distance_noise(rec: &Recording) -> f64 {
         return 0.0;
     }
     (median(&mut third) / 0.4549 / 20.0).sqrt()
+}
+
+/// `x` to seven significant digits, written as briefly as that allows (0.0006666666707 reads
+/// 0.0006666667, 449.9999972682611 reads 450): a derived number carries no more.
+pub fn significant(x: f64) -> String {
+    let rounded: f64 = format!("{x:.6e}").parse().unwrap_or(x);
+    format!("{rounded}")
 }
 
 #[cfg(test)]

@@ -254,7 +254,7 @@ impl Recording {
         let c = &p.calibration;
         s += &format!(
             "scale: {} m per file unit ({}); y {}\n",
-            c.scale,
+            super::calibrate::significant(c.scale),
             c.scale_source,
             if c.y_flipped {
                 "down in the file, flipped to up"

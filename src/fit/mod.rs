@@ -255,7 +255,7 @@ impl RigValue {
     ) -> Vec<RigValue> {
         params
             .iter()
-            .filter(|(q, _)| matches!(q, Param::RodLength | Param::MassRatio))
+            .filter(|(q, _)| q.is_measured())
             .filter_map(|(q, e)| {
                 let pr = prior_on(*q)?;
                 Some(RigValue {
@@ -476,7 +476,11 @@ pub fn fit(
     settings: &FitSettings,
 ) -> Result<FitReport, FitError> {
     let data = prepare::prepare(obs, settings)?;
-    let mut warnings = Vec::new();
+    let mut warnings: Vec<String> = settings
+        .measured
+        .iter()
+        .flat_map(|m| m.notes.clone())
+        .collect();
     let started = priors::start_from_markers(&data.obs, rig_guess, settings.measured.as_ref());
     let rig_guess = &started;
     let base = base::fit(&data.obs, rig_guess, data.sigma, settings, &mut warnings)?;

@@ -366,7 +366,7 @@ fn rig_fraction(problem: &TrajectoryProblem, cov: &DMatrix<f64>, i: usize) -> f6
         .free
         .iter()
         .enumerate()
-        .filter(|(_, q)| matches!(q, Param::RodLength | Param::MassRatio))
+        .filter(|(_, q)| q.is_measured())
         .filter(|(_, q)| problem.prior_on(**q).is_some())
         .map(|(j, _)| j)
         .collect();

@@ -30,8 +30,8 @@ pub struct PlanRigSpec {
     pub pendulum_com: Option<f64>,
     /// Moment of inertia about the pivot (kg m^2).
     pub pendulum_inertia: Option<f64>,
-    /// Gravity (m/s^2).
-    pub gravity: f64,
+    /// Gravity (m/s^2); default [`crate::scene::EARTH_GRAVITY`].
+    pub gravity: Option<f64>,
 }
 
 /// The `[friction]` section: the estimate of mu and how uncertain it is, as a standard
@@ -621,6 +621,7 @@ impl PlanRigSpec {
             bob_mass_sd: None,
             rod_mass_sd: None,
             bob_radius_sd: None,
+            gravity_sd: None,
         };
         let rig = spec.checked(path).map_err(|e| match e {
             SceneError::Invalid { path, message } => SceneError::Invalid {

@@ -10,6 +10,51 @@ use plotters::prelude::*;
 use serde_json::{json, Value};
 use std::fmt::Write as _;
 
+/// The joint fit's one-line answer, in the single fit's words: `mu_kinetic = V +- E (95 %: LO
+/// to HI) from N releases (K set aside), ...` with the verdict (the releases agree, or the
+/// interval holds their disagreement, or the joint model needs what no rig has), or why there
+/// is no value.
+pub fn joint_answer(rep: &JointReport) -> String {
+    let n = rep.releases.len();
+    let aside = match rep.set_aside.len() {
+        0 => String::new(),
+        k => format!(", {k} set aside"),
+    };
+    if let Some(why) = &rep.failed {
+        return format!(
+            "mu_kinetic not measured, the joint fit of {n} releases{aside} failed: {why}"
+        );
+    }
+    let e = &rep.mu_kinetic;
+    let d = crate::report::two_digit_decimals(e.stderr).map_or(6, |d| d.min(12));
+    let head = format!(
+        "mu_kinetic = {} (95 %: {:.d$} to {:.d$}) from {n} releases{aside}",
+        crate::report::fit::value_pm(e.value, e.stderr),
+        e.ci95[0],
+        e.ci95[1],
+    );
+    let agree = rep
+        .consistency_p
+        .map_or(String::new(), |p| format!(" ({})", crate::report::p_is(p)));
+    if !rep.implausible.is_empty() {
+        let needs: Vec<&str> = rep
+            .implausible
+            .iter()
+            .map(|s| s.split(" is beyond").next().unwrap_or(s))
+            .collect();
+        format!(
+            "{head}, limited by the model: needs {}; check on the rig what it names (below)",
+            needs.join(", needs ")
+        )
+    } else if e.interval.contains("releases") {
+        format!(
+            "{head}, limited by the releases' disagreement{agree}; the interval holds their spread"
+        )
+    } else {
+        format!("{head}, the releases agree{agree}")
+    }
+}
+
 fn estimate_json(e: &Estimate) -> Value {
     json!({"value": e.value, "stderr": e.stderr, "ci95": e.ci95, "interval": e.interval})
 }
@@ -51,6 +96,7 @@ pub fn joint_json(rep: &JointReport) -> Value {
         "n_params": rep.n_params,
         "models": rep.models,
         "sentence": rep.sentence,
+        "answer": joint_answer(rep),
         "warnings": rep.warnings,
         "iterations": rep.iterations,
     })
@@ -59,28 +105,9 @@ pub fn joint_json(rep: &JointReport) -> Value {
 /// The joint fit as text: the shared parameters, the plain sentence, the releases' table.
 pub fn joint_text(rep: &JointReport) -> String {
     let mut s = String::new();
-    let e = &rep.mu_kinetic;
-    let aside = match rep.set_aside.len() {
-        0 => String::new(),
-        k => format!(" ({k} set aside)"),
-    };
-    if let Some(why) = &rep.failed {
-        let _ = writeln!(
-            s,
-            "joint fit of {} releases{aside}: FAILED, no value for mu_kinetic: {why}",
-            rep.releases.len()
-        );
-    } else {
-        let _ = writeln!(
-            s,
-            "joint fit of {} releases{aside}: mu_kinetic {:.6} +- {:.2e}, 95% [{:.6}, {:.6}] [{}]",
-            rep.releases.len(),
-            e.value,
-            e.stderr,
-            e.ci95[0],
-            e.ci95[1],
-            e.interval
-        );
+    let _ = writeln!(s, "{}", joint_answer(rep));
+    if rep.failed.is_some() {
+        let _ = writeln!(s, "FAILED: no value for mu_kinetic.");
     }
     let _ = writeln!(s, "{}", rep.sentence);
     if !rep.implausible.is_empty() {
@@ -100,14 +127,16 @@ pub fn joint_text(rep: &JointReport) -> String {
         }
     );
     for (q, e) in &rep.shared {
+        // Digits from the standard error, as in the answer line.
+        let d = crate::report::two_digit_decimals(e.stderr).map_or(6, |d| d.min(12));
         let _ = writeln!(
             s,
-            "  {:<22} {:>12.6e} +- {:.2e}  [{:.6e}, {:.6e}] {}",
+            "  {:<22} {:>24}  (95 %: {:.d$} to {:.d$}) [{}] {}",
             q.name(),
-            e.value,
-            e.stderr,
+            crate::report::fit::value_pm(e.value, e.stderr),
             e.ci95[0],
             e.ci95[1],
+            e.interval,
             crate::report::unit_of(*q, e.value)
         );
     }

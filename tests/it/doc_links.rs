@@ -22,12 +22,12 @@ const PREFIXES: [&str; 10] = [
 /// The only file that may mention `../shared` (developer data beside a checkout).
 const SHARED_ALLOWED: &str = "docs/development.md";
 
-fn root() -> PathBuf {
+pub(crate) fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
 }
 
 /// The documents checked, relative to the repository root.
-fn documents() -> Vec<String> {
+pub(crate) fn documents() -> Vec<String> {
     let mut docs: Vec<String> = std::fs::read_dir(root().join("docs"))
         .expect("docs/ exists")
         .map(|e| e.unwrap().path())

@@ -7,6 +7,7 @@ mod cli_fit;
 mod cli_messages;
 mod cli_regions;
 mod cli_simulate;
+mod doc_commands;
 mod doc_links;
 mod fit;
 mod fit_real;

@@ -183,6 +183,7 @@ pub fn fit_joint(
         left_out,
         mut warnings,
     } = singles::fit_singles(releases, rig_guess, settings, joint)?;
+    warnings.extend(settings.measured.iter().flat_map(|m| m.notes.clone()));
     let ctx = analysis::Context {
         rig_guess,
         settings,

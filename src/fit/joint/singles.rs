@@ -259,10 +259,9 @@ pub(super) fn start_part(
             q.is_state()
                 || *q == Param::MuKinetic
                 || (*q == Param::RodLength && settings.fit_rod_length)
-                // The rig file as a measurement: its rod and mass ratio, with their priors
+                // The rig file as a measurement: its rod, mass ratio and gravity, with their priors
                 // (the joint problem counts a shared prior once).
-                || (matches!(q, Param::RodLength | Param::MassRatio)
-                    && single.prior_on(*q).is_some())
+                || (q.is_measured() && single.prior_on(*q).is_some())
         })
         .collect();
     let mut part = single.clone();

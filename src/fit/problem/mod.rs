@@ -280,6 +280,7 @@ impl TrajectoryProblem {
             Param::SliderDx => self.camera.slider_dx,
             Param::SliderDy => self.camera.slider_dy,
             Param::Lag => self.camera.lag,
+            Param::Gravity => self.rig.gravity,
         }
     }
 
@@ -339,6 +340,7 @@ impl TrajectoryProblem {
                 Param::SliderDx => cam.slider_dx = v,
                 Param::SliderDy => cam.slider_dy = v,
                 Param::Lag => cam.lag = v,
+                Param::Gravity => rig.gravity = v,
             }
         }
         if self.tie_static && !self.free.contains(&Param::MuStatic) {

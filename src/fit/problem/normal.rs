@@ -309,6 +309,8 @@ impl LeastSquares for TrajectoryProblem {
             }
         };
         clamp(p, Param::RodLength, 1e-6, f64::INFINITY);
+        let [g_lo, g_hi] = crate::scene::GRAVITY_RANGE;
+        clamp(p, Param::Gravity, g_lo, g_hi);
         // A rigid pendulum's L lies between half and twice the bob's distance for any rod
         // and bob a lab builds (a bare uniform rod has L = 2l/3).
         let l = self.rig.marker_length;

@@ -55,11 +55,13 @@ pub enum Param {
     SliderDy,
     /// Lag of the bob's track behind the slider's (s).
     Lag,
+    /// Gravity (m/s^2): a measured value of the rig file's, like the rod and the masses.
+    Gravity,
 }
 
 impl Param {
     /// Every parameter, in report order.
-    pub const ALL: [Param; 21] = [
+    pub const ALL: [Param; 22] = [
         Param::MuKinetic,
         Param::MuStatic,
         Param::X,
@@ -81,6 +83,7 @@ impl Param {
         Param::SliderDx,
         Param::SliderDy,
         Param::Lag,
+        Param::Gravity,
     ];
 
     /// Whether it belongs to the camera and marker model, which acts on the positions seen
@@ -111,6 +114,12 @@ impl Param {
         !self.is_state() && !self.is_camera()
     }
 
+    /// Whether it is one of the rig file's measured values, fitted with the file's deviation
+    /// as its prior: the rod length, the mass ratio and gravity.
+    pub fn is_measured(self) -> bool {
+        matches!(self, Param::RodLength | Param::MassRatio | Param::Gravity)
+    }
+
     /// Name in reports and JSON.
     pub fn name(self) -> &'static str {
         match self {
@@ -135,6 +144,7 @@ impl Param {
             Param::SliderDx => "slider_marker_dx",
             Param::SliderDy => "slider_marker_dy",
             Param::Lag => "marker_lag",
+            Param::Gravity => "gravity",
         }
     }
 
@@ -160,6 +170,7 @@ impl Param {
             Param::PivotDamping => "N m s",
             Param::ViscousFriction => "N s/m",
             Param::Lag => "s",
+            Param::Gravity => "m/s^2",
         }
     }
 }

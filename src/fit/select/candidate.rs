@@ -129,9 +129,7 @@ impl Candidate for TrajectoryProblem {
         !crate::fit::priors::implausible(self).is_empty()
     }
     fn rig_held(&self) -> Option<Self> {
-        let measured = |q: &Param| {
-            matches!(q, Param::RodLength | Param::MassRatio) && self.prior_on(*q).is_some()
-        };
+        let measured = |q: &Param| q.is_measured() && self.prior_on(*q).is_some();
         if !self.free.iter().any(measured) {
             return None;
         }
@@ -140,9 +138,8 @@ impl Candidate for TrajectoryProblem {
         Some(held)
     }
     fn rig_moved(&self, p: &DVector<f64>) -> bool {
-        self.prior_rows(p.as_slice()).any(|(i, z, _)| {
-            matches!(self.free[i], Param::RodLength | Param::MassRatio) && z.abs() > 3.0
-        })
+        self.prior_rows(p.as_slice())
+            .any(|(i, z, _)| self.free[i].is_measured() && z.abs() > 3.0)
     }
     fn adopt(&self, other: &Self) -> Self {
         let mut m = self.clone();
@@ -168,10 +165,7 @@ fn restarted(m: &TrajectoryProblem, (y0, mu0): (State<f64>, f64)) -> TrajectoryP
     // may have taken part of its compromise.
     let mut v = f.values();
     for (i, &q) in f.free.iter().enumerate() {
-        if let Some(pr) = f
-            .prior_on(q)
-            .filter(|_| matches!(q, Param::RodLength | Param::MassRatio))
-        {
+        if let Some(pr) = f.prior_on(q).filter(|_| q.is_measured()) {
             v[i] = pr.centre;
         }
     }
