@@ -118,14 +118,21 @@ def to_image(p, origin_px, px_per_m, roll_deg):
     return np.column_stack([origin_px[0] + px_per_m * xr, origin_px[1] - px_per_m * yr])
 
 
-def write_dlc(path, rng, rig, segs):
-    fps, k, roll, noise = 100.0, 1240.0, 1.8, 0.4
+def film(rng, rig, segs, fps, px_per_m, roll_deg, noise_px, origin_px):
+    """A video camera's view of the release: the first frame's phase, the frame count, and
+    the slider's and bob's pixels with the tracker's noise."""
     ts, phase = frame_times(rng, fps)
     slider, bob, _ = markers(rig, segs, ts)
-    origin = (612.0, 287.0)
     n = len(ts)
-    sl = to_image(slider, origin, k, roll) + rng.normal(0, noise, (n, 2))
-    bo = to_image(bob, origin, k, roll) + rng.normal(0, noise, (n, 2))
+    sl = to_image(slider, origin_px, px_per_m, roll_deg) + rng.normal(0, noise_px, (n, 2))
+    bo = to_image(bob, origin_px, px_per_m, roll_deg) + rng.normal(0, noise_px, (n, 2))
+    return phase, n, sl, bo
+
+
+def write_dlc(path, rng, rig, segs):
+    fps, k, roll, noise = 100.0, 1240.0, 1.8, 0.4
+    origin = (612.0, 287.0)
+    phase, n, sl, bo = film(rng, rig, segs, fps, k, roll, noise, origin)
     rail_end = to_image(np.array([[0.42, 0.0]]), origin, k, roll)[0]
     re = rail_end + rng.normal(0, noise, (n, 2))
     # Likelihoods of a well-trained network: mostly above 0.95.
@@ -169,12 +176,8 @@ def write_dlc(path, rng, rig, segs):
 
 def write_sleap(path, rng, rig, segs):
     fps, k, roll, noise = 200.0, 960.0, -1.2, 0.35
-    ts, phase = frame_times(rng, fps)
-    slider, bob, _ = markers(rig, segs, ts)
     origin = (455.0, 198.0)
-    n = len(ts)
-    sl = to_image(slider, origin, k, roll) + rng.normal(0, noise, (n, 2))
-    bo = to_image(bob, origin, k, roll) + rng.normal(0, noise, (n, 2))
+    phase, n, sl, bo = film(rng, rig, segs, fps, k, roll, noise, origin)
     score = np.clip(1.0 - np.abs(rng.normal(0, 0.04, (n, 2))), 0.0, 1.0)
     picks = rng.choice(np.arange(5, n - 5), size=12, replace=False)
     no_pred = sorted(int(i) for i in picks[:4])   # frames without any prediction: no row

@@ -298,13 +298,11 @@ mod tests {
         // At t = 0.6 s the bob moves at about 1.2 m/s: 15 mm is 50 noise deviations.
         bob[bad] = bob[bad].map(|p| [p[0] + 0.015, p[1]]);
         let slider = times.iter().map(|_| Some([0.0, 0.0])).collect();
-        let mut obs = Observations {
-            times,
-            slider,
-            bob,
-        };
+        let mut obs = Observations { times, slider, bob };
         let dropped = drop_from_tracks(&mut obs, [3e-4, 3e-4]);
-        let gone: Vec<usize> = (0..obs.bob.len()).filter(|&i| obs.bob[i].is_none()).collect();
+        let gone: Vec<usize> = (0..obs.bob.len())
+            .filter(|&i| obs.bob[i].is_none())
+            .collect();
         assert_eq!(gone, vec![bad], "dropped {dropped:?}");
     }
 
