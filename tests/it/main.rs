@@ -28,5 +28,6 @@ mod regions;
 mod rig_ranges;
 mod rigid;
 mod safety_io;
+mod showcase;
 mod simulate_oracles;
 mod stress;
