@@ -29,5 +29,6 @@ mod regions;
 mod rig_ranges;
 mod rigid;
 mod safety_io;
+mod showcase;
 mod simulate_oracles;
 mod stress;
