@@ -33,9 +33,7 @@ pub fn joint_answer(rep: &JointReport) -> String {
         e.ci95[0],
         e.ci95[1],
     );
-    let agree = rep
-        .consistency_p
-        .map_or(String::new(), |p| format!(" ({})", crate::report::p_is(p)));
+    // The agreement's p-value is in the sentence that follows the answer.
     if !rep.implausible.is_empty() {
         let needs: Vec<&str> = rep
             .implausible
@@ -47,11 +45,9 @@ pub fn joint_answer(rep: &JointReport) -> String {
             needs.join(", needs ")
         )
     } else if e.interval.contains("releases") {
-        format!(
-            "{head}, limited by the releases' disagreement{agree}; the interval holds their spread"
-        )
+        format!("{head}, limited by the releases' disagreement; the interval holds their spread")
     } else {
-        format!("{head}, the releases agree{agree}")
+        format!("{head}, the releases agree")
     }
 }
 
@@ -126,11 +122,15 @@ pub fn joint_text(rep: &JointReport) -> String {
             " kept"
         }
     );
-    for (q, e) in &rep.shared {
+    // mu_kinetic is the answer line's; the table has the rest.
+    for (q, e) in rep
+        .shared
+        .iter()
+        .filter(|(q, _)| *q != crate::fit::Param::MuKinetic)
+    {
         // Digits from the standard error, as in the answer line.
         let d = crate::report::two_digit_decimals(e.stderr).map_or(6, |d| d.min(12));
-        let _ = writeln!(
-            s,
+        let line = format!(
             "  {:<22} {:>24}  (95 %: {:.d$} to {:.d$}) [{}] {}",
             q.name(),
             crate::report::fit::value_pm(e.value, e.stderr),
@@ -139,6 +139,7 @@ pub fn joint_text(rep: &JointReport) -> String {
             e.interval,
             crate::report::unit_of(*q, e.value)
         );
+        let _ = writeln!(s, "{}", line.trim_end());
     }
     let nuis: Vec<&str> = rep.nuisances.iter().map(|n| n.name()).collect();
     let _ = writeln!(
