@@ -244,6 +244,24 @@ impl TrajectoryProblem {
         }
     }
 
+    /// The observations as the fit weighs them: a position whose rows all have weight zero
+    /// (left out as mis-tracked after a fit) is missing, as are those left out before it.
+    pub fn weighed_observations(&self) -> Observations {
+        let mut obs = (*self.obs).clone();
+        for (row, info) in self.rows().enumerate() {
+            if self.row_weight(row) == 0.0 {
+                let i = self.layout.obs_index[info.frame];
+                let track = if info.marker == 0 {
+                    &mut obs.slider
+                } else {
+                    &mut obs.bob
+                };
+                track[i] = None;
+            }
+        }
+        obs
+    }
+
     /// Rows with a weight above zero.
     pub fn rows_used(&self) -> usize {
         self.weights
