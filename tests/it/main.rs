@@ -8,6 +8,7 @@ mod cli_messages;
 mod cli_regions;
 mod cli_simulate;
 mod doc_links;
+mod figures;
 mod fit;
 mod fit_real;
 mod friction_laws;
