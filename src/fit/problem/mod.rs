@@ -244,22 +244,17 @@ impl TrajectoryProblem {
         }
     }
 
-    /// The observations as the fit weighs them: a position whose rows all have weight zero
-    /// (left out as mis-tracked after a fit) is missing, as are those left out before it.
-    pub fn weighed_observations(&self) -> Observations {
-        let mut obs = (*self.obs).clone();
+    /// At each frame, whether the fit weighs the slider's and the bob's position: `false`
+    /// where it is missing, left out as mis-tracked before the fit, or after it (its rows'
+    /// weight zero).
+    pub fn weighed_positions(&self) -> Vec<[bool; 2]> {
+        let mut weighed = vec![[false; 2]; self.obs.times.len()];
         for (row, info) in self.rows().enumerate() {
-            if self.row_weight(row) == 0.0 {
-                let i = self.layout.obs_index[info.frame];
-                let track = if info.marker == 0 {
-                    &mut obs.slider
-                } else {
-                    &mut obs.bob
-                };
-                track[i] = None;
+            if self.row_weight(row) > 0.0 {
+                weighed[self.layout.obs_index[info.frame]][info.marker] = true;
             }
         }
-        obs
+        weighed
     }
 
     /// Rows with a weight above zero.

@@ -7,7 +7,7 @@ use crate::report::plot::{
     data_range, draw_key, draw_side_legend, finite_runs, thin_line, thin_points, Figure, PlotError,
     Swatch,
 };
-use crate::sim::{simulate, Options, Request};
+use crate::sim::{simulate_each, Options, Request};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
@@ -243,7 +243,10 @@ impl<'a> FitFigure<'a> {
         let t0 = obs.times[0];
         let times: Vec<f64> = obs.times.iter().map(|t| t - t0).collect();
         let t_end = times.last().copied().unwrap_or(1.0).max(1e-9);
-        let sol = simulate(
+        // Each sample made a point of the trace as the run passes it: a million frames keep
+        // no simulated state besides.
+        let mut pred: Vec<(f64, [f64; 4], Mode)> = Vec::with_capacity(times.len());
+        simulate_each(
             &rep.rig,
             &rep.initial,
             t_end,
@@ -257,27 +260,20 @@ impl<'a> FitFigure<'a> {
                 friction_work: false,
                 positions_only: false,
             },
+            &mut |s| {
+                let markers = observed_markers(&rep.rig, &rep.camera, s.mode, &s.state);
+                pred.push((s.t, markers, s.mode));
+            },
         )
         .map_err(|e| PlotError::Draw(e.to_string()))?;
-        let pred: Vec<(f64, [f64; 4], Mode)> = sol
-            .samples
-            .iter()
-            .map(|s| {
-                (
-                    s.t,
-                    observed_markers(&rep.rig, &rep.camera, s.mode, &s.state),
-                    s.mode,
-                )
-            })
-            .collect();
-        // The fit's own observations (the same frames) lack what it left out.
-        let used = rep.problem.weighed_observations();
-        let left_out = if used.times.len() == obs.times.len() {
+        // The fit's own observations are the same frames; it weighs all but what it left out.
+        let weighed = rep.problem.weighed_positions();
+        let left_out = if weighed.len() == obs.times.len() {
             (0..obs.times.len())
                 .map(|i| {
                     [
-                        obs.slider[i].is_some() && used.slider[i].is_none(),
-                        obs.bob[i].is_some() && used.bob[i].is_none(),
+                        obs.slider[i].is_some() && !weighed[i][0],
+                        obs.bob[i].is_some() && !weighed[i][1],
                     ]
                 })
                 .collect()
