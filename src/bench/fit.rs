@@ -19,7 +19,7 @@ pub struct FitPoint {
     pub rtol: f64,
     /// Whether the profile intervals were computed.
     pub profile: bool,
-    /// The plain model only (`--plain`: no nuisance search, no thirds).
+    /// The plain model only (`--plain`: no nuisance search, no windows).
     pub plain: bool,
     /// Median wall time of one whole fit (s).
     pub seconds: f64,

@@ -87,7 +87,7 @@ pub struct Args {
     /// (with --scale), e.g. `0.0002` or `0.5px,0.8px`.
     #[arg(long, value_delimiter = ',', value_name = "NOISE[,NOISE]")]
     noise: Vec<String>,
-    /// The plain model only: no physics or camera nuisances and no check of the thirds
+    /// The plain model only: no physics or camera nuisances and no check of the windows
     /// (faster; the chi-square against the measured noise still shows a misfit).
     #[arg(long)]
     plain: bool,

@@ -362,7 +362,7 @@ pub fn slide_points_of(
     if sol.samples.len() != obs.times.len() {
         return Vec::new();
     }
-    let bounds = super::uncertainty::motion_bounds(&obs.times, &sol.events);
+    let (bounds, _) = super::uncertainty::motion_bounds(&obs.times, &sol.events);
     // The chosen model's own motion as a noise-free recording, cut and fitted the same way:
     // its windows' coefficients are what the chosen law says each slide's value is.
     let (slider, bob) = sol

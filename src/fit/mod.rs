@@ -56,7 +56,7 @@ pub use pendulum::{PendulumFound, ValueSe};
 pub use plausible::{check_rod_length, ROD_LENGTH_TOLERANCE};
 pub use problem::{Counters, Observations, Param, TrajectoryProblem, MAX_FREE};
 pub use select::{ModelRow, Nuisance};
-pub use uncertainty::WindowFit;
+pub use uncertainty::{WindowCut, WindowFit};
 
 use crate::model::{Camera, FrictionLaw, Rig, State};
 use crate::sim::{Event, Options};
@@ -395,6 +395,9 @@ pub struct FitReport {
     pub nuisances: Vec<Nuisance>,
     /// mu_kinetic fitted on each window of the recording (cut by the motion).
     pub windows: Vec<WindowFit>,
+    /// How the windows were cut: a slide each, a slide or more, or the thirds (`None` when
+    /// no window was fitted).
+    pub window_cut: Option<WindowCut>,
     /// Mis-tracked positions dropped (slider, bob): before the fit from the tracks, and
     /// after it from the residuals.
     pub outliers: [usize; 2],

@@ -386,6 +386,8 @@ fn rig_fraction(problem: &TrajectoryProblem, cov: &DMatrix<f64>, i: usize) -> f6
 /// What the adequacy stage found.
 pub(super) struct Verdict {
     pub windows: Vec<WindowFit>,
+    /// How the windows were cut (`None` when none were fitted).
+    pub window_cut: Option<uncertainty::WindowCut>,
     pub windows_p: Option<f64>,
     pub runs_p: f64,
     pub block_ratio: f64,
@@ -415,11 +417,13 @@ pub(super) fn adequacy(
 ) -> Verdict {
     let (problem, a) = (&f.problem, &est.a);
     let mu_index = est.mu_index;
-    let windows = if settings.windows && mu_index.is_some() {
-        let bounds = uncertainty::motion_bounds(&problem.observations().times, events);
-        uncertainty::windows(problem, &bounds, settings)
+    let (windows, window_cut) = if settings.windows && mu_index.is_some() {
+        let (bounds, cut) = uncertainty::motion_bounds(&problem.observations().times, events);
+        let windows = uncertainty::windows(problem, &bounds, settings);
+        let cut = (!windows.is_empty()).then_some(cut);
+        (windows, cut)
     } else {
-        Vec::new()
+        (Vec::new(), None)
     };
     let windows_p = uncertainty::window_consistency(&windows);
     let block_ratio = mu_index.map_or(1.0, |i| a.se_block[i] / a.se[i]);
@@ -509,6 +513,7 @@ pub(super) fn adequacy(
         implausible,
         lag1: uncertainty::lag1(problem, a.r.as_slice()),
         windows,
+        window_cut,
         windows_p,
         runs_p,
         block_ratio,
@@ -839,6 +844,7 @@ pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
         models,
         nuisances,
         windows: v.windows,
+        window_cut: v.window_cut,
         outliers,
         sliding_speed_range: motion.slide_speeds,
         events: motion.sol.events,

@@ -1,7 +1,7 @@
 //! Uncertainty that stays honest when the model does not describe the data: chi-square against
 //! the noise measured from the tracks, a covariance from the exact Jacobian, a block
 //! (heteroskedasticity-and-autocorrelation-consistent) covariance over contiguous stretches of
-//! frames, fits of the recording's thirds, and the profile interval for a parameter.
+//! frames, fits of the recording's windows (a slide each), and the profile interval for a parameter.
 
 use super::lm::{LeastSquares, Normal};
 use super::problem::{Observations, Param, TrajectoryProblem};
@@ -235,11 +235,44 @@ const MIN_SLIDING_FRAMES: usize = 30;
 /// Most windows the motion is cut into (each is one more fit).
 pub const MAX_WINDOWS: usize = 6;
 
+/// How [`motion_bounds`] cut the recording: what a window is, for the report to say.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum WindowCut {
+    /// At every stick between two slides and every reversal: one slide a window.
+    Slides,
+    /// At some of them only (more slides than [`MAX_WINDOWS`], or a slide shorter than 30
+    /// frames): a slide or more a window.
+    SlideGroups,
+    /// The recording's thirds: fewer than two slides to cut between.
+    Thirds,
+}
+
+impl WindowCut {
+    /// What one window is, as the report says it: "mu_kinetic per ...".
+    pub fn per(self) -> &'static str {
+        match self {
+            WindowCut::Slides => "slide",
+            WindowCut::SlideGroups => "window of a slide or more",
+            WindowCut::Thirds => "third of the recording",
+        }
+    }
+
+    /// How the windows were cut, in a few words.
+    pub fn how(self) -> &'static str {
+        match self {
+            WindowCut::Slides => "cut at sticks and reversals",
+            WindowCut::SlideGroups => "cut at some of the sticks and reversals",
+            WindowCut::Thirds => "fewer than two slides to cut between",
+        }
+    }
+}
+
 /// Frame indices that cut the recording by its fitted motion (`events`): in the middle of each
 /// stick between two slides, and at each reversal, so every window holds its own slide. At
 /// most [`MAX_WINDOWS`] windows (evenly chosen cuts), each at least 30 frames; a motion with
-/// fewer than two slides gives the recording's thirds.
-pub fn motion_bounds(times: &[f64], events: &[crate::sim::Event]) -> Vec<usize> {
+/// fewer than two slides gives the recording's thirds. Returns the bounds and how they cut.
+pub fn motion_bounds(times: &[f64], events: &[crate::sim::Event]) -> (Vec<usize>, WindowCut) {
     use crate::sim::EventKind;
     let n = times.len();
     let mut cuts: Vec<f64> = Vec::new();
@@ -258,6 +291,7 @@ pub fn motion_bounds(times: &[f64], events: &[crate::sim::Event]) -> Vec<usize> 
             _ => {}
         }
     }
+    let candidates = cuts.len();
     if cuts.len() > MAX_WINDOWS - 1 {
         let k = cuts.len();
         cuts = (1..MAX_WINDOWS)
@@ -273,9 +307,17 @@ pub fn motion_bounds(times: &[f64], events: &[crate::sim::Event]) -> Vec<usize> 
     }
     bounds.push(n - 1);
     if bounds.len() < 3 {
-        return (0..=3).map(|k| k * (n - 1) / 3).collect();
+        return (
+            (0..=3).map(|k| k * (n - 1) / 3).collect(),
+            WindowCut::Thirds,
+        );
     }
-    bounds
+    let cut = if bounds.len() == candidates + 2 {
+        WindowCut::Slides
+    } else {
+        WindowCut::SlideGroups
+    };
+    (bounds, cut)
 }
 
 /// mu_kinetic fitted on each stretch between consecutive frame indices `bounds`: the state at
@@ -356,7 +398,7 @@ pub fn windows(
             if sliding < MIN_SLIDING_FRAMES {
                 return None;
             }
-            // A long recording's thirds start next to their optimum (the whole fit's state):
+            // A long recording's windows start next to their optimum (the whole fit's state):
             // one Gauss-Newton step from there, checked below against the chi-square it
             // predicts; a looser stop for the minimisation when that check fails.
             let long = n > settings.long_prefix.saturating_mul(2);
@@ -588,7 +630,7 @@ pub fn profile_interval(
 
 #[cfg(test)]
 mod tests {
-    use super::{motion_bounds, runs_p, window_spread, WindowFit, MAX_WINDOWS};
+    use super::{motion_bounds, runs_p, window_spread, WindowCut, WindowFit, MAX_WINDOWS};
     use crate::model::{Direction, Mode};
     use crate::sim::{Event, EventKind, Outcome};
 
@@ -626,16 +668,23 @@ mod tests {
                 assert!(g.abs_diff(*w) <= 1, "{got:?} against {want:?}");
             }
         };
-        near(motion_bounds(&times, &events), &[0, 300, 800, 1500, 2000]);
+        let (bounds, cut) = motion_bounds(&times, &events);
+        near(bounds, &[0, 300, 800, 1500, 2000]);
+        assert_eq!(cut, WindowCut::Slides);
         // One slide that ends stuck: the thirds.
         let one = [event(0.5, EventKind::Stick)];
-        assert_eq!(motion_bounds(&times, &one), vec![0, 666, 1333, 2000]);
+        assert_eq!(
+            motion_bounds(&times, &one),
+            (vec![0, 666, 1333, 2000], WindowCut::Thirds)
+        );
         // A cut closer than 30 frames to the last is skipped.
         let close = [
             event(0.30, EventKind::Reversal),
             event(0.31, EventKind::Reversal),
         ];
-        near(motion_bounds(&times, &close), &[0, 300, 2000]);
+        let (bounds, cut) = motion_bounds(&times, &close);
+        near(bounds, &[0, 300, 2000]);
+        assert_eq!(cut, WindowCut::SlideGroups);
         // Many stick-slip cycles: at most MAX_WINDOWS windows.
         let many: Vec<Event> = (0..20)
             .flat_map(|k| {
@@ -643,7 +692,11 @@ mod tests {
                 [event(t, EventKind::Stick), event(t + 0.02, EventKind::Slip)]
             })
             .collect();
-        assert_eq!(motion_bounds(&times, &many).len(), MAX_WINDOWS + 1);
+        let (bounds, cut) = motion_bounds(&times, &many);
+        assert_eq!(
+            (bounds.len(), cut),
+            (MAX_WINDOWS + 1, WindowCut::SlideGroups)
+        );
     }
 
     /// The spread weighs each window by 1/se^2: a window that says little moves it little.

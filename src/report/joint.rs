@@ -2,7 +2,7 @@
 //! and their agreement, as text, JSON and a figure of each release's own mu against the
 //! joint band.
 
-use super::plot::{data_range, Figure, PlotError};
+use super::plot::{data_range, draw_key, Figure, PlotError, Swatch};
 use crate::fit::joint::JointReport;
 use crate::fit::Estimate;
 use plotters::coord::Shift;
@@ -223,7 +223,7 @@ impl Figure for JointFigure<'_> {
     fn size(&self) -> (u32, u32) {
         (
             1000,
-            250 + 40 * (self.report.releases.len() + self.report.set_aside.len()).min(40) as u32,
+            280 + 40 * (self.report.releases.len() + self.report.set_aside.len()).min(40) as u32,
         )
     }
 
@@ -234,6 +234,9 @@ impl Figure for JointFigure<'_> {
             rep.releases.iter().chain(&rep.set_aside).collect();
         let n = rows.len();
         let mu = &rep.mu_kinetic;
+        // A strip below the chart for its key, where it covers nothing.
+        let (w, h) = root.dim_in_pixel();
+        let (root, strip) = root.split_vertically(h - 30);
         let x_range = data_range(
             rows.iter()
                 .filter_map(|r| r.own_mu)
@@ -241,7 +244,7 @@ impl Figure for JointFigure<'_> {
                 .chain(mu.ci95),
             0.08,
         );
-        let mut chart = ChartBuilder::on(root)
+        let mut chart = ChartBuilder::on(&root)
             .caption(
                 format!(
                     "mu_kinetic of each release (95 %) and the joint {:.6} [{:.6}, {:.6}]{}",
@@ -292,6 +295,22 @@ impl Figure for JointFigure<'_> {
             .label_style(("sans-serif", 14))
             .draw()?;
         let band = RGBColor(120, 160, 220);
+        let mut key = vec![
+            (
+                Swatch::Dot(BLACK),
+                "a release's own mu, 95 % bar".to_owned(),
+            ),
+            // The band's colour at 30 % over white, as it is drawn.
+            (
+                Swatch::Fill(RGBColor(214, 226, 244)),
+                "joint 95 % interval".to_owned(),
+            ),
+            (Swatch::Line(band, 2), "joint value".to_owned()),
+        ];
+        if !rep.set_aside.is_empty() {
+            key.push((Swatch::Dot(RED), "set aside".to_owned()));
+        }
+        draw_key(&strip, &key, (w as i32 - 20, 12), 14)?;
         chart.draw_series(std::iter::once(Rectangle::new(
             [(mu.ci95[0], -0.5), (mu.ci95[1], n as f64 - 0.5)],
             band.mix(0.3).filled(),

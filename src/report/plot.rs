@@ -100,7 +100,7 @@ pub fn draw_legend<'a, DB: DrawingBackend + 'a, CT: plotters::coord::CoordTransl
     Ok(())
 }
 
-/// How a legend entry of [`draw_side_legend`] is drawn.
+/// How a legend entry of [`draw_side_legend`] or [`draw_key`] is drawn.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Swatch {
     /// A filled box of this colour (a shaded region).
@@ -111,6 +111,81 @@ pub enum Swatch {
     Dashed(RGBColor),
     /// A dot of this colour.
     Dot(RGBColor),
+    /// An open circle of this colour.
+    Ring(RGBColor),
+    /// An open square of this colour.
+    Square(RGBColor),
+    /// A cross (x) of this colour.
+    Cross(RGBColor),
+}
+
+/// Width in pixels of a swatch, before its label.
+const SWATCH_WIDTH: i32 = 22;
+
+/// Draw `swatch` with its left end at `x0`, centred on the row `mid`.
+fn draw_swatch<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    swatch: Swatch,
+    x0: i32,
+    mid: i32,
+) -> Result<(), PlotError> {
+    let centre = (x0 + SWATCH_WIDTH / 2, mid);
+    match swatch {
+        Swatch::Fill(c) => {
+            let corners = [(x0, mid - 6), (x0 + SWATCH_WIDTH, mid + 6)];
+            area.draw(&Rectangle::new(corners, c.filled()))?;
+            area.draw(&Rectangle::new(corners, BLACK))?;
+        }
+        Swatch::Line(c, w) => {
+            area.draw(&PathElement::new(
+                vec![(x0, mid), (x0 + SWATCH_WIDTH, mid)],
+                c.stroke_width(w),
+            ))?;
+        }
+        Swatch::Dashed(c) => {
+            for k in 0..3 {
+                let a = x0 + 9 * k;
+                area.draw(&PathElement::new(
+                    vec![(a, mid), (a + 5, mid)],
+                    c.stroke_width(2),
+                ))?;
+            }
+        }
+        Swatch::Dot(c) => area.draw(&Circle::new(centre, 4, c.filled()))?,
+        Swatch::Ring(c) => area.draw(&Circle::new(centre, 4, c.stroke_width(2)))?,
+        Swatch::Square(c) => area.draw(&Rectangle::new(
+            [(centre.0 - 6, mid - 6), (centre.0 + 6, mid + 6)],
+            c.stroke_width(2),
+        ))?,
+        Swatch::Cross(c) => area.draw(&Cross::new(centre, 4, c.stroke_width(2)))?,
+    }
+    Ok(())
+}
+
+/// A one-row key drawn right-aligned at `right` on row `mid` of `area` (above a chart, where
+/// it covers nothing): each entry's swatch, then its label, at `font_size`.
+pub fn draw_key<DB: DrawingBackend>(
+    area: &DrawingArea<DB, Shift>,
+    entries: &[(Swatch, String)],
+    (right, mid): (i32, i32),
+    font_size: u32,
+) -> Result<(), PlotError> {
+    let font = ("sans-serif", font_size).into_font().color(&BLACK);
+    let widths = entries
+        .iter()
+        .map(|(_, label)| {
+            let (w, _) = area.estimate_text_size(label, &font)?;
+            Ok(SWATCH_WIDTH + 6 + w as i32 + 16)
+        })
+        .collect::<Result<Vec<i32>, PlotError>>()?;
+    let mut x = right - widths.iter().sum::<i32>();
+    for ((swatch, label), w) in entries.iter().zip(widths) {
+        draw_swatch(area, *swatch, x, mid)?;
+        let pos = (x + SWATCH_WIDTH + 6, mid - font_size as i32 / 2 - 1);
+        area.draw(&Text::new(label.clone(), pos, font.clone()))?;
+        x += w;
+    }
+    Ok(())
 }
 
 /// A legend drawn in its own area beside the charts, so that it never covers data: a title,
@@ -131,34 +206,7 @@ pub fn draw_side_legend<DB: DrawingBackend>(
     area.draw(&Text::new(title.to_owned(), (x0, y), bold.clone()))?;
     y += line + 6;
     for (swatch, label) in entries {
-        let mid = y + line / 2 - 2;
-        match *swatch {
-            Swatch::Fill(c) => {
-                area.draw(&Rectangle::new(
-                    [(x0, mid - 6), (x0 + 22, mid + 6)],
-                    c.filled(),
-                ))?;
-                area.draw(&Rectangle::new([(x0, mid - 6), (x0 + 22, mid + 6)], BLACK))?;
-            }
-            Swatch::Line(c, w) => {
-                area.draw(&PathElement::new(
-                    vec![(x0, mid), (x0 + 22, mid)],
-                    c.stroke_width(w),
-                ))?;
-            }
-            Swatch::Dashed(c) => {
-                for k in 0..3 {
-                    let a = x0 + 9 * k;
-                    area.draw(&PathElement::new(
-                        vec![(a, mid), (a + 5, mid)],
-                        c.stroke_width(2),
-                    ))?;
-                }
-            }
-            Swatch::Dot(c) => {
-                area.draw(&Circle::new((x0 + 11, mid), 4, c.filled()))?;
-            }
-        }
+        draw_swatch(area, *swatch, x0, y + line / 2 - 2)?;
         for (i, piece) in wrap_words(label, wrap).into_iter().enumerate() {
             let indent = if i == 0 { 0 } else { 8 };
             area.draw(&Text::new(piece, (x0 + 30 + indent, y), text.clone()))?;
@@ -207,6 +255,77 @@ pub fn wrap_words(s: &str, width: usize) -> Vec<String> {
         out.push(line);
     }
     out
+}
+
+/// Which points of a line to draw so that the drawn path stays the same to the pixel: of each
+/// run of points in one pixel column (`pixels`, backend coordinates in drawing order), the
+/// first, the lowest, the highest and the last, and no point twice in a row on one pixel. A
+/// line of a million frames is then a few points per column. Indices ascending.
+pub fn thin_line(pixels: &[(i32, i32)]) -> Vec<usize> {
+    let mut keep = Vec::new();
+    let mut start = 0;
+    while start < pixels.len() {
+        let x = pixels[start].0;
+        let end = start + pixels[start..].iter().take_while(|p| p.0 == x).count();
+        let column = start..end;
+        let low = column.clone().min_by_key(|&i| pixels[i].1).unwrap_or(start);
+        let high = column.max_by_key(|&i| pixels[i].1).unwrap_or(start);
+        let mut four = [start, low, high, end - 1];
+        four.sort_unstable();
+        for i in four {
+            if keep.last().is_none_or(|&j: &usize| pixels[j] != pixels[i]) {
+                keep.push(i);
+            }
+        }
+        start = end;
+    }
+    keep
+}
+
+/// Which of a series' points to draw, at most `budget` (plus the first and last), so that what
+/// the eye looks for stays: the points at `pixels` (backend coordinates), each with a `key`
+/// (its distance from the model). A point on a pixel already drawn is left out; beyond the
+/// budget, every `group` pixel columns keep their points of the largest and the smallest key
+/// (the outliers and the extremes never go), and an even sample of the rest fills the budget.
+/// Groups much wider than a dot keep the extremes without drawing the noise's envelope as a
+/// ridge of dots. Indices ascending.
+pub fn thin_points(pixels: &[(i32, i32)], keys: &[f64], budget: usize, group: i32) -> Vec<usize> {
+    let mut seen = std::collections::HashSet::new();
+    let unique: Vec<usize> = (0..pixels.len())
+        .filter(|&i| seen.insert(pixels[i]))
+        .collect();
+    let (Some(&first), Some(&last)) = (unique.first(), unique.last()) else {
+        return unique;
+    };
+    if unique.len() <= budget {
+        return unique;
+    }
+    let x0 = unique.iter().map(|&i| pixels[i].0).min().unwrap_or(0);
+    let x1 = unique.iter().map(|&i| pixels[i].0).max().unwrap_or(0);
+    let group = group.max(1);
+    let groups = ((x1 - x0) / group) as usize + 1;
+    let mut low: Vec<Option<usize>> = vec![None; groups];
+    let mut high: Vec<Option<usize>> = vec![None; groups];
+    for &i in &unique {
+        let g = ((pixels[i].0 - x0) / group) as usize;
+        if low[g].is_none_or(|j| keys[i].total_cmp(&keys[j]).is_lt()) {
+            low[g] = Some(i);
+        }
+        if high[g].is_none_or(|j| keys[i].total_cmp(&keys[j]).is_gt()) {
+            high[g] = Some(i);
+        }
+    }
+    let mut kept = vec![false; pixels.len()];
+    for i in low.into_iter().chain(high).flatten().chain([first, last]) {
+        kept[i] = true;
+    }
+    let marked = kept.iter().filter(|k| **k).count();
+    let rest: Vec<usize> = unique.iter().copied().filter(|&i| !kept[i]).collect();
+    let room = budget.saturating_sub(marked).min(rest.len());
+    for k in 0..room {
+        kept[rest[k * rest.len() / room]] = true;
+    }
+    (0..pixels.len()).filter(|&i| kept[i]).collect()
 }
 
 /// Something that draws itself on a plotters drawing area of any backend.
@@ -405,6 +524,85 @@ mod tests {
             Err(PlotError::Extension { .. })
         ));
         assert!(!path.exists());
+    }
+
+    /// A thinned line covers the same pixels column by column: each column's lowest and
+    /// highest pixel, where it enters and where it leaves, from far fewer points.
+    #[test]
+    fn thin_line_keeps_every_columns_extent() {
+        // A noisy sine over 100 columns, 300 points a column.
+        let pixels: Vec<(i32, i32)> = (0..30_000)
+            .map(|i| {
+                let t = i as f64 / 300.0;
+                let wobble = ((i * 7919) % 13) as f64 - 6.0;
+                (t as i32, (200.0 + 80.0 * (t / 9.0).sin() + wobble) as i32)
+            })
+            .collect();
+        let kept = thin_line(&pixels);
+        assert!(kept.len() <= 4 * 100, "{}", kept.len());
+        assert!(kept.windows(2).all(|w| w[0] < w[1]));
+        assert_eq!((kept[0], *kept.last().unwrap()), (0, pixels.len() - 1));
+        for x in 0..100 {
+            let column = |idx: &mut dyn Iterator<Item = usize>| {
+                let ys: Vec<i32> = idx
+                    .filter(|&i| pixels[i].0 == x)
+                    .map(|i| pixels[i].1)
+                    .collect();
+                (
+                    ys.iter().min().copied(),
+                    ys.iter().max().copied(),
+                    ys.first().copied(),
+                    ys.last().copied(),
+                )
+            };
+            assert_eq!(
+                column(&mut kept.iter().copied()),
+                column(&mut (0..pixels.len())),
+                "column {x}"
+            );
+        }
+    }
+
+    /// Thinned points stay within the budget, keep the first and the last, and keep every
+    /// group's largest and smallest key: a lone outlier is never thinned away.
+    #[test]
+    fn thin_points_keeps_the_extremes_within_the_budget() {
+        let n = 50_000;
+        let keys: Vec<f64> = (0..n)
+            .map(|i| match i {
+                31_337 => 40.0,
+                4_242 => -25.0,
+                _ => (((i * 7919) % 101) as f64 - 50.0) / 20.0,
+            })
+            .collect();
+        let pixels: Vec<(i32, i32)> = (0..n)
+            .map(|i| ((i / 60) as i32, (300.0 - 10.0 * keys[i]) as i32))
+            .collect();
+        let kept = thin_points(&pixels, &keys, 1000, 10);
+        assert!(kept.len() <= 1000 + 2, "{}", kept.len());
+        assert!(kept.windows(2).all(|w| w[0] < w[1]));
+        for must in [0, n - 1, 31_337, 4_242] {
+            assert!(kept.contains(&must), "{must}");
+        }
+        // Every group of ten columns keeps its highest and lowest pixel.
+        let groups = pixels.last().unwrap().0 / 10 + 1;
+        for g in 0..groups {
+            let extent = |idx: &mut dyn Iterator<Item = usize>| {
+                let ys: Vec<i32> = idx
+                    .filter(|&i| pixels[i].0 / 10 == g)
+                    .map(|i| pixels[i].1)
+                    .collect();
+                (ys.iter().min().copied(), ys.iter().max().copied())
+            };
+            assert_eq!(
+                extent(&mut kept.iter().copied()),
+                extent(&mut (0..n)),
+                "group {g}"
+            );
+        }
+        // Within the budget everything distinct is drawn, a pixel once.
+        let few = [(1, 1), (2, 2), (1, 1), (3, 3)];
+        assert_eq!(thin_points(&few, &[0.0; 4], 10, 10), vec![0, 1, 3]);
     }
 
     #[test]

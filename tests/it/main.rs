@@ -9,6 +9,7 @@ mod cli_regions;
 mod cli_simulate;
 mod doc_commands;
 mod doc_links;
+mod figures;
 mod fit;
 mod fit_real;
 mod friction_laws;

@@ -244,6 +244,19 @@ impl TrajectoryProblem {
         }
     }
 
+    /// At each frame, whether the fit weighs the slider's and the bob's position: `false`
+    /// where it is missing, left out as mis-tracked before the fit, or after it (its rows'
+    /// weight zero).
+    pub fn weighed_positions(&self) -> Vec<[bool; 2]> {
+        let mut weighed = vec![[false; 2]; self.obs.times.len()];
+        for (row, info) in self.rows().enumerate() {
+            if self.row_weight(row) > 0.0 {
+                weighed[self.layout.obs_index[info.frame]][info.marker] = true;
+            }
+        }
+        weighed
+    }
+
     /// Rows with a weight above zero.
     pub fn rows_used(&self) -> usize {
         self.weights

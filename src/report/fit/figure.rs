@@ -3,16 +3,31 @@
 
 use crate::fit::{Estimate, FitReport, Observations, StaticResult};
 use crate::model::{observed_markers, Mode};
-use crate::report::plot::{data_range, draw_side_legend, Figure, PlotError, Swatch};
-use crate::sim::{simulate, Options, Request};
+use crate::report::plot::{
+    data_range, draw_key, draw_side_legend, finite_runs, thin_line, thin_points, Figure, PlotError,
+    Swatch,
+};
+use crate::sim::{simulate_each, Options, Request};
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
-use std::borrow::Cow;
+use std::ops::Range;
 
-/// Most frames the fit's figure draws.
-const PLOT_FRAMES: usize = 20_000;
+/// Most residual points one time panel draws: a few thousand dots show what the eye can see
+/// in a panel 900 pixels wide, and keep the SVG of a long recording small (each dot is an
+/// element of its own).
+const PANEL_POINTS: usize = 1600;
 
-/// The fit's figure: slider x and bob position, data and fit, residuals, mode bands.
+/// Most data points one coordinate draws over its model line: spaced enough that the line
+/// shows between and through them.
+const DATA_POINTS: usize = 400;
+
+/// The width in pixels of the column groups whose largest and smallest residual are always
+/// drawn ([`thin_points`]).
+const EXTREMES_EVERY: i32 = 10;
+
+/// The fit's figure: slider x and bob position, data and fit, residuals, mode bands, and
+/// mu_kinetic per window.
 pub struct FitFigure<'a> {
     /// The recording.
     pub obs: &'a Observations,
@@ -21,16 +36,26 @@ pub struct FitFigure<'a> {
 }
 
 /// The four observed coordinates in drawing order, each with the one colour it has in every
-/// panel and the legend: slider x, slider y, bob x, bob y.
+/// panel and the legend: slider x, slider y, bob x, bob y (Okabe and Ito's palette, told
+/// apart with any colour vision).
 const COORDS: [(&str, RGBColor); 4] = [
-    ("slider x", RGBColor(0, 90, 200)),
-    ("slider y", RGBColor(130, 60, 180)),
-    ("bob x", RGBColor(215, 95, 0)),
-    ("bob y", RGBColor(0, 140, 60)),
+    ("slider x", RGBColor(0, 114, 178)),
+    ("slider y", RGBColor(230, 159, 0)),
+    ("bob x", RGBColor(213, 94, 0)),
+    ("bob y", RGBColor(0, 158, 115)),
 ];
 
-/// (t, value) points of one series.
-type Points = Vec<(f64, f64)>;
+/// The fitted model's lines.
+const MODEL: RGBColor = RGBColor(0, 0, 0);
+
+/// Positions left out of the fit as mis-tracked.
+const LEFT_OUT: RGBColor = RGBColor(110, 110, 110);
+
+/// The whole fit's mu_kinetic in the windows' panel.
+const WHOLE: RGBColor = RGBColor(204, 121, 167);
+
+/// One drawn point: time (s), value (mm) and residual (fitted - observed, mm).
+type Point = (f64, f64, f64);
 
 /// Pale fills of the fitted modes behind the time panels.
 fn mode_color(m: Mode) -> RGBColor {
@@ -57,9 +82,9 @@ fn tick_label(v: f64, span: f64) -> String {
 }
 
 impl FitFigure<'_> {
-    /// The legend's key numbers: mu with its error and interval, the model, the fit's quality
-    /// and the windows.
-    fn notes(&self) -> Vec<String> {
+    /// The legend's key numbers: mu with its error and interval, the model, the fit's quality,
+    /// and what the drawing left out (`thinned`: the points drawn and those there were).
+    fn notes(&self, tr: &Traces, thinned: (usize, usize)) -> Vec<String> {
         let rep = self.report;
         let mut notes = Vec::new();
         match &rep.mu_kinetic {
@@ -103,6 +128,18 @@ impl FitFigure<'_> {
         if a.limited_by_model.is_some() {
             notes.push("limited by the model, not by the noise (see the report)".into());
         }
+        let left_out = tr.left_out.iter().flatten().filter(|b| **b).count();
+        if left_out > 0 {
+            notes.push(format!(
+                "{left_out} positions left out of the fit as mis-tracked (x; beyond an axis, drawn at its edge)"
+            ));
+        }
+        let (drawn, total) = thinned;
+        if drawn < total {
+            notes.push(format!(
+                "thinned to draw: {drawn} of {total} points shown ({DATA_POINTS} data a coordinate, {PANEL_POINTS} residuals a panel at most, every {EXTREMES_EVERY} pixels' largest and smallest residual among them); the fit used them all"
+            ));
+        }
         notes
     }
 }
@@ -113,31 +150,37 @@ type Panel = (&'static str, &'static [usize], bool);
 
 /// The four time panels, top to bottom.
 const PANELS: [Panel; 4] = [
-    ("slider x [mm] (data and fit)", &[0], false),
-    ("bob x and y [mm] (data and fit)", &[2, 3], false),
+    ("slider x [mm]: data over the fitted model", &[0], false),
     (
-        "slider residual [mm] (fitted - observed; band +-2 noise)",
+        "bob x and y [mm]: data over the fitted model",
+        &[2, 3],
+        false,
+    ),
+    (
+        "slider residual [mm]: fitted - observed; band +-2 noise",
         &[0, 1],
         true,
     ),
     (
-        "bob residual [mm] (fitted - observed; band +-2 noise)",
+        "bob residual [mm]: fitted - observed; band +-2 noise",
         &[2, 3],
         true,
     ),
 ];
 
-/// What the time panels draw: the frames drawn (every k-th of a long recording), their times
-/// from zero, and the fitted model's markers and mode at each.
+/// What the time panels draw: every frame's time from zero, the fitted model's markers and
+/// mode at each, and which positions the fit left out.
 struct Traces<'a> {
-    /// The frames drawn.
-    obs: Cow<'a, Observations>,
-    /// Their times from the first (s).
+    /// The recording.
+    obs: &'a Observations,
+    /// Frame times from the first (s).
     times: Vec<f64>,
     /// The last time drawn (s), above zero.
     t_end: f64,
     /// At each frame: its time, the fitted markers (slider x, y, bob x, y; m) and the mode.
     pred: Vec<(f64, [f64; 4], Mode)>,
+    /// At each frame, whether the fit left out the slider's and the bob's position.
+    left_out: Vec<[bool; 2]>,
 }
 
 impl Traces<'_> {
@@ -151,29 +194,21 @@ impl Traces<'_> {
         m.map(|p| p[k % 2] * 1e3)
     }
 
-    /// The data of coordinate `k` (mm) at the frames that have it.
-    fn data(&self, k: usize) -> Points {
-        (0..self.times.len())
-            .filter_map(|i| self.observed(k, i).map(|v| (self.times[i], v)))
+    /// The observed points of coordinate `k` with their residuals (fitted minus observed, as
+    /// the fit and the README define them): those the fit used, or those it `left_out`.
+    fn points(&self, k: usize, left_out: bool) -> Vec<Point> {
+        (0..self.times.len().min(self.pred.len()))
+            .filter(|&i| self.left_out[i][k / 2] == left_out)
+            .filter_map(|i| {
+                let v = self.observed(k, i)?;
+                Some((self.times[i], v, self.pred[i].1[k] * 1e3 - v))
+            })
             .collect()
     }
 
     /// The fitted coordinate `k` (mm) at every frame.
-    fn fitted(&self, k: usize) -> Points {
+    fn fitted(&self, k: usize) -> Vec<(f64, f64)> {
         self.pred.iter().map(|p| (p.0, p.1[k] * 1e3)).collect()
-    }
-
-    /// Residuals of coordinate `k` (mm) as the fit and the README define them: fitted minus
-    /// observed.
-    fn resid(&self, k: usize) -> Points {
-        (0..self.times.len())
-            .filter_map(|i| {
-                Some((
-                    self.times[i],
-                    self.pred.get(i)?.1[k] * 1e3 - self.observed(k, i)?,
-                ))
-            })
-            .collect()
     }
 
     /// The fitted modes as bands from `bottom` to `top`, one per stretch of one mode.
@@ -200,25 +235,18 @@ impl Traces<'_> {
 }
 
 impl<'a> FitFigure<'a> {
-    /// The frames to draw and the fitted model at them. A figure cannot show more frames than
-    /// it has pixels: a long recording is drawn from every k-th frame (at most PLOT_FRAMES),
-    /// the fit's numbers still from all.
+    /// The fitted model at every frame, and the positions the fit left out. Every frame is
+    /// simulated; the drawing, not the data, is thinned to what a panel's pixels can show.
     fn traces(&self) -> Result<Traces<'a>, PlotError> {
         let rep = self.report;
-        let stride = self.obs.times.len().div_ceil(PLOT_FRAMES).max(1);
-        let obs = if stride > 1 {
-            Cow::Owned(Observations {
-                times: self.obs.times.iter().step_by(stride).copied().collect(),
-                slider: self.obs.slider.iter().step_by(stride).copied().collect(),
-                bob: self.obs.bob.iter().step_by(stride).copied().collect(),
-            })
-        } else {
-            Cow::Borrowed(self.obs)
-        };
+        let obs = self.obs;
         let t0 = obs.times[0];
         let times: Vec<f64> = obs.times.iter().map(|t| t - t0).collect();
         let t_end = times.last().copied().unwrap_or(1.0).max(1e-9);
-        let sol = simulate(
+        // Each sample made a point of the trace as the run passes it: a million frames keep
+        // no simulated state besides.
+        let mut pred: Vec<(f64, [f64; 4], Mode)> = Vec::with_capacity(times.len());
+        simulate_each(
             &rep.rig,
             &rep.initial,
             t_end,
@@ -232,62 +260,124 @@ impl<'a> FitFigure<'a> {
                 friction_work: false,
                 positions_only: false,
             },
+            &mut |s| {
+                let markers = observed_markers(&rep.rig, &rep.camera, s.mode, &s.state);
+                pred.push((s.t, markers, s.mode));
+            },
         )
         .map_err(|e| PlotError::Draw(e.to_string()))?;
-        let pred: Vec<(f64, [f64; 4], Mode)> = sol
-            .samples
-            .iter()
-            .map(|s| {
-                (
-                    s.t,
-                    observed_markers(&rep.rig, &rep.camera, s.mode, &s.state),
-                    s.mode,
-                )
-            })
-            .collect();
+        // The fit's own observations are the same frames; it weighs all but what it left out.
+        let weighed = rep.problem.weighed_positions();
+        let left_out = if weighed.len() == obs.times.len() {
+            (0..obs.times.len())
+                .map(|i| {
+                    [
+                        obs.slider[i].is_some() && !weighed[i][0],
+                        obs.bob[i].is_some() && !weighed[i][1],
+                    ]
+                })
+                .collect()
+        } else {
+            vec![[false; 2]; obs.times.len()]
+        };
         Ok(Traces {
             obs,
             times,
             t_end,
             pred,
+            left_out,
         })
     }
 }
 
+/// A time chart of the figure: f64 seconds against f64 values.
+type TimeChart<'c, DB> = ChartContext<'c, DB, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
+
+/// Draw `points` (t, value) as a line thinned to the pixels it covers ([`thin_line`]).
+fn draw_line<DB: DrawingBackend>(
+    chart: &mut TimeChart<'_, DB>,
+    points: &[(f64, f64)],
+    style: ShapeStyle,
+) -> Result<(), PlotError> {
+    for run in finite_runs(points) {
+        let pixels: Vec<(i32, i32)> = run.iter().map(|p| chart.backend_coord(p)).collect();
+        let kept = thin_line(&pixels);
+        chart.draw_series(LineSeries::new(kept.into_iter().map(|i| run[i]), style))?;
+    }
+    Ok(())
+}
+
+/// Draw `points` (t, y, key) as dots of `style` with at most `budget` drawn
+/// ([`thin_points`], the key telling the extremes), a value outside `yr` at its edge, as
+/// crosses when `cross`. Returns how many were drawn.
+fn draw_dots<DB: DrawingBackend>(
+    chart: &mut TimeChart<'_, DB>,
+    points: &[(f64, f64, f64)],
+    yr: &Range<f64>,
+    (style, radius, cross): (ShapeStyle, i32, bool),
+    budget: usize,
+) -> Result<usize, PlotError> {
+    let at = |p: &(f64, f64, f64)| (p.0, p.1.clamp(yr.start, yr.end));
+    let pixels: Vec<(i32, i32)> = points.iter().map(|p| chart.backend_coord(&at(p))).collect();
+    let keys: Vec<f64> = points.iter().map(|p| p.2).collect();
+    let kept = thin_points(&pixels, &keys, budget, EXTREMES_EVERY);
+    let drawn = kept.len();
+    if cross {
+        chart.draw_series(
+            kept.into_iter()
+                .map(|i| Cross::new(at(&points[i]), radius, style)),
+        )?;
+    } else {
+        chart.draw_series(
+            kept.into_iter()
+                .map(|i| Circle::new(at(&points[i]), radius, style)),
+        )?;
+    }
+    Ok(drawn)
+}
+
+/// The points a panel draws and the points there were.
+type Drawn = (usize, usize);
+
 impl FitFigure<'_> {
-    /// One time panel on `area`: data and fit, or residuals within a band of twice the
-    /// measured noise, over the fitted modes.
+    /// One time panel on `area`: data over the fitted model, or residuals within a band of
+    /// twice the measured noise, over the fitted modes, with its title and key above it.
     fn panel<DB: DrawingBackend>(
         &self,
         area: &DrawingArea<DB, Shift>,
         (title, coords, is_resid): Panel,
         tr: &Traces,
-    ) -> Result<(), PlotError> {
+    ) -> Result<Drawn, PlotError> {
         let t_end = tr.t_end;
-        let series: Vec<(usize, Points, Points)> = coords
-            .iter()
-            .map(|&k| {
-                if is_resid {
-                    (k, tr.resid(k), Vec::new())
-                } else {
-                    (k, tr.data(k), tr.fitted(k))
-                }
-            })
-            .collect();
+        let used: Vec<Vec<Point>> = coords.iter().map(|&k| tr.points(k, false)).collect();
+        let left: Vec<Vec<Point>> = coords.iter().map(|&k| tr.points(k, true)).collect();
+        let fitted: Vec<Vec<(f64, f64)>> = coords.iter().map(|&k| tr.fitted(k)).collect();
+        // The drawn value: the residual or the observation.
+        let value = |p: &Point| -> Point {
+            if is_resid {
+                (p.0, p.2, p.2)
+            } else {
+                *p
+            }
+        };
         let band = if is_resid {
             2.0 * self.report.noise_m[coords[0] / 2] * 1e3
         } else {
             0.0
         };
-        let ys = series
+        // The axis holds what the fit used and the model: a position left out as mis-tracked
+        // may lie metres off, and is drawn at the axis's edge.
+        let ys = used
             .iter()
-            .flat_map(|(_, d, f)| d.iter().chain(f).map(|p| p.1))
+            .flatten()
+            .map(|p| value(p).1)
+            .chain(fitted.iter().flatten().filter(|_| !is_resid).map(|p| p.1))
             .chain([band, -band]);
         let yr = data_range(ys, 0.05);
         let span = yr.end - yr.start;
         let mut chart = ChartBuilder::on(area)
-            .caption(title, ("sans-serif", 16))
             .margin(6)
+            .margin_top(26)
             .x_label_area_size(32)
             .y_label_area_size(84)
             .build_cartesian_2d(0.0..t_end, yr.clone())?;
@@ -295,11 +385,37 @@ impl FitFigure<'_> {
             .configure_mesh()
             .light_line_style(WHITE.mix(0.0))
             .x_desc("t [s]")
-            .y_desc(if is_resid { "residual [mm]" } else { "[mm]" })
+            .y_desc(if is_resid {
+                "residual [mm]"
+            } else {
+                "position [mm]"
+            })
             .y_label_formatter(&|v| tick_label(*v, span))
             .x_label_formatter(&|v| tick_label(*v, t_end))
             .label_style(("sans-serif", 13))
             .draw()?;
+        let font = ("sans-serif", 16).into_font().color(&BLACK);
+        area.draw(&Text::new(title, (90, 6), font))?;
+        let mut key: Vec<(Swatch, String)> = coords
+            .iter()
+            .map(|&k| {
+                let (name, c) = COORDS[k];
+                let swatch = if is_resid {
+                    Swatch::Dot(c)
+                } else {
+                    Swatch::Ring(c)
+                };
+                (swatch, name.to_owned())
+            })
+            .collect();
+        if !is_resid {
+            key.push((Swatch::Line(MODEL, 1), "fitted model".into()));
+        }
+        if left.iter().any(|l| !l.is_empty()) {
+            key.push((Swatch::Cross(LEFT_OUT), "left out".into()));
+        }
+        let right = area.dim_in_pixel().0 as i32 - 10;
+        draw_key(area, &key, (right, 13), 13)?;
         chart.draw_series(tr.bands(yr.end, yr.start))?;
         if is_resid {
             chart.draw_series(std::iter::once(Rectangle::new(
@@ -307,21 +423,36 @@ impl FitFigure<'_> {
                 RGBColor(120, 120, 120).mix(0.25).filled(),
             )))?;
             chart.draw_series(LineSeries::new([(0.0, 0.0), (t_end, 0.0)], BLACK))?;
-        }
-        for (k, d, f) in &series {
-            let c = COORDS[*k].1;
-            chart.draw_series(
-                d.iter()
-                    .map(|&(t, v)| Circle::new((t, v), 1, c.mix(0.7).filled())),
-            )?;
-            if !f.is_empty() {
-                chart.draw_series(LineSeries::new(
-                    f.iter().cloned(),
-                    BLACK.mix(0.8).stroke_width(1),
-                ))?;
+        } else {
+            // The model first and thin, so that the data drawn over it stay visible, and
+            // where they leave it, the model shows through them.
+            for f in &fitted {
+                draw_line(&mut chart, f, MODEL.stroke_width(1))?;
             }
         }
-        Ok(())
+        // Residuals as dots; data as open circles, through which the model line shows.
+        let (budget, radius) = if is_resid {
+            (PANEL_POINTS / coords.len(), 2)
+        } else {
+            (DATA_POINTS, 3)
+        };
+        let mut drawn = 0;
+        for (&k, pts) in coords.iter().zip(&used) {
+            let style = if is_resid {
+                COORDS[k].1.mix(0.6).filled()
+            } else {
+                COORDS[k].1.stroke_width(1)
+            };
+            let shown: Vec<Point> = pts.iter().map(value).collect();
+            drawn += draw_dots(&mut chart, &shown, &yr, (style, radius, false), budget)?;
+        }
+        for pts in &left {
+            let shown: Vec<Point> = pts.iter().map(value).collect();
+            let style = LEFT_OUT.stroke_width(1);
+            drawn += draw_dots(&mut chart, &shown, &yr, (style, 3, true), PANEL_POINTS)?;
+        }
+        let total = used.iter().chain(&left).map(Vec::len).sum();
+        Ok((drawn, total))
     }
 
     /// The windows: mu_kinetic fitted on each stretch against the whole fit's interval `mu`.
@@ -344,11 +475,16 @@ impl FitFigure<'_> {
             .chain(mu.ci95);
         let yr = data_range(ys, 0.15);
         let span = yr.end - yr.start;
+        let title = match rep.window_cut {
+            Some(cut) => format!(
+                "mu_kinetic per {} ({}), 95% bars, against the whole fit's 95% interval",
+                cut.per(),
+                cut.how()
+            ),
+            None => "mu_kinetic of the whole fit (95% interval; no window fitted)".to_owned(),
+        };
         let mut chart = ChartBuilder::on(area)
-            .caption(
-                "mu_kinetic per third of the recording (95% bars) against the whole fit's 95% interval",
-                ("sans-serif", 16),
-            )
+            .caption(title, ("sans-serif", 16))
             .margin(6)
             .x_label_area_size(32)
             .y_label_area_size(84)
@@ -364,11 +500,11 @@ impl FitFigure<'_> {
             .draw()?;
         chart.draw_series(std::iter::once(Rectangle::new(
             [(0.0, mu.ci95[0]), (t_end, mu.ci95[1])],
-            RGBColor(0, 90, 200).mix(0.18).filled(),
+            WHOLE.mix(0.25).filled(),
         )))?;
         chart.draw_series(LineSeries::new(
             [(0.0, mu.value), (t_end, mu.value)],
-            RGBColor(0, 90, 200).stroke_width(2),
+            WHOLE.stroke_width(2),
         ))?;
         for w in &rep.windows {
             let (t0w, t1w) = (w.t_start, w.t_end);
@@ -388,38 +524,46 @@ impl FitFigure<'_> {
         }
         Ok(())
     }
-}
 
-/// The legend's entries: the coordinates' colours, the fit, the noise band, the fitted modes
-/// and the windows' marks.
-fn legend_entries() -> Vec<(Swatch, String)> {
-    let mut entries: Vec<(Swatch, String)> = COORDS
-        .iter()
-        .map(|(name, c)| (Swatch::Dot(*c), format!("{name} observed")))
-        .collect();
-    entries.push((Swatch::Line(BLACK, 1), "fitted model".into()));
-    entries.push((
-        Swatch::Fill(RGBColor(200, 200, 200)),
-        "+-2 measured noise".into(),
-    ));
-    entries.push((
-        Swatch::Fill(mode_color(Mode::Stick)),
-        "fitted: stuck".into(),
-    ));
-    entries.push((
-        Swatch::Fill(mode_color(Mode::Slide(crate::model::Direction::Positive))),
-        "fitted: sliding +x".into(),
-    ));
-    entries.push((
-        Swatch::Fill(mode_color(Mode::Slide(crate::model::Direction::Negative))),
-        "fitted: sliding -x".into(),
-    ));
-    entries.push((
-        Swatch::Line(RGBColor(0, 90, 200), 2),
-        "mu_kinetic, whole fit".into(),
-    ));
-    entries.push((Swatch::Line(BLACK, 2), "mu_kinetic, one third".into()));
-    entries
+    /// The legend's entries: the coordinates' colours, the fit, what was left out, the noise
+    /// band, the fitted modes and the windows' marks.
+    fn legend_entries(&self) -> Vec<(Swatch, String)> {
+        let mut entries: Vec<(Swatch, String)> = COORDS
+            .iter()
+            .map(|(name, c)| (Swatch::Dot(*c), (*name).to_owned()))
+            .collect();
+        let grey = RGBColor(90, 90, 90);
+        entries.push((Swatch::Ring(grey), "data (observed)".into()));
+        entries.push((Swatch::Dot(grey), "residual (fitted - observed)".into()));
+        entries.push((Swatch::Line(MODEL, 1), "fitted model".into()));
+        entries.push((
+            Swatch::Cross(LEFT_OUT),
+            "left out of the fit as mis-tracked".into(),
+        ));
+        entries.push((
+            Swatch::Fill(RGBColor(200, 200, 200)),
+            "+-2 measured noise".into(),
+        ));
+        entries.push((
+            Swatch::Fill(mode_color(Mode::Stick)),
+            "fitted: stuck".into(),
+        ));
+        entries.push((
+            Swatch::Fill(mode_color(Mode::Slide(crate::model::Direction::Positive))),
+            "fitted: sliding +x".into(),
+        ));
+        entries.push((
+            Swatch::Fill(mode_color(Mode::Slide(crate::model::Direction::Negative))),
+            "fitted: sliding -x".into(),
+        ));
+        entries.push((
+            Swatch::Line(WHOLE, 2),
+            "mu_kinetic, whole fit (band: 95%)".into(),
+        ));
+        let one = self.report.window_cut.map_or("window", |c| c.per());
+        entries.push((Swatch::Line(BLACK, 2), format!("mu_kinetic, one {one}")));
+        entries
+    }
 }
 
 impl Figure for FitFigure<'_> {
@@ -440,13 +584,16 @@ impl Figure for FitFigure<'_> {
             rest = b;
         }
         areas.push(rest);
+        let mut thinned = (0, 0);
         for (area, panel) in areas.iter().zip(PANELS) {
-            self.panel(area, panel, &traces)?;
+            let (drawn, total) = self.panel(area, panel, &traces)?;
+            thinned = (thinned.0 + drawn, thinned.1 + total);
         }
         if let Some(mu) = self.report.mu_kinetic {
             self.windows_panel(&windows_area, mu, traces.t_end)?;
         }
-        draw_side_legend(&side, "Fit", &legend_entries(), &self.notes(), 30)?;
+        let notes = self.notes(&traces, thinned);
+        draw_side_legend(&side, "Fit", &self.legend_entries(), &notes, 30)?;
         Ok(())
     }
 }

@@ -69,7 +69,7 @@ impl FrictionFigure<'_> {
                 out.push((Swatch::Dot(self.colour(i, 1.0)), name.clone()));
             }
             out.push((
-                Swatch::Line(BLACK, 1),
+                Swatch::Ring(BLACK),
                 "filled: toward +x, open: toward -x".into(),
             ));
         }
@@ -95,8 +95,8 @@ impl FrictionFigure<'_> {
             ));
         }
         out.push((
-            Swatch::Line(BLACK, 1),
-            "squares: the chosen law's value of the same fit on its own motion".into(),
+            Swatch::Square(BLACK),
+            "the chosen law's value: the same fit on the law's own motion".into(),
         ));
         out.push((
             Swatch::Dashed(RGBColor(120, 120, 120)),

@@ -123,6 +123,7 @@ pub fn fit_json(rep: &FitReport) -> Value {
         "nuisances": rep.nuisances.iter().map(|n| n.name()).collect::<Vec<_>>(),
         "friction_law": rep.friction,
         "windows": rep.windows,
+        "windows_cut": rep.window_cut,
         "windows_p_value": a.windows_p_value,
         "runs_p_value": a.runs_p_value,
         "block_se_ratio": a.block_se_ratio,

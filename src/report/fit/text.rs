@@ -305,13 +305,16 @@ pub fn friction_law_text(s: &mut String, f: &crate::fit::law::FrictionLawResult)
     let _ = writeln!(s);
 }
 
-/// [[Windows]]: mu_kinetic per slide with the windows' agreement.
+/// [[Windows]]: mu_kinetic per window (a slide each, as they were cut) with the windows'
+/// agreement.
 fn windows(s: &mut String, rep: &FitReport) {
     let a = &rep.adequacy;
-    if !rep.windows.is_empty() {
+    if let (false, Some(cut)) = (rep.windows.is_empty(), rep.window_cut) {
         let _ = writeln!(
             s,
-            "[[Windows]] mu_kinetic per slide (cut at sticks and reversals; agreement {})",
+            "[[Windows]] mu_kinetic per {} ({}; agreement {})",
+            cut.per(),
+            cut.how(),
             crate::report::p_is(a.windows_p_value.unwrap_or(f64::NAN))
         );
         for w in &rep.windows {
