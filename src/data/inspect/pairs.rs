@@ -499,3 +499,40 @@ fn ordinal(n: usize) -> String {
     };
     format!("{n}{suffix}")
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A bob at angles spread evenly over +-30 deg about straight below a slider at rest swings
+    /// through the middle 90 % of 60 deg (54 deg) and leans by nothing, whichever way y points;
+    /// read upside down it leans by 180 deg.
+    #[test]
+    fn swing_and_lean_of_an_even_swing_about_the_vertical() {
+        let n = 1001;
+        let slider = vec![Some([0.2, 0.1]); n];
+        for y_down in [false, true] {
+            let down = if y_down { 1.0 } else { -1.0 };
+            let bob: Vec<Option<[f64; 2]>> = (0..n)
+                .map(|k| {
+                    let a = (-30.0 + 60.0 * k as f64 / (n - 1) as f64).to_radians();
+                    Some([0.2 + 0.3 * a.sin(), 0.1 + down * 0.3 * a.cos()])
+                })
+                .collect();
+            let (swing, lean) = swing_and_lean(&slider, &bob, y_down);
+            assert!((swing - 54.0).abs() < 0.1, "{swing}");
+            assert!(lean.abs() < 1e-9, "{lean}");
+            let (_, upside) = swing_and_lean(&slider, &bob, !y_down);
+            assert!((upside - 180.0).abs() < 1e-9, "{upside}");
+        }
+    }
+
+    #[test]
+    fn ordinals_read_as_english() {
+        let o: Vec<String> = [1, 2, 3, 4, 11, 12, 13, 21, 22, 101].map(ordinal).into();
+        assert_eq!(
+            o,
+            ["1st", "2nd", "3rd", "4th", "11th", "12th", "13th", "21st", "22nd", "101st"]
+        );
+    }
+}
