@@ -231,8 +231,8 @@ fn fps_is_asked_for_exactly_where_convert_needs_it() {
             scale: Some(1.0),
             ..ReadOptions::default()
         };
-        let needs = read_recording(&[file.clone()], &opts(None)).is_err()
-            && read_recording(&[file.clone()], &opts(Some(30.0))).is_ok();
+        let needs = read_recording(std::slice::from_ref(&file), &opts(None)).is_err()
+            && read_recording(std::slice::from_ref(&file), &opts(Some(30.0))).is_ok();
         let says = suggested(&v).contains(&"--fps".to_string());
         assert_eq!(says, needs, "{rel}");
         assert_eq!(v["time"]["timed"], !needs, "{rel}");
