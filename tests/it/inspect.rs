@@ -16,6 +16,15 @@ fn appell(args: &[&str]) -> Output {
         .expect("run appell")
 }
 
+/// The command ended well; else the test fails with its stderr.
+fn ok(out: &Output, what: &str) {
+    assert!(
+        out.status.success(),
+        "{what}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 fn root(rel: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR")).join(rel)
 }
@@ -32,11 +41,7 @@ fn inspect(files: &[&Path], flags: &[&str]) -> Value {
     args.extend(flags.iter().map(|f| f.to_string()));
     let args: Vec<&str> = args.iter().map(String::as_str).collect();
     let out = appell(&args);
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    ok(&out, &format!("{args:?}"));
     serde_json::from_slice(&out.stdout).unwrap_or_else(|e| panic!("{args:?}: {e}"))
 }
 
@@ -298,11 +303,7 @@ fn convert(args: &[String], output: &Path) -> String {
     args.insert(0, "convert");
     args.push(&out_arg);
     let out = appell(&args);
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    ok(&out, &format!("{args:?}"));
     std::fs::read_to_string(output).unwrap()
 }
 
@@ -331,11 +332,7 @@ fn the_dlc_example_runs_as_printed() {
         ("RIG.toml", s(&root("configs/markers_example.toml"))),
     ];
     let out = run_printed(v["convert_command"].as_str().unwrap(), &fill);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    ok(&out, "");
     let by_readme = convert(
         &[
             "--fps".into(),
@@ -349,11 +346,7 @@ fn the_dlc_example_runs_as_printed() {
     );
     assert_eq!(std::fs::read_to_string(&printed).unwrap(), by_readme);
     let fit = run_printed(v["fit_command"].as_str().unwrap(), &fill);
-    assert!(
-        fit.status.success(),
-        "{}",
-        String::from_utf8_lossy(&fit.stderr)
-    );
+    ok(&fit, "");
 }
 
 /// The shipped Tracker pair, the example MCAP and a generated wide CSV need no flag: their
@@ -384,11 +377,7 @@ fn metric_rig_recordings_fit_as_printed() {
             v["fit_command"].as_str().unwrap(),
             &[("RIG.toml", s(&root(rig)))],
         );
-        assert!(
-            fit.status.success(),
-            "{files:?}: {}",
-            String::from_utf8_lossy(&fit.stderr)
-        );
+        ok(&fit, &format!("{files:?}"));
     }
 }
 
@@ -453,11 +442,7 @@ fn markers_named_otherwise_are_found_by_their_motion() {
         v["convert_command"].as_str().unwrap(),
         &[("OUT.csv", s(&out))],
     );
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    ok(&run, "");
     assert_eq!(
         std::fs::read_to_string(&out).unwrap(),
         shipped_conversion(dir.path())
@@ -480,11 +465,7 @@ fn an_upside_down_file_is_read_with_the_other_y() {
         v["convert_command"].as_str().unwrap(),
         &[("OUT.csv", s(&out))],
     );
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    ok(&run, "");
     // y is negated twice: the same numbers, but for the sign of a zero.
     let norm = |t: String| t.replace("-0,", "0,").replace("-0\n", "0\n");
     assert_eq!(
@@ -516,11 +497,7 @@ fn a_3d_file_is_read_in_the_plane_of_the_swing() {
     let out = dir.path().join("out.csv");
     let fill = [("OUT.csv", s(&out)), ("METRES", "0.3".to_string())];
     let run = run_printed(v["convert_command"].as_str().unwrap(), &fill);
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    ok(&run, "");
     let got = std::fs::read_to_string(&out).unwrap();
     let want = shipped_conversion(dir.path());
     // 3-D columns carry no unit: the rod length sets the scale, within its median's rounding.
@@ -557,11 +534,7 @@ fn tracker_files_in_the_wrong_order_are_turned_round() {
         v["convert_command"].as_str().unwrap(),
         &[("OUT.csv", s(&out))],
     );
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    ok(&run, "");
     let shipped = convert(
         &[
             s(&root("tests/data/tracker_slider.txt")),
@@ -593,11 +566,7 @@ fn placeholders_filled_in_make_a_command_that_runs() {
             ("OUT.csv", s(&out)),
         ];
         let run = run_printed(v["convert_command"].as_str().unwrap(), &fill);
-        assert!(
-            run.status.success(),
-            "{rel}: {}",
-            String::from_utf8_lossy(&run.stderr)
-        );
+        ok(&run, rel);
     }
 }
 
@@ -627,11 +596,7 @@ fn several_files_are_reported_in_turn() {
         &s(&root("tests/data/tracker_bob.txt")),
         "--json",
     ]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    ok(&out, "");
     let lines: Vec<Value> = String::from_utf8_lossy(&out.stdout)
         .lines()
         .map(|l| serde_json::from_str(l).unwrap())

@@ -171,6 +171,52 @@ struct Chosen {
     indices: Option<(usize, usize)>,
 }
 
+impl Chosen {
+    /// No pair to name: `why` says what is missing.
+    fn none(why: &str) -> Chosen {
+        Chosen {
+            choice: RigChoice {
+                slider: None,
+                bob: None,
+                looks_like_rig: false,
+                why: why.to_string(),
+                by_name: None,
+            },
+            pair: None,
+            indices: None,
+        }
+    }
+
+    /// The pair `p` of `series`, and what the names picked.
+    fn pair(p: &Pair, series: &[Series], by_name: Option<[String; 2]>) -> Chosen {
+        let index = |name: &str| series.iter().position(|s| s.name == name);
+        Chosen {
+            choice: RigChoice {
+                slider: Some(p.slider.clone()),
+                bob: Some(p.bob.clone()),
+                looks_like_rig: usable(p),
+                why: p.why.clone(),
+                by_name,
+            },
+            pair: Some(p.clone()),
+            indices: index(&p.slider).zip(index(&p.bob)),
+        }
+    }
+}
+
+/// `--slider A --bob B`, required.
+fn name_flags(slider: &str, bob: &str, why: String) -> Suggestion {
+    Suggestion {
+        flags: vec![
+            ("--slider".into(), Some(slider.to_string())),
+            ("--bob".into(), Some(bob.to_string())),
+        ],
+        files: Vec::new(),
+        need: Need::Required,
+        why,
+    }
+}
+
 /// The slider and the bob: the pair the names pick when it moves like one, else the pair
 /// that does, with the flags (or the file order) that name it.
 fn choose(
@@ -181,32 +227,6 @@ fn choose(
     look: Look,
 ) -> (Chosen, Vec<Suggestion>) {
     let series = &parsed.series;
-    let index = |name: &str| series.iter().position(|s| s.name == name);
-    let best = ins
-        .pairs
-        .iter()
-        .find(|p| p.rig)
-        .or_else(|| ins.pairs.iter().find(|p| usable(p)));
-    let chosen = |p: &Pair, by_name: Option<[String; 2]>| Chosen {
-        choice: RigChoice {
-            slider: Some(p.slider.clone()),
-            bob: Some(p.bob.clone()),
-            looks_like_rig: usable(p),
-            why: p.why.clone(),
-            by_name,
-        },
-        pair: Some(p.clone()),
-        indices: index(&p.slider).zip(index(&p.bob)),
-    };
-    let name_flags = |p: &Pair, why: String| Suggestion {
-        flags: vec![
-            ("--slider".into(), Some(p.slider.clone())),
-            ("--bob".into(), Some(p.bob.clone())),
-        ],
-        files: Vec::new(),
-        need: Need::Required,
-        why,
-    };
     if series.len() < 2 {
         let why = match series.first() {
             Some(s) => format!(
@@ -215,25 +235,16 @@ fn choose(
             ),
             None => "the input holds no marker".into(),
         };
-        let choice = RigChoice {
-            slider: None,
-            bob: None,
-            looks_like_rig: false,
-            why: why.clone(),
-            by_name: None,
-        };
         let mut with_other: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
         with_other.push("OTHER_FILE".into());
-        let more = Suggestion::files(with_other, Need::Required, why);
-        return (
-            Chosen {
-                choice,
-                pair: None,
-                indices: None,
-            },
-            vec![more],
-        );
+        let more = Suggestion::files(with_other, Need::Required, why.clone());
+        return (Chosen::none(&why), vec![more]);
     }
+    let best = ins
+        .pairs
+        .iter()
+        .find(|p| p.rig)
+        .or_else(|| ins.pairs.iter().find(|p| usable(p)));
     let label = paths_label(paths);
     let named = match (
         select(&label, parsed, "slider", opts.slider.as_deref()),
@@ -244,66 +255,52 @@ fn choose(
         (Err(e), _) => Err(name_problem(&e, opts.slider.as_deref())),
         (_, Err(e)) => Err(name_problem(&e, opts.bob.as_deref())),
     };
-    let (si, bi) = match named {
-        Err(problem) => {
-            return match best {
-                Some(p) => {
-                    let why = format!(
-                        "{problem}; {:?} and {:?} move like a slider and a bob",
-                        p.slider, p.bob
-                    );
-                    (chosen(p, None), vec![name_flags(p, why)])
-                }
-                None => {
-                    let why = match ins.pairs.first() {
-                        Some(p) => format!(
-                            "{problem}, and no pair of markers moves like a slider and a bob (the closest, {:?} and {:?}: {}): name them",
-                            p.slider, p.bob, p.why
-                        ),
-                        None => format!("{problem}, and no two markers are seen together in {} frames: name them", super::pairs::MIN_COMMON_FRAMES),
-                    };
-                    let choice = RigChoice {
-                        slider: None,
-                        bob: None,
-                        looks_like_rig: false,
-                        why: why.clone(),
-                        by_name: None,
-                    };
-                    let flags = Suggestion {
-                        flags: vec![
-                            ("--slider".into(), Some("SLIDER".into())),
-                            ("--bob".into(), Some("BOB".into())),
-                        ],
-                        files: Vec::new(),
-                        need: Need::Required,
-                        why,
-                    };
-                    (
-                        Chosen {
-                            choice,
-                            pair: None,
-                            indices: None,
-                        },
-                        vec![flags],
-                    )
-                }
-            };
-        }
-        Ok(ix) => ix,
-    };
+    match named {
+        Ok(ix) => by_names(ix, best, parsed, paths, look),
+        Err(problem) => match best {
+            Some(p) => {
+                let why = format!(
+                    "{problem}; {:?} and {:?} move like a slider and a bob",
+                    p.slider, p.bob
+                );
+                let flags = name_flags(&p.slider, &p.bob, why);
+                (Chosen::pair(p, series, None), vec![flags])
+            }
+            None => {
+                let why = match ins.pairs.first() {
+                    Some(p) => format!(
+                        "{problem}, and no pair of markers moves like a slider and a bob (the closest, {:?} and {:?}: {}): name them",
+                        p.slider, p.bob, p.why
+                    ),
+                    None => format!(
+                        "{problem}, and no two markers are seen together in {} frames: name them",
+                        super::pairs::MIN_COMMON_FRAMES
+                    ),
+                };
+                let flags = name_flags("SLIDER", "BOB", why.clone());
+                (Chosen::none(&why), vec![flags])
+            }
+        },
+    }
+}
+
+/// The pair the names pick (`si`, `bi`): kept when it moves like a slider and a bob; turned
+/// round (by the flags, or by the files' order when that is what named it) when it does the
+/// other way round; else the pair that moves like one, when any does.
+fn by_names(
+    (si, bi): (usize, usize),
+    best: Option<&Pair>,
+    parsed: &Parsed,
+    paths: &[PathBuf],
+    look: Look,
+) -> (Chosen, Vec<Suggestion>) {
+    let series = &parsed.series;
     let by_name = Some([series[si].name.clone(), series[bi].name.clone()]);
     let as_named = pair_as_named(&series[si], &series[bi], look);
     if let Some(p) = as_named.as_ref().filter(|p| usable(p)) {
-        return (chosen(p, by_name), Vec::new());
+        return (Chosen::pair(p, series, by_name), Vec::new());
     }
     let reversed = pair_as_named(&series[bi], &series[si], look);
-    let what = match &as_named {
-        Some(p) => p.why.clone(),
-        None => format!(
-            "they are seen together in fewer than {} frames",
-            super::pairs::MIN_COMMON_FRAMES
-        ),
-    };
     if let Some(r) = reversed.as_ref().filter(|p| usable(p)) {
         let by_order = paths.len() == 2
             && parsed
@@ -322,7 +319,7 @@ fn choose(
                 r.why
             );
             let swapped = vec![r.slider.clone(), r.bob.clone()];
-            let mut c = chosen(&r, by_name);
+            let mut c = Chosen::pair(&r, series, by_name);
             c.indices = Some((bi, si));
             return (c, vec![Suggestion::files(swapped, Need::Required, why)]);
         }
@@ -330,37 +327,37 @@ fn choose(
             "the markers read as the slider ({:?}) and the bob ({:?}) are the other way round: {}",
             series[si].name, series[bi].name, r.why
         );
-        return (chosen(r, by_name), vec![name_flags(r, why)]);
+        let flags = name_flags(&r.slider, &r.bob, why);
+        return (Chosen::pair(r, series, by_name), vec![flags]);
     }
-    match best {
-        Some(p) => {
-            let why = format!(
-                "the markers the names pick, {:?} and {:?}, do not move like a slider and a bob ({what}); {:?} and {:?} do",
-                series[si].name, series[bi].name, p.slider, p.bob
-            );
-            (chosen(p, by_name), vec![name_flags(p, why)])
-        }
-        None => {
-            let mut c = match &as_named {
-                Some(p) => chosen(p, by_name),
-                None => Chosen {
-                    choice: RigChoice {
-                        slider: Some(series[si].name.clone()),
-                        bob: Some(series[bi].name.clone()),
-                        looks_like_rig: false,
-                        why: String::new(),
-                        by_name,
-                    },
-                    pair: None,
-                    indices: Some((si, bi)),
-                },
-            };
-            c.choice.why = format!(
-                "the markers the names pick do not move like a slider and a bob ({what}), and no other pair does"
-            );
-            (c, Vec::new())
-        }
+    let what = match &as_named {
+        Some(p) => p.why.clone(),
+        None => format!(
+            "they are seen together in fewer than {} frames",
+            super::pairs::MIN_COMMON_FRAMES
+        ),
+    };
+    if let Some(p) = best {
+        let why = format!(
+            "the markers the names pick, {:?} and {:?}, do not move like a slider and a bob ({what}); {:?} and {:?} do",
+            series[si].name, series[bi].name, p.slider, p.bob
+        );
+        let flags = name_flags(&p.slider, &p.bob, why);
+        return (Chosen::pair(p, series, by_name), vec![flags]);
     }
+    let mut c = match &as_named {
+        Some(p) => Chosen::pair(p, series, by_name),
+        None => Chosen {
+            indices: Some((si, bi)),
+            ..Chosen::none("")
+        },
+    };
+    c.choice.slider = Some(series[si].name.clone());
+    c.choice.bob = Some(series[bi].name.clone());
+    c.choice.why = format!(
+        "the markers the names pick do not move like a slider and a bob ({what}), and no other pair does"
+    );
+    (c, Vec::new())
 }
 
 /// A pair that moves like a slider and a bob: every test passes, or all but the bob below the
