@@ -22,8 +22,13 @@ pub const LINE_NOISE: f64 = 5.0;
 /// take of static markers: up to 2.6 deg between markers 28 mm apart).
 pub const MIN_SWING_DEG: f64 = 5.0;
 
-/// Noise deviations over the distance (as an angle) the swing must also exceed.
-pub const SWING_NOISE: f64 = 10.0;
+/// How many times the distance's robust spread (or its noise, if larger) the bob's arc must
+/// bow out from its chord: the sagitta d (1 - cos(swing / 2)) of a swing about a fixed point.
+/// A marker running along a straight line past another keeps a nearly constant distance from it
+/// too, but varies it by about the sagitta its sweep would have: a pendulum's bob swings far
+/// enough for its distance to hold several times better than that (the shipped rigs: arcs of
+/// 0.1 to 0.2 m against spreads under 0.6 mm).
+pub const ARC_SPREADS: f64 = 4.0;
 
 /// The largest angle (degrees) between straight down (the file's) and the mean direction from
 /// the slider to the bob: a pendulum swings about the vertical below its pivot (offset by a
@@ -140,8 +145,12 @@ pub(super) fn analyse(series: &[Series], look: Look) -> Analysis {
         .filter(|&i| markers[i].seen >= MIN_COMMON_FRAMES)
         .collect();
     let rare = series.len() - order.len();
-    // The most often seen first; among equals the file's order.
-    order.sort_by_key(|&i| std::cmp::Reverse(markers[i].seen));
+    // The most often seen first; among equals those that move most (a rig's markers among
+    // static ones), then the file's order.
+    order.sort_by(|&i, &j| {
+        (markers[j].seen.cmp(&markers[i].seen))
+            .then(markers[j].travel.total_cmp(&markers[i].travel))
+    });
     let mut left_out = Vec::new();
     if rare > 0 {
         left_out.push(format!(
@@ -359,8 +368,9 @@ fn judge(
     };
     let rod_allows = Geometry::RIGID_NOISE * g.noise + share * d;
     let line_allows = LINE_SHARE * d + LINE_NOISE * g.noise;
-    let swing_needs =
-        MIN_SWING_DEG + (SWING_NOISE * g.noise / d.max(f64::MIN_POSITIVE)).to_degrees();
+    // The swing whose arc bows out by ARC_SPREADS spreads: 2 acos(1 - k s / d).
+    let bow = (ARC_SPREADS * g.spread.max(g.noise) / d.max(f64::MIN_POSITIVE)).min(1.0);
+    let swing_needs = MIN_SWING_DEG.max(2.0 * (1.0 - bow).acos().to_degrees());
     let off = s.off_line.unwrap_or(f64::INFINITY);
     let ratio = |x: f64, limit: f64| if x <= 0.0 { 0.0 } else { x / limit };
     let barely = s.travel <= LINE_SHARE * d.max(0.0) + LINE_NOISE * g.noise;
@@ -453,7 +463,7 @@ fn judge(
         }
         if r[3] > 1.0 {
             said.push(format!(
-                "{bn:?} does not swing about {sn:?} ({} deg, where a release swings through at least {})",
+                "{bn:?} does not swing about {sn:?} as a pendulum does ({} deg, where a swing that holds the distance as well as it does, and not a run along a line, takes at least {} deg)",
                 sig(swing, 2),
                 sig(swing_needs, 2)
             ));
@@ -525,6 +535,69 @@ mod tests {
             let (_, upside) = swing_and_lean(&slider, &bob, !y_down);
             assert!((upside - 180.0).abs() < 1e-9, "{upside}");
         }
+    }
+
+    /// A series sampled at 100 Hz for 10 s from a position function of time.
+    fn series(name: &str, at: impl Fn(f64) -> [f64; 2]) -> Series {
+        let times: Vec<f64> = (0..1000).map(|k| k as f64 * 0.01).collect();
+        Series {
+            name: name.into(),
+            points: times.iter().map(|&t| Some(at(t))).collect(),
+            times,
+        }
+    }
+
+    const METRES: Look = Look {
+        scale: 1.0,
+        y_down: false,
+        unit: "m",
+    };
+
+    /// A slider running 5 cm either way along the rail under a marker fixed 0.43 m above it
+    /// keeps its distance to 0.7 % (the sagitta a^2 / 2h of its run) and sweeps 13 deg as seen
+    /// from it: a run along a line, not a swing, which would hold the distance to its noise.
+    #[test]
+    fn a_run_along_a_line_past_a_fixed_marker_is_no_swing() {
+        let fixed = series("fixed", |_| [0.0, 0.43]);
+        let runner = series("runner", |t| [0.05 * (0.9 * t).sin(), 0.0]);
+        let a = analyse(&[fixed, runner], METRES);
+        let p = &a.pairs[0];
+        assert_eq!((p.slider.as_str(), p.bob.as_str()), ("fixed", "runner"));
+        // The distance runs from 0.43 to sqrt(0.43^2 + 0.05^2): well within a rod's 2 %.
+        assert!(p.spread < 0.02 * p.median, "{p:?}");
+        assert!(!p.fails.contains(&"rod".to_string()), "{p:?}");
+        assert_eq!(p.fails, ["swing"], "{p:?}");
+        assert!(!p.rig);
+    }
+
+    /// Among 150 fixed markers listed first, the rig's two are still compared (the cap keeps
+    /// the markers that move), and found.
+    #[test]
+    fn the_rig_is_found_among_many_fixed_markers() {
+        let mut all: Vec<Series> = (0..150)
+            .map(|i| series(&format!("u{i}"), move |_| [0.01 * i as f64, 1.0]))
+            .collect();
+        let theta = |t: f64| 0.6 * (3.1 * t).sin();
+        all.push(series("s", |t| [0.05 * (0.9 * t).sin(), 0.0]));
+        all.push(series("b", move |t| {
+            [
+                0.05 * (0.9 * t).sin() + 0.3 * theta(t).sin(),
+                -0.3 * theta(t).cos(),
+            ]
+        }));
+        let a = analyse(&all, METRES);
+        assert!(
+            a.left_out.iter().any(|l| l.contains("100 markers")),
+            "{:?}",
+            a.left_out
+        );
+        let p = &a.pairs[0];
+        assert_eq!(
+            (p.slider.as_str(), p.bob.as_str(), p.rig),
+            ("s", "b", true),
+            "{p:?}"
+        );
+        assert!((p.median - 0.3).abs() < 1e-12);
     }
 
     #[test]
