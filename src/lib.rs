@@ -13,7 +13,8 @@
 //! - `data/`: recordings in and out: the CSV family one file per tool (`table/`), HDF5
 //!   (`hdf5/`), XML (`tracker_project.rs`, `kinovea_xml.rs`), MCAP (`mcap/`), calibration into the
 //!   rail frame (`calibrate.rs`), the one `Recording` type and the canonical CSV
-//!   (`recording.rs`), synthetic recordings (`synth.rs`).
+//!   (`recording.rs`), synthetic recordings (`synth.rs`), what a file holds before its options
+//!   are known (`inspect/`).
 //! - `fit/`: the estimation problem (`problem/`), the Levenberg-Marquardt solver for argmin
 //!   (`lm.rs`), the nuisances chosen by the data (`select/`), the uncertainty and adequacy checks,
 //!   and many releases fitted together (`joint/`).

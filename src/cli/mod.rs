@@ -62,6 +62,7 @@ pub fn stdout_failed(e: std::io::Error) -> ! {
 mod bench;
 mod convert;
 mod fit;
+mod inspect;
 mod plan;
 pub mod recording_args;
 mod regions;
@@ -81,6 +82,9 @@ pub struct Cli {
 
 #[derive(Debug, Subcommand)]
 enum Command {
+    /// What a recording holds (format, markers, times, units, which pair looks like the
+    /// slider and the bob) and every option still missing, with the commands to run.
+    Inspect(inspect::Args),
     /// Fit mu and the initial state to a recording (or a directory of recordings).
     Fit(fit::Args),
     /// Simulate a scene and print its event timeline.
@@ -135,6 +139,7 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     appell::output::remove_temporaries_on_signal();
     let result = match cli.command {
+        Command::Inspect(args) => inspect::run(args),
         Command::Fit(args) => fit::run(args),
         Command::Simulate(args) => simulate::run(args),
         Command::Bench(args) => bench::run(args),

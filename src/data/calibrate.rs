@@ -21,7 +21,7 @@ pub fn calibrate(
         (Some(s), _, _) => (s, "--scale".to_string()),
         (None, Some((s, why)), _) => (s, why),
         (None, None, Some(l)) => {
-            let mut d = distances(rec);
+            let mut d = distances(&rec.slider, &rec.bob);
             if d.is_empty() {
                 return Err("no frame shows both markers, so --rod-length cannot set the scale: give --scale".into());
             }
@@ -157,11 +157,48 @@ pub fn fit_rail(rec: &Recording) -> Result<(f64, [f64; 2], f64), String> {
     Ok((angle, origin, rms))
 }
 
+/// The robust spread (1.4826 times the median absolute deviation, in the track's units) of a track's
+/// positions across its own best straight line: the line through the coordinate-wise median
+/// along the principal axis of the positions, found again from the positions within five
+/// spreads of the first line (a few mis-tracked positions do not tilt it). `None` with fewer
+/// than 10 positions.
+pub fn off_line_spread(track: &[Option<[f64; 2]>]) -> Option<f64> {
+    let pts: Vec<[f64; 2]> = track.iter().flatten().copied().collect();
+    if pts.len() < 10 {
+        return None;
+    }
+    let centre = [0, 1].map(|k| median(&mut pts.iter().map(|p| p[k]).collect::<Vec<_>>()));
+    let mut keep = vec![true; pts.len()];
+    let mut spread = 0.0;
+    for _ in 0..2 {
+        let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
+        for (p, _) in pts.iter().zip(&keep).filter(|(_, k)| **k) {
+            let (dx, dy) = (p[0] - centre[0], p[1] - centre[1]);
+            sxx += dx * dx;
+            syy += dy * dy;
+            sxy += dx * dy;
+        }
+        let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
+        let (s, c) = angle.sin_cos();
+        let across: Vec<f64> = pts
+            .iter()
+            .map(|p| -s * (p[0] - centre[0]) + c * (p[1] - centre[1]))
+            .collect();
+        let mid = median(&mut across.clone());
+        let mut dev: Vec<f64> = across.iter().map(|d| (d - mid).abs()).collect();
+        spread = 1.4826 * median(&mut dev);
+        for (k, d) in keep.iter_mut().zip(&across) {
+            *k = (d - mid).abs() <= 5.0 * spread;
+        }
+    }
+    Some(spread)
+}
+
 /// The slider-bob distance of every frame with both markers, in frame order.
-fn distances(rec: &Recording) -> Vec<f64> {
-    rec.slider
+fn distances(slider: &[Option<[f64; 2]>], bob: &[Option<[f64; 2]>]) -> Vec<f64> {
+    slider
         .iter()
-        .zip(&rec.bob)
+        .zip(bob)
         .filter_map(|(s, b)| {
             let (s, b) = (s.as_ref()?, b.as_ref()?);
             Some((b[0] - s[0]).hypot(b[1] - s[1]))
@@ -191,7 +228,16 @@ pub(crate) fn median(v: &mut [f64]) -> f64 {
 /// reference (`rod_length`, else the median) than five robust standard deviations (at least
 /// 2 % of the length).
 pub fn check_geometry(rec: &Recording, rod_length: Option<f64>) -> Option<Geometry> {
-    let vals = distances(rec);
+    geometry(&rec.slider, &rec.bob, rod_length)
+}
+
+/// [`check_geometry`] of two tracks of equal length (one entry per frame), in any unit.
+pub fn geometry(
+    slider: &[Option<[f64; 2]>],
+    bob: &[Option<[f64; 2]>],
+    rod_length: Option<f64>,
+) -> Option<Geometry> {
+    let vals = distances(slider, bob);
     if vals.is_empty() {
         return None;
     }
@@ -212,10 +258,9 @@ pub fn check_geometry(rec: &Recording, rod_length: Option<f64>) -> Option<Geomet
     // distance scattering by 0.58 m on a 0.3 m rod left every frame within it).
     let tolerance = (5.0 * spread).clamp(0.02 * reference, 0.05 * reference);
     // Frames with both markers, in order, are the distances' frames.
-    let both = rec
-        .slider
+    let both = slider
         .iter()
-        .zip(&rec.bob)
+        .zip(bob)
         .enumerate()
         .filter(|(_, (s, b))| s.is_some() && b.is_some())
         .map(|(i, _)| i);
@@ -232,7 +277,7 @@ pub fn check_geometry(rec: &Recording, rod_length: Option<f64>) -> Option<Geomet
         outliers,
         tolerance,
         spread,
-        noise: distance_noise(rec),
+        noise: distance_noise(slider, bob),
     })
 }
 
@@ -240,11 +285,10 @@ pub fn check_geometry(rec: &Recording, rod_length: Option<f64>) -> Option<Geomet
 /// four consecutive frames with both markers: for white noise of deviation s their variance is
 /// 20 s^2, and the median of the squares over 0.4549 (the median of chi-square with one degree
 /// of freedom) is robust to mis-tracked frames. 0 with no such run.
-fn distance_noise(rec: &Recording) -> f64 {
-    let d: Vec<Option<f64>> = rec
-        .slider
+fn distance_noise(slider: &[Option<[f64; 2]>], bob: &[Option<[f64; 2]>]) -> f64 {
+    let d: Vec<Option<f64>> = slider
         .iter()
-        .zip(&rec.bob)
+        .zip(bob)
         .map(|(s, b)| {
             Some((b.as_ref()?[0] - s.as_ref()?[0]).hypot(b.as_ref()?[1] - s.as_ref()?[1]))
         })

@@ -172,6 +172,7 @@ impl Builder {
                 "DeepLabCut: pixels with y down, t = frame / {} Hz; {} point(s) under likelihood {} counted as missing",
                 self.fps, self.dropped, self.min_likelihood
             )],
+            plane: self.three_d.then_some(self.plane),
             ..Parsed::default()
         })
     }

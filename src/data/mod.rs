@@ -26,12 +26,16 @@
 //! - `recording.rs`: the formats, the calibrated `Recording` with its provenance, and the
 //!   canonical CSV it writes; `error.rs`: the one error type, `DataError`.
 //! - `synth.rs`: synthetic recordings with a known mu.
+//! - `inspect/`: what a file holds before the options a reader needs are known (`appell
+//!   inspect`): markers, times, units, the pair that moves like the slider and the bob, and the
+//!   options still missing.
 
 mod budget;
 pub mod calibrate;
 mod dlc;
 mod error;
 mod hdf5;
+pub mod inspect;
 mod kinovea_xml;
 pub mod mcap;
 mod options;
@@ -57,6 +61,22 @@ use std::path::{Path, PathBuf};
 /// Read a recording from one file, or from one file per marker (Tracker), and calibrate it
 /// into the rail frame. The format is detected unless `opts.format` is set.
 pub fn read_recording(paths: &[PathBuf], opts: &ReadOptions) -> Result<Recording, DataError> {
+    let (parsed, format, detected) = read_parsed(paths, opts)?;
+    let mut rec = assemble(paths, format, detected, parsed, opts)?;
+    if let Some((start, end)) = opts.time_window {
+        crop(&mut rec, start, end, &paths_label(paths))?;
+    }
+    Ok(rec)
+}
+
+/// Every marker series of one recording's files as the readers give them, before the slider
+/// and the bob are picked: the files' series in order (a name repeated in a later file is told
+/// apart by that file's name), two one-track files named in file order, the format and
+/// whether it was detected.
+pub(crate) fn read_parsed(
+    paths: &[PathBuf],
+    opts: &ReadOptions,
+) -> Result<(Parsed, Format, bool), DataError> {
     let Some(first) = paths.first() else {
         return Err(DataError::Options {
             path: PathBuf::from("(no input)"),
@@ -130,11 +150,7 @@ pub fn read_recording(paths: &[PathBuf], opts: &ReadOptions) -> Result<Recording
     let mut parsed = parsed.expect("at least one path");
     by_file_order(&mut parsed, &per_file, opts);
     let format = format.expect("format set with the first path");
-    let mut rec = assemble(paths, format, detected, parsed, opts)?;
-    if let Some((start, end)) = opts.time_window {
-        crop(&mut rec, start, end, &paths_label(paths))?;
-    }
-    Ok(rec)
+    Ok((parsed, format, detected))
 }
 
 /// The words of the note that says two tracks were taken as the slider and the bob in the
@@ -292,7 +308,8 @@ fn assemble(
     Ok(rec)
 }
 
-fn paths_label(paths: &[PathBuf]) -> PathBuf {
+/// The files of one recording as errors name them: `A + B`.
+pub(crate) fn paths_label(paths: &[PathBuf]) -> PathBuf {
     PathBuf::from(
         paths
             .iter()
@@ -304,7 +321,7 @@ fn paths_label(paths: &[PathBuf]) -> PathBuf {
 
 /// The index of the series for `role`: an exact name (or a name joined into a series), else
 /// the one name containing `wanted` (or the role itself), case-insensitively.
-fn select(
+pub(crate) fn select(
     path: &Path,
     parsed: &Parsed,
     role: &'static str,
@@ -409,7 +426,7 @@ fn join_rounded_times(a: &Series, b: &mut Series) -> Option<String> {
 
 /// Merge two series with increasing times into common frames: the union of their times, each
 /// marker missing where it has no sample.
-fn align(a: Series, b: Series) -> (Vec<f64>, Track, Track) {
+pub(crate) fn align(a: Series, b: Series) -> (Vec<f64>, Track, Track) {
     if a.times == b.times {
         return (a.times, a.points, b.points);
     }
@@ -501,6 +518,12 @@ fn read_sized(
 /// Tell the format from the file's first bytes and lines; for HDF5, from its groups and datasets
 /// (DeepLabCut's pandas DataFrame, else SLEAP).
 pub fn detect(path: &Path) -> Result<Format, DataError> {
+    detect_why(path).map(|(f, _)| f)
+}
+
+/// [`detect`], with what in the file told the format (`a first row starting "scorer"`), for a
+/// report that says how it knows.
+pub fn detect_why(path: &Path) -> Result<(Format, &'static str), DataError> {
     let mut head = Vec::with_capacity(4096);
     std::fs::File::open(path)
         .and_then(|f| f.take(4096).read_to_end(&mut head))
@@ -509,19 +532,33 @@ pub fn detect(path: &Path) -> Result<Format, DataError> {
             source,
         })?;
     if head.starts_with(hdf5::MAGIC) {
-        return Ok(hdf5::detect_file(path));
+        return Ok(match hdf5::detect_file(path) {
+            Format::DeepLabCut => (
+                Format::DeepLabCut,
+                "an HDF5 file holding a pandas DataFrame (DeepLabCut's output)",
+            ),
+            f => (
+                f,
+                "an HDF5 file without a pandas DataFrame (SLEAP's analysis file)",
+            ),
+        });
     }
-    detect_head(&head, path)
+    head_why(&head, path)
 }
 
 /// Tell the format from a file's first bytes (up to 4 KiB); `path` names it in errors. HDF5 is
 /// taken for SLEAP here: [`detect`] looks inside it.
 pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
+    head_why(head, path).map(|(f, _)| f)
+}
+
+/// [`detect_head`], with what told the format.
+fn head_why(head: &[u8], path: &Path) -> Result<(Format, &'static str), DataError> {
     if head.starts_with(::mcap::MAGIC) {
-        return Ok(Format::Mcap);
+        return Ok((Format::Mcap, "the MCAP magic bytes"));
     }
     if head.starts_with(hdf5::MAGIC) {
-        return Ok(Format::Sleap);
+        return Ok((Format::Sleap, "an HDF5 file"));
     }
     if head.is_empty() {
         return Err(DataError::Empty {
@@ -532,12 +569,15 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     let text = String::from_utf8_lossy(head);
     let text = text.trim_start_matches('\u{feff}');
     if text.trim_start().starts_with("<?xml") && text.contains("Excel.Sheet") {
-        return Ok(Format::Kinovea);
+        return Ok((
+            Format::Kinovea,
+            "an Excel XML spreadsheet (Kinovea's export)",
+        ));
     }
     if text.trim_start().starts_with("<?xml")
         && text.contains("org.opensourcephysics.cabrillo.tracker")
     {
-        return Ok(Format::Tracker);
+        return Ok((Format::Tracker, "an XML Tracker project"));
     }
     let lines: Vec<&str> = text.lines().take(8).collect();
     let first = lines.first().copied().unwrap_or("").trim();
@@ -550,7 +590,7 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("mcap"))
     {
-        return Ok(Format::Mcap);
+        return Ok((Format::Mcap, "the .mcap extension"));
     }
     let cells = |l: &str| -> Vec<String> {
         l.split([',', '\t', ';'])
@@ -560,13 +600,13 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     let c0 = cells(first);
     let key = c0.first().cloned().unwrap_or_default();
     if key == "scorer" {
-        return Ok(Format::DeepLabCut);
+        return Ok((Format::DeepLabCut, "a first row starting \"scorer\""));
     }
     if key == "format version" {
-        return Ok(Format::Motive);
+        return Ok((Format::Motive, "a first row starting \"Format Version\""));
     }
     if key.starts_with("#kinovea") {
-        return Ok(Format::Kinovea);
+        return Ok((Format::Kinovea, "a first line starting \"#Kinovea\""));
     }
     if [
         "no_of_frames",
@@ -576,15 +616,18 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     ]
     .contains(&key.as_str())
     {
-        return Ok(Format::Qualisys);
+        return Ok((
+            Format::Qualisys,
+            "a header of QTM keys (NO_OF_FRAMES, FREQUENCY, ...)",
+        ));
     }
     if c0.contains(&"frame_idx".to_string()) && c0.iter().any(|c| c.ends_with(".x")) {
-        return Ok(Format::Sleap);
+        return Ok((Format::Sleap, "the columns frame_idx and NODE.x"));
     }
     if c0.iter().any(|c| c == "x (cm)" || c == "x#wcentroid (cm)")
         || (c0.contains(&"midline_x".to_string()) && c0.contains(&"timestamp".to_string()))
     {
-        return Ok(Format::Trex);
+        return Ok((Format::Trex, "TRex's columns (X (cm), timestamp, ...)"));
     }
     if [
         "trajectories",
@@ -595,10 +638,13 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
     ]
     .contains(&key.as_str())
     {
-        return Ok(Format::Vicon);
+        return Ok((
+            Format::Vicon,
+            "a Nexus section title (Trajectories, Devices, ...)",
+        ));
     }
     if table::long_columns(&c0).is_some() {
-        return Ok(Format::Long);
+        return Ok((Format::Long, "the columns time, marker, x, y"));
     }
     // Tracker: `#multi:`, or a lone track name then `t x y`, or `t x y` itself.
     if first.eq_ignore_ascii_case("#multi:")
@@ -608,10 +654,10 @@ pub fn detect_head(head: &[u8], path: &Path) -> Result<Format, DataError> {
             && !first.contains(' ')
             && table::tracker_header_delimiter(lines[1]).is_some())
     {
-        return Ok(Format::Tracker);
+        return Ok((Format::Tracker, "Tracker's columns t, x, y"));
     }
     if !table::wide_markers(&c0).is_empty() {
-        return Ok(Format::Wide);
+        return Ok((Format::Wide, "columns NAME_x, NAME_y (or x1, y1, ...)"));
     }
     Err(unknown())
 }

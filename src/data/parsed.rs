@@ -29,4 +29,6 @@ pub(crate) struct Parsed {
     /// Names a reader joined into another series (a later name, the name it is kept under):
     /// asking for the later name selects the joined series.
     pub joined: Vec<(String, String)>,
+    /// The plane a 3-D file's positions were projected onto (`None`: the file is 2-D).
+    pub plane: Option<super::Plane>,
 }

@@ -2,7 +2,6 @@
 //! round, and their distance as constant as a rod's. A swapped or foreign recording is
 //! otherwise fitted to a meaningless mu (or fails after minutes) instead of being named.
 
-use crate::data::calibrate::median;
 use crate::data::Recording;
 use thiserror::Error;
 
@@ -38,42 +37,7 @@ pub struct RecordingCheck {
     pub message: String,
 }
 
-/// The robust spread (1.4826 times the median absolute deviation, metres) of a track's
-/// positions across its own best straight line: the line through the coordinate-wise median
-/// along the principal axis of the positions, found again from the positions within five
-/// spreads of the first line (a few mis-tracked positions do not tilt it). `None` with fewer
-/// than 10 positions.
-pub fn off_line_spread(track: &[Option<[f64; 2]>]) -> Option<f64> {
-    let pts: Vec<[f64; 2]> = track.iter().flatten().copied().collect();
-    if pts.len() < 10 {
-        return None;
-    }
-    let centre = [0, 1].map(|k| median(&mut pts.iter().map(|p| p[k]).collect::<Vec<_>>()));
-    let mut keep = vec![true; pts.len()];
-    let mut spread = 0.0;
-    for _ in 0..2 {
-        let (mut sxx, mut syy, mut sxy) = (0.0, 0.0, 0.0);
-        for (p, _) in pts.iter().zip(&keep).filter(|(_, k)| **k) {
-            let (dx, dy) = (p[0] - centre[0], p[1] - centre[1]);
-            sxx += dx * dx;
-            syy += dy * dy;
-            sxy += dx * dy;
-        }
-        let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
-        let (s, c) = angle.sin_cos();
-        let across: Vec<f64> = pts
-            .iter()
-            .map(|p| -s * (p[0] - centre[0]) + c * (p[1] - centre[1]))
-            .collect();
-        let mid = median(&mut across.clone());
-        let mut dev: Vec<f64> = across.iter().map(|d| (d - mid).abs()).collect();
-        spread = 1.4826 * median(&mut dev);
-        for (k, d) in keep.iter_mut().zip(&across) {
-            *k = (d - mid).abs() <= 5.0 * spread;
-        }
-    }
-    Some(spread)
-}
+pub use crate::data::calibrate::off_line_spread;
 
 /// The files of a recording, as its messages name them.
 fn files(rec: &Recording) -> String {

@@ -1,6 +1,7 @@
 //! Reports: readable timelines, JSON objects and CSV tables, each written whole or not at all.
 
 pub mod fit;
+pub mod inspect;
 pub mod joint;
 pub mod plan;
 pub mod plot;

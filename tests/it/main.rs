@@ -16,6 +16,7 @@ mod friction_laws;
 mod fuzz_structured;
 mod hardening;
 mod helpers;
+mod inspect;
 mod joint;
 mod measured;
 mod misspec;

@@ -75,6 +75,7 @@ pub(super) fn read_motive(
         .collect(),
         joined,
         warnings: join_warning.into_iter().collect(),
+        plane: Some(plane),
         ..Parsed::default()
     })
 }

@@ -97,6 +97,7 @@ pub(super) fn read_qualisys(
             },
             plane.name()
         )],
+        plane: Some(plane),
         ..Parsed::default()
     })
 }

@@ -104,6 +104,7 @@ pub(super) fn read_vicon(
             "Vicon: {rate} Hz, t = (frame - first frame) / rate; plane {} (Vicon's z is up; --plane to change)",
             plane.name()
         )],
+        plane: Some(plane),
         ..Parsed::default()
     })
 }

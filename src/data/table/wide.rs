@@ -138,6 +138,7 @@ pub(super) fn read_wide(
         y_down: header.iter().any(|h| h.eq_ignore_ascii_case("x1")),
         time_base: time.base.unwrap_or(0.0),
         notes,
+        plane: three_d.then_some(plane),
         ..Parsed::default()
     })
 }

@@ -1,0 +1,252 @@
+//! `appell inspect`'s report: what a recording holds, the pair that looks like the slider and
+//! the bob, the options still missing and the commands to run, as text or one JSON object.
+
+use crate::data::inspect::{sig, Inspection, Need};
+use serde_json::Value;
+
+/// The pairs the text lists (the JSON lists every pair compared).
+pub const PAIRS_SHOWN: usize = 8;
+
+/// The inspection as one JSON object.
+pub fn inspect_json(ins: &Inspection) -> Value {
+    serde_json::to_value(ins).expect("an inspection serializes")
+}
+
+/// The inspection as text, one item per line.
+pub fn inspect_text(ins: &Inspection) -> String {
+    let mut s = String::new();
+    let files: Vec<String> = ins.files.iter().map(|f| f.display().to_string()).collect();
+    s += &format!("{}\n", files.join(" + "));
+    s += &format!("  format     {}, {}\n", ins.format, ins.detection);
+    s += &format!("  frames     {}\n", frames_line(ins));
+    let u = &ins.units;
+    s += &format!(
+        "  units      {}; y {} in the file; lengths below in {}\n",
+        u.said,
+        if u.y_down { "down" } else { "up" },
+        u.unit
+    );
+    if let Some(p) = &ins.plane {
+        let how = if p.given {
+            "from --plane".to_string()
+        } else if p.used == p.default {
+            format!(
+                "the format's default{}",
+                if p.rig {
+                    ""
+                } else {
+                    "; no plane shows a slider and a bob"
+                }
+            )
+        } else {
+            format!(
+                "where the markers look most like a slider and a bob (the format's default is {})",
+                p.default
+            )
+        };
+        s += &format!("  plane      {} ({how})\n", p.used);
+    }
+    markers(&mut s, ins);
+    pairs(&mut s, ins);
+    let r = &ins.rig;
+    let verdict = match (&r.slider, &r.bob, r.looks_like_rig) {
+        (Some(a), Some(b), true) => format!("slider {a:?}, bob {b:?}: {}", r.why),
+        _ => r.why.clone(),
+    };
+    s += &format!("  rig        {verdict}\n");
+    if ins.suggestions.is_empty() {
+        s += "  options    none missing: the file reads as it is\n";
+    }
+    for (k, sg) in ins.suggestions.iter().enumerate() {
+        let head = if k == 0 {
+            "  options    "
+        } else {
+            "             "
+        };
+        let need = match sg.need {
+            Need::Required => "required",
+            Need::Advised => "advised",
+        };
+        let what = if sg.flags.is_empty() {
+            format!("files {}", sg.typed())
+        } else {
+            sg.typed()
+        };
+        s += &format!("{head}{what} ({need}): {}\n", sg.why);
+    }
+    s += &format!("  run        {}\n", ins.convert_command);
+    s += &format!("             {}\n", ins.fit_command);
+    s += &format!("             ({})\n", placeholders(ins));
+    for n in &ins.left_out {
+        s += &format!("  note: {n}\n");
+    }
+    for n in &ins.notes {
+        s += &format!("  note: {n}\n");
+    }
+    for w in &ins.warnings {
+        s += &format!("  warning: {w}\n");
+    }
+    if !ins.metadata.is_empty() {
+        let kv: Vec<String> = ins
+            .metadata
+            .iter()
+            .map(|(k, v)| format!("{k}={v}"))
+            .collect();
+        s += &format!("  metadata: {}\n", kv.join(", "));
+    }
+    s
+}
+
+/// How many frames, over what, at what rate.
+fn frames_line(ins: &Inspection) -> String {
+    let t = &ins.time;
+    let uneven = |unit: &str| match t.uneven {
+        Some([lo, hi]) => format!(
+            "; steps uneven, from {} to {} {unit}",
+            sig(lo, 3),
+            sig(hi, 3)
+        ),
+        None => String::new(),
+    };
+    if !t.timed {
+        let hint = match t.name_says {
+            Some(hz) => format!(" (the file's name says {hz} Hz)"),
+            None => String::new(),
+        };
+        let frame = |x: f64| {
+            if x.fract() == 0.0 && x.abs() < 1e15 {
+                format!("{}", x as i64)
+            } else {
+                sig(x, 6)
+            }
+        };
+        return format!(
+            "{}, frame numbers {} to {} only: the file holds no times, so --fps is needed{hint}{}",
+            t.frames,
+            frame(t.first),
+            frame(t.last),
+            uneven("frames")
+        );
+    }
+    let rate = match t.rate {
+        Some(hz) => format!(", {} frames/s", sig(hz, 4)),
+        None => String::new(),
+    };
+    // A clock of seconds since 1970 is said to the millisecond, not to six digits.
+    let start = match t.first {
+        0.0 => String::new(),
+        x if x.abs() >= 1e4 => format!(", from {x:.3} s on the file's clock"),
+        x => format!(", from {} s on the file's clock", sig(x, 6)),
+    };
+    format!(
+        "{} over {} s{start}{rate}{}",
+        t.frames,
+        sig(t.last - t.first, 4),
+        uneven("s")
+    )
+}
+
+/// Decimal places that show the report's lengths to about four significant digits at the size
+/// of the largest of them.
+fn length_decimals(ins: &Inspection) -> usize {
+    let largest = ins
+        .markers
+        .iter()
+        .flat_map(|m| m.x.into_iter().chain(m.y).flatten())
+        .fold(0.0f64, |a, v| a.max(v.abs()));
+    if largest > 0.0 {
+        (3 - largest.log10().floor() as i32).clamp(0, 8) as usize
+    } else {
+        1
+    }
+}
+
+/// One line a marker: frames seen, ranges, travel, spread off a line.
+fn markers(s: &mut String, ins: &Inspection) {
+    let dec = length_decimals(ins);
+    let width = ins
+        .markers
+        .iter()
+        .map(|m| m.name.len())
+        .max()
+        .unwrap_or(0)
+        .min(30);
+    let frames = ins.time.frames;
+    *s += &format!(
+        "  markers    {}: frames seen, x and y ranges, travel and robust spread off a straight line ({})\n",
+        ins.markers.len(),
+        ins.units.unit
+    );
+    for m in &ins.markers {
+        let range = |r: Option<[f64; 2]>| match r {
+            Some([a, b]) => format!("{a:.dec$} to {b:.dec$}"),
+            None => "-".into(),
+        };
+        *s += &format!(
+            "    {:width$}  {:>w$} of {frames}  x {}  y {}  travel {}  off line {}\n",
+            m.name,
+            m.seen,
+            range(m.x),
+            range(m.y),
+            sig(m.travel, 3),
+            m.off_line.map_or("-".into(), |d| sig(d, 2)),
+            w = frames.to_string().len()
+        );
+    }
+}
+
+/// The ranked pairs, at most [`PAIRS_SHOWN`].
+fn pairs(s: &mut String, ins: &Inspection) {
+    let unit = &ins.units.unit;
+    if ins.pairs.is_empty() {
+        *s += "  pairs      none compared (fewer than two markers seen together in 10 frames)\n";
+        return;
+    }
+    *s += &format!(
+        "  pairs      {} compared, the most like a slider and a bob first: slider -> bob, distance median +- robust spread ({unit}), slider off its line, swing\n",
+        ins.pairs.len()
+    );
+    for (k, p) in ins.pairs.iter().take(PAIRS_SHOWN).enumerate() {
+        *s += &format!(
+            "    {:>2}. {:?} -> {:?}  {} +- {} over {} frames  off line {}  swing {} deg  score {:.2}{}\n",
+            k + 1,
+            p.slider,
+            p.bob,
+            sig(p.median, 4),
+            sig(p.spread, 2),
+            p.frames,
+            sig(p.slider_off_line, 2),
+            sig(p.swing_deg, 2),
+            p.score,
+            if p.rig { "  rig" } else { "" }
+        );
+    }
+    if ins.pairs.len() > PAIRS_SHOWN {
+        *s += &format!(
+            "        ... {} more pairs (--json lists them all)\n",
+            ins.pairs.len() - PAIRS_SHOWN
+        );
+    }
+}
+
+/// What the upper-case words of the commands stand for.
+fn placeholders(ins: &Inspection) -> String {
+    let words = format!("{} {}", ins.convert_command, ins.fit_command);
+    let mut said = Vec::new();
+    for (word, meaning) in [
+        ("OTHER_FILE", "OTHER_FILE the other marker's file"),
+        ("FPS", "FPS the video's frame rate in Hz"),
+        ("METRES", "METRES the rig's rod length in metres"),
+        ("SLIDER", "SLIDER and BOB the markers' names"),
+        (
+            "RIG.toml",
+            "RIG.toml your rig file (the [rig] section of a scene)",
+        ),
+        ("OUT.csv", "OUT.csv the canonical CSV to write"),
+    ] {
+        if words.split(' ').any(|w| w == word) {
+            said.push(meaning);
+        }
+    }
+    format!("upper case is yours to fill in: {}", said.join(", "))
+}
