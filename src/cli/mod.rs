@@ -80,6 +80,8 @@ pub struct Cli {
     command: Command,
 }
 
+// Parsed once per process: the fit's many flags make its variant large, which costs nothing.
+#[allow(clippy::large_enum_variant)]
 #[derive(Debug, Subcommand)]
 enum Command {
     /// What a recording holds (format, markers, times, units, which pair looks like the
