@@ -26,12 +26,9 @@ pub fn joint_answer(rep: &JointReport) -> String {
         );
     }
     let e = &rep.mu_kinetic;
-    let d = crate::report::two_digit_decimals(e.stderr).map_or(6, |d| d.min(12));
     let head = format!(
-        "mu_kinetic = {} (95 %: {:.d$} to {:.d$}) from {n} releases{aside}",
-        crate::report::fit::value_pm(e.value, e.stderr),
-        e.ci95[0],
-        e.ci95[1],
+        "mu_kinetic = {} from {n} releases{aside}",
+        crate::report::fit::with_interval(e)
     );
     // The agreement's p-value is in the sentence that follows the answer.
     if !rep.implausible.is_empty() {
@@ -128,7 +125,7 @@ pub fn joint_text(rep: &JointReport) -> String {
         .iter()
         .filter(|(q, _)| *q != crate::fit::Param::MuKinetic)
     {
-        // Digits from the standard error, as in the answer line.
+        // Digits from the standard error, as in the answer line; the values in one column.
         let d = crate::report::two_digit_decimals(e.stderr).map_or(6, |d| d.min(12));
         let line = format!(
             "  {:<22} {:>24}  (95 %: {:.d$} to {:.d$}) [{}] {}",

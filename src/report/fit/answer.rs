@@ -2,7 +2,7 @@
 //! as many digits as its uncertainty carries, and the verdict in a few words, so that a lab
 //! reads the result before the tables that back it.
 
-use crate::fit::{failed_tests, FailedTest, FitReport};
+use crate::fit::{failed_tests, Estimate, FailedTest, FitReport};
 use crate::report::{p_is, two_digit_decimals};
 
 /// `value +- se` rounded where the uncertainty puts it: the standard error to two significant
@@ -13,6 +13,18 @@ pub fn value_pm(value: f64, se: f64) -> String {
         Some(d) => format!("{value:.d$} +- {se:.d$}"),
         None => format!("{value:.6}"),
     }
+}
+
+/// `value +- se (95 %: lo to hi)`, every number to the decimal place of [`value_pm`]: how an
+/// estimate reads in the answers and the joint fit's table.
+pub fn with_interval(e: &Estimate) -> String {
+    let d = decimals(e.stderr).unwrap_or(6);
+    format!(
+        "{} (95 %: {:.d$} to {:.d$})",
+        value_pm(e.value, e.stderr),
+        e.ci95[0],
+        e.ci95[1]
+    )
 }
 
 /// Decimal places that show a standard error to two significant digits (at most 12).
@@ -38,14 +50,7 @@ pub fn answer(rep: &FitReport) -> String {
             mu.value
         );
     }
-    let d = decimals(mu.stderr).unwrap_or(6);
-    let head = format!(
-        "mu_kinetic = {} (95 %: {:.d$} to {:.d$}){}",
-        value_pm(mu.value, mu.stderr),
-        mu.ci95[0],
-        mu.ci95[1],
-        law_words(rep)
-    );
+    let head = format!("mu_kinetic = {}{}", with_interval(mu), law_words(rep));
     if rep.adequacy.limited_by_model.is_none() {
         return format!("{head}, model adequate");
     }

@@ -8,7 +8,7 @@ mod figure;
 mod friction_figure;
 mod text;
 
-pub use answer::{answer, value_pm};
+pub use answer::{answer, value_pm, with_interval};
 pub use figure::FitFigure;
 pub use friction_figure::FrictionFigure;
 pub use text::{fit_text, friction_law_text};
