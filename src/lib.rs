@@ -21,6 +21,8 @@
 //! - `plan/`: plan files (`spec.rs`), observability criteria (`criteria.rs`), the search
 //!   (`search.rs`) and the prior from an earlier fit (`prior.rs`).
 //! - `report/`: tables, JSON and figures (`plot.rs` renders SVG and PNG with the shipped font).
+//! - `pipeline/`: what a command does between its flags and its output (the options by their
+//!   CLI names, read and check, fit, provenance), shared by the binary and the Python package.
 //! - `bench/`: the benchmarks `appell bench` runs.
 //! - `cli/` (in the binary): clap derive structs and one function per command.
 #![warn(missing_docs)]
@@ -30,6 +32,7 @@ pub mod data;
 pub mod fit;
 pub mod model;
 pub mod output;
+pub mod pipeline;
 pub mod plan;
 pub mod report;
 pub mod scene;

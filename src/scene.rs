@@ -1082,7 +1082,17 @@ impl RigFile {
         mu_guess: f64,
         site: Option<(f64, f64)>,
     ) -> Result<(Rig<f64>, RigSpec, Option<String>), SceneError> {
-        let file: RigFile = parse_toml(&read_text(path, MAX_TOML_BYTES)?, path)?;
+        Self::parse_on_earth(&read_text(path, MAX_TOML_BYTES)?, path, mu_guess, site)
+    }
+
+    /// [`RigFile::load_on_earth`] on a rig file's text; `path` only labels errors and notes.
+    pub fn parse_on_earth(
+        text: &str,
+        path: &Path,
+        mu_guess: f64,
+        site: Option<(f64, f64)>,
+    ) -> Result<(Rig<f64>, RigSpec, Option<String>), SceneError> {
+        let file: RigFile = parse_toml(text, path)?;
         let mut measured = file.rig;
         // Gravity is a measured value like the rod and the masses: the fit takes it with a
         // prior of this deviation, and the recording (its swings) pins it far better.

@@ -1,10 +1,10 @@
 //! `appell convert INPUT... OUTPUT.csv`: read any supported recording and write the canonical
 //! wide CSV.
 
-use super::recording_args::RecordingArgs;
 use super::Failure;
 use anyhow::anyhow;
 use appell::data::{read_recording, synth};
+use appell::pipeline::RecordingArgs;
 use std::path::PathBuf;
 
 /// Arguments of `appell convert`.

@@ -1,11 +1,11 @@
 //! `appell inspect FILE...`: what a recording holds and every option still missing to read it
 //! as the rig, said at once, with the commands to run.
 
-use super::recording_args::RecordingArgs;
 use super::Failure;
 use anyhow::anyhow;
 use appell::data::inspect::inspect;
 use appell::data::{detect, Format, ReadOptions};
+use appell::pipeline::RecordingArgs;
 use appell::report::inspect::{inspect_json, inspect_text};
 use std::path::PathBuf;
 

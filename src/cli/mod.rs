@@ -64,7 +64,6 @@ mod convert;
 mod fit;
 mod inspect;
 mod plan;
-pub mod recording_args;
 mod regions;
 mod simulate;
 mod synth;
@@ -176,16 +175,7 @@ pub fn main() -> ExitCode {
     }
 }
 
-/// The messages of an error and its causes, leaving out a cause whose message the one before
-/// it already contains (errors that print their source, as most of the library's do), so
-/// nothing is said twice. Never empty.
+/// The messages of an error and its causes ([`appell::pipeline::messages`]).
 pub fn messages(e: &anyhow::Error) -> Vec<String> {
-    let mut out: Vec<String> = Vec::new();
-    for cause in e.chain() {
-        let m = cause.to_string();
-        if !out.last().is_some_and(|prev| prev.contains(&m)) {
-            out.push(m);
-        }
-    }
-    out
+    appell::pipeline::messages(e)
 }

@@ -29,42 +29,14 @@ pub struct Args {
     duration: f64,
 }
 
-/// The most phase-portrait trajectories one run draws.
-const MAX_TRAJECTORIES: usize = 1000;
-
-/// The most simulated seconds one run's portraits hold (trajectories x duration): each keeps
-/// 1000 samples a second (4.0e7 bytes here at most), and the integration's work is this times
-/// the rig's rate, at most 100 /s (`scene::check_time_scale`). Measured at the bound: the
-/// paper rig about 0.7 s; a rig damped at 95 /s about 5 s (1000 runs of 600 s took 40 s and
-/// 300 s).
-const MAX_PORTRAIT_SECONDS: f64 = 1e4;
-
 pub fn run(args: Args) -> Result<(), Failure> {
     // Validate every value before any work.
     super::refuse_input(args.plot.as_deref(), &[&args.rig])?;
     if let Some(path) = &args.plot {
         ImageFormat::from_path(path).map_err(|e| Failure::Input(e.into()))?;
     }
-    if !(args.duration.is_finite() && args.duration > 0.0 && args.duration <= 600.0) {
-        return Err(Failure::Input(anyhow!(
-            "--duration must be in (0, 600] s, got {}",
-            args.duration
-        )));
-    }
-    if args.trajectories > MAX_TRAJECTORIES {
-        return Err(Failure::Input(anyhow!(
-            "--trajectories must be at most {MAX_TRAJECTORIES}, got {}",
-            args.trajectories
-        )));
-    }
-    let seconds = args.trajectories as f64 * args.duration;
-    if seconds > MAX_PORTRAIT_SECONDS {
-        return Err(Failure::Input(anyhow!(
-            "--trajectories {} x --duration {} s is {seconds:e} simulated seconds, more than the {MAX_PORTRAIT_SECONDS:e} one run draws (1000 samples a second each): lower either",
-            args.trajectories,
-            args.duration
-        )));
-    }
+    appell::pipeline::check_portrait(args.trajectories, args.duration)
+        .map_err(|e| Failure::Input(anyhow!(e)))?;
     let rig = RigFile::load(&args.rig).map_err(|e| Failure::Input(e.into()))?;
     let window = figure_window(&rig);
     let map = RegionMap::new(&rig, &window);

@@ -350,13 +350,7 @@ pub fn render(path: &Path, figure: &impl Figure) -> Result<(), PlotError> {
     };
     match ImageFormat::from_path(path)? {
         ImageFormat::Svg => {
-            let mut svg = String::new();
-            {
-                let root = SVGBackend::with_string(&mut svg, figure.size()).into_drawing_area();
-                root.fill(&WHITE)?;
-                figure.draw(&root)?;
-                root.present()?;
-            }
+            let svg = svg_string(figure)?;
             write_atomic(path, |w| w.write_all(svg.as_bytes())).map_err(io)
         }
         ImageFormat::Png => {
@@ -375,6 +369,19 @@ pub fn render(path: &Path, figure: &impl Figure) -> Result<(), PlotError> {
             write_atomic(path, |w| encode_png(w, width, height, &rgb)).map_err(io)
         }
     }
+}
+
+/// `figure` drawn as an SVG document in memory (a notebook shows it inline).
+pub fn svg_string(figure: &impl Figure) -> Result<String, PlotError> {
+    ensure_font();
+    let mut svg = String::new();
+    {
+        let root = SVGBackend::with_string(&mut svg, figure.size()).into_drawing_area();
+        root.fill(&WHITE)?;
+        figure.draw(&root)?;
+        root.present()?;
+    }
+    Ok(svg)
 }
 
 /// Encode 8-bit RGB pixels, row by row from the top, as a PNG.

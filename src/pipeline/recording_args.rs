@@ -1,14 +1,21 @@
-//! The recording flags shared by every command that reads a recording (convert, and later
-//! fit), and the resolve step that turns them into library options.
+//! The recording options every command that reads a recording shares (inspect, convert, fit;
+//! the Python package's keyword arguments), and the resolve step that checks them into the
+//! readers' options with the CLI's messages.
 
-use appell::data::{Format, Plane, ReadOptions};
+use crate::data::{Format, Plane, ReadOptions};
+
+/// The names `--format` takes.
+pub const FORMAT_NAMES: [&str; 11] = [
+    "wide", "long", "tracker", "dlc", "motive", "vicon", "sleap", "qualisys", "kinovea", "trex",
+    "mcap",
+];
 
 /// Flags that say how to read a recording. Flatten into a command with
 /// `#[command(flatten)] recording: RecordingArgs`.
 #[derive(Debug, Clone, Default, clap::Args)]
 pub struct RecordingArgs {
     /// Input format (default: detected from the header).
-    #[arg(long, value_parser = ["wide", "long", "tracker", "dlc", "motive", "vicon", "sleap", "qualisys", "kinovea", "trex", "mcap"])]
+    #[arg(long, value_parser = FORMAT_NAMES)]
     pub format: Option<String>,
     /// Marker name of the slider (default: the one name containing "slider").
     #[arg(long, value_name = "NAME")]
@@ -69,13 +76,33 @@ impl RecordingArgs {
                 self.min_likelihood
             ));
         }
+        // clap checks the names on the command line; other callers (Python) get the message.
+        let format = match self.format.as_deref() {
+            None => None,
+            Some(name) => Some(Format::from_name(name).ok_or_else(|| {
+                format!(
+                    "--format must be one of {}, got {name:?}",
+                    FORMAT_NAMES.join(", ")
+                )
+            })?),
+        };
+        let plane = match self.plane.as_deref() {
+            None => None,
+            Some(name) => Some(
+                Plane::from_name(name)
+                    .ok_or_else(|| format!("--plane must be xy, xz or yz, got {name:?}"))?,
+            ),
+        };
+        if self.y_down && self.y_up {
+            return Err("--y-down and --y-up contradict each other: give one".into());
+        }
         Ok(ReadOptions {
-            format: self.format.as_deref().and_then(Format::from_name),
+            format,
             slider: self.slider.clone(),
             bob: self.bob.clone(),
             scale: positive("--scale", self.scale)?,
             fps: positive("--fps", self.fps)?,
-            plane: self.plane.as_deref().and_then(Plane::from_name),
+            plane,
             y_down: if self.y_down {
                 Some(true)
             } else if self.y_up {

@@ -1,0 +1,675 @@
+"""appell: fit dry friction on a Painleve-Appell rig from Python.
+
+The same library as the ``appell`` command, called in-process: a fit here gives the numbers of
+``appell fit`` to the last digit, and ``FitResult.to_dict()`` is its ``--json``. Keyword
+arguments carry the command's flag names (``--fit-rod-length`` is ``fit_rod_length=True``,
+``--with`` is ``with_``) and defaults. Bad input raises ``ValueError`` with the command's
+message; a run that cannot finish raises ``RuntimeError``. Long calls release the GIL, so
+threads fit in parallel.
+
+    >>> import appell
+    >>> result = appell.fit("data/example_recording.mcap", "configs/rig_example.toml")
+    >>> result.answer
+    'mu_kinetic = 0.119922 +- 0.000049 (95 %: 0.119825 to 0.120018), model adequate'
+"""
+
+from __future__ import annotations
+
+import html
+import json
+import os
+from typing import Any, Iterable, Mapping, Optional, Sequence, Union
+
+import numpy as np
+
+from . import _appell
+
+__all__ = [
+    "Recording",
+    "Rig",
+    "FitResult",
+    "JointResult",
+    "Simulation",
+    "Plan",
+    "Regions",
+    "read_recording",
+    "fit",
+    "fit_joint",
+    "fit_many",
+    "simulate",
+    "plan",
+    "synth",
+    "regions",
+    "READ_OPTIONS",
+    "FIT_OPTIONS",
+]
+
+__version__ = "0.1.0"
+
+PathLike = Union[str, "os.PathLike[str]"]
+
+#: Reading options (``appell convert``/``fit`` flags) and their defaults.
+READ_OPTIONS: Mapping[str, Any] = {
+    "format": None,
+    "slider": None,
+    "bob": None,
+    "scale": None,
+    "fps": None,
+    "plane": None,
+    "y_down": False,
+    "y_up": False,
+    "rail_frame": False,
+    "rod_length": None,
+    "min_likelihood": 0.6,
+    "drop_outliers": False,
+    "t_start": None,
+    "t_end": None,
+    "topic": (),
+}
+
+#: Fit options (``appell fit`` flags) and their defaults; ``with_`` is ``--with``.
+FIT_OPTIONS: Mapping[str, Any] = {
+    "latitude": None,
+    "altitude": None,
+    "robust": None,
+    "fit_rod_length": False,
+    "mu_static": "auto",
+    "no_profile": False,
+    "starts": (),
+    "noise": (),
+    "plain": False,
+    "with_": (),
+    "friction": None,
+}
+
+
+def _split(options: Mapping[str, Any], where: str, read_ok: bool = True):
+    """Options by kind, every key filled with its default; unknown names are a TypeError."""
+    read = dict(READ_OPTIONS)
+    fit_opts = dict(FIT_OPTIONS)
+    for name, value in options.items():
+        key = "with_" if name == "with" else name
+        if read_ok and key in read:
+            read[key] = value
+        elif key in fit_opts:
+            fit_opts[key] = value
+        else:
+            known = sorted(list(READ_OPTIONS) * read_ok + list(FIT_OPTIONS))
+            raise TypeError(
+                f"{where}() got an unexpected keyword argument {name!r}; "
+                f"it takes {', '.join(known)}"
+            )
+    return _read_kw(read), _fit_kw(fit_opts)
+
+
+def _strings(value: Any) -> list:
+    if value is None:
+        return []
+    if isinstance(value, (str, bytes, os.PathLike)) or not isinstance(value, Iterable):
+        value = [value]
+    return list(value)
+
+
+def _read_kw(read: dict) -> dict:
+    read = dict(read)
+    read["topic"] = [str(t) for t in _strings(read["topic"])]
+    for key in ("scale", "fps", "rod_length", "t_start", "t_end", "min_likelihood"):
+        if read[key] is not None:
+            read[key] = float(read[key])
+    return read
+
+
+def _fit_kw(fit_opts: dict) -> dict:
+    fit_opts = dict(fit_opts)
+    # Noise as the CLI takes it: metres, or pixels with a "px" suffix; repr keeps every digit.
+    fit_opts["noise"] = [
+        v if isinstance(v, str) else repr(float(v)) for v in _strings(fit_opts["noise"])
+    ]
+    fit_opts["starts"] = [float(s) for s in _strings(fit_opts["starts"])]
+    fit_opts["with"] = [str(n) for n in _strings(fit_opts.pop("with_"))]
+    for key in ("latitude", "altitude"):
+        if fit_opts[key] is not None:
+            fit_opts[key] = float(fit_opts[key])
+    return fit_opts
+
+
+def _paths(recording: Any) -> list:
+    if isinstance(recording, (str, os.PathLike)):
+        return [os.fspath(recording)]
+    return [os.fspath(p) for p in recording]
+
+
+class Recording:
+    """Frame times and the two marker tracks, in the rail frame (metres, y up).
+
+    ``t`` has shape (n,); ``slider`` and ``bob`` have shape (n, 2), NaN where the marker was
+    not seen. ``metadata`` says where it came from (format, marker names, scale, notes).
+    Build one from your own arrays with ``Recording(t, slider, bob)``.
+    """
+
+    def __init__(self, t, slider, bob, metadata: Optional[dict] = None):
+        self.t = np.ascontiguousarray(t, dtype=np.float64).reshape(-1)
+        self.slider = np.ascontiguousarray(slider, dtype=np.float64).reshape(-1, 2)
+        self.bob = np.ascontiguousarray(bob, dtype=np.float64).reshape(-1, 2)
+        if not (len(self.t) == len(self.slider) == len(self.bob)):
+            raise ValueError(
+                f"t, slider and bob must have one row per frame: got {len(self.t)}, "
+                f"{len(self.slider)} and {len(self.bob)}"
+            )
+        self.metadata = dict(metadata or {})
+
+    @classmethod
+    def _from_rust(cls, d: dict) -> "Recording":
+        return cls(
+            np.frombuffer(d["t"], dtype=np.float64),
+            np.frombuffer(d["slider"], dtype=np.float64).reshape(-1, 2),
+            np.frombuffer(d["bob"], dtype=np.float64).reshape(-1, 2),
+            d.get("metadata"),
+        )
+
+    def __len__(self) -> int:
+        return len(self.t)
+
+    def __repr__(self) -> str:
+        seen = (int(np.isfinite(self.slider[:, 0]).sum()), int(np.isfinite(self.bob[:, 0]).sum()))
+        span = f"{self.t[-1] - self.t[0]:.4g} s" if len(self.t) else "empty"
+        fmt = self.metadata.get("format")
+        return (
+            f"<Recording {len(self)} frames, {span}, slider seen {seen[0]}, bob seen {seen[1]}"
+            + (f", read as {fmt}" if fmt else "")
+            + ">"
+        )
+
+    def to_pandas(self):
+        """A DataFrame with the canonical columns t, slider_x, slider_y, bob_x, bob_y."""
+        import pandas as pd
+
+        return pd.DataFrame(
+            {
+                "t": self.t,
+                "slider_x": self.slider[:, 0],
+                "slider_y": self.slider[:, 1],
+                "bob_x": self.bob[:, 0],
+                "bob_y": self.bob[:, 1],
+            }
+        )
+
+
+def read_recording(path: Union[PathLike, Sequence[PathLike]], **options) -> Recording:
+    """Read a recording as ``appell convert`` does (CSV family, MCAP, DeepLabCut and SLEAP
+    HDF5, Tracker, Motive, Qualisys, Kinovea...). A Tracker pair is a list of two files.
+    Options: ``READ_OPTIONS`` (``fps=``, ``scale=``, ``rod_length=``, ``rail_frame=``...)."""
+    read, _ = _split(options, "read_recording")
+    for name in FIT_OPTIONS:
+        if name in options:
+            raise TypeError(f"read_recording() got an unexpected keyword argument {name!r}")
+    return Recording._from_rust(_appell.read_recording_py(_paths(path), read))
+
+
+def _toml_value(key: str, value: Any) -> str:
+    if isinstance(value, bool) or value is None:
+        raise ValueError(f"Rig: {key} = {value!r}: expected a number or a name")
+    if isinstance(value, (int, float, np.floating, np.integer)):
+        return repr(float(value))
+    if isinstance(value, str):
+        return json.dumps(value)
+    raise ValueError(f"Rig: {key} = {value!r}: expected a number or a name")
+
+
+class Rig:
+    """A rig as the lab measured it: the ``[rig]`` section of a rig file.
+
+    ``Rig(slider_mass=0.3, bob_mass=0.15, rod_length=0.25, rod_length_sd=0.001)`` takes the
+    file's keys (docs/formats.md); ``Rig.from_toml("rig.toml")`` reads a file. The values are
+    checked at once (``ValueError`` naming the key). Each is a measurement: the fit takes its
+    ``*_sd`` (or the defaults: a ruler's 1 mm, a scale's few percent) as a prior.
+    """
+
+    def __init__(self, **keys: Any):
+        lines = ["[rig]"] + [f"{k} = {_toml_value(k, v)}" for k, v in keys.items()]
+        self.keys = dict(keys)
+        self.text = "\n".join(lines) + "\n"
+        self.label = "Rig(" + ", ".join(f"{k}={v!r}" for k, v in keys.items()) + ")"
+        _appell.check_rig_py(self.text, self.label)
+
+    @classmethod
+    def from_toml(cls, path: PathLike) -> "Rig":
+        """Read a rig file (or a scene, whose ``[rig]`` is used)."""
+        rig = cls.__new__(cls)
+        rig.label = os.fspath(path)
+        rig.text = _appell.read_toml_py(rig.label)
+        rig.keys = None
+        _appell.check_rig_py(rig.text, rig.label)
+        return rig
+
+    def __repr__(self) -> str:
+        return self.label if self.keys is not None else f"Rig.from_toml({self.label!r})"
+
+
+def _rig(rig: Union[Rig, PathLike]) -> Rig:
+    return rig if isinstance(rig, Rig) else Rig.from_toml(rig)
+
+
+class _Result:
+    """What fit results share: the JSON, the text report, the figure."""
+
+    _inner: Any
+
+    def to_dict(self) -> dict:
+        """The command's ``--json`` object."""
+        return json.loads(self._inner.json())
+
+    def report(self) -> str:
+        """The report the command prints."""
+        return self._inner.text()
+
+    @property
+    def answer(self) -> str:
+        """One line: mu, its interval, and what limits it."""
+        return self._inner.answer()
+
+    @property
+    def notes(self) -> list:
+        """What the command would print on stderr (notes, left-out releases)."""
+        return list(self._inner.notes())
+
+    def svg(self) -> str:
+        """The figure as SVG text."""
+        return self._inner.svg()
+
+    def plot(self, path: PathLike) -> None:
+        """Write the figure, SVG or PNG by the extension (never over an input)."""
+        self._inner.plot(os.fspath(path))
+
+    def _table_rows(self) -> list:
+        return []
+
+    def _repr_html_(self) -> str:
+        rows = "".join(
+            "<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r) + "</tr>"
+            for r in self._table_rows()
+        )
+        table = (
+            "<table><tr><th>parameter</th><th>value</th><th>stderr</th><th>95 %</th></tr>"
+            f"{rows}</table>"
+            if rows
+            else ""
+        )
+        try:
+            figure = self.svg()
+        except (RuntimeError, ValueError) as e:
+            figure = f"<p>(no figure: {html.escape(str(e))})</p>"
+        return (
+            f"<div><p><b>{html.escape(self.answer)}</b></p>{table}"
+            f"<details><summary>report</summary><pre>{html.escape(self.report())}</pre></details>"
+            f"<div style='max-width:100%'>{figure}</div></div>"
+        )
+
+
+def _interval(entry: Mapping[str, Any]):
+    ci = entry.get("ci95") or [None, None]
+    return (ci[0], ci[1])
+
+
+class FitResult(_Result):
+    """One recording's fit. ``mu``, ``interval``, ``stderr``; ``parameters`` (every fitted
+    value), ``models`` (the models compared), ``to_dict()`` (``appell fit --json``),
+    ``report()`` (its text), ``answer``, ``svg()``/``plot(path)``/``friction_plot(path)``."""
+
+    def __init__(self, inner):
+        self._inner = inner
+        self._dict = self.to_dict()
+
+    @property
+    def mu(self) -> Optional[float]:
+        """mu_kinetic (None when the fit gave no value)."""
+        return (self._dict.get("mu_kinetic") or {}).get("value")
+
+    @property
+    def stderr(self) -> Optional[float]:
+        """mu_kinetic's standard error."""
+        return (self._dict.get("mu_kinetic") or {}).get("stderr")
+
+    @property
+    def interval(self):
+        """mu_kinetic's 95 % interval (low, high)."""
+        return _interval(self._dict.get("mu_kinetic") or {})
+
+    @property
+    def parts(self) -> dict:
+        """Where mu's uncertainty comes from (noise, model, ...)."""
+        return (self._dict.get("mu_kinetic") or {}).get("parts") or {}
+
+    @property
+    def parameters(self) -> dict:
+        """Every fitted parameter: value, stderr, ci95, interval kind."""
+        out = {}
+        for name in ("mu_kinetic", "mu_static"):
+            if isinstance(self._dict.get(name), dict):
+                out[name] = self._dict[name]
+        out.update(self._dict.get("parameters") or {})
+        return out
+
+    @property
+    def initial(self) -> dict:
+        """The fitted initial state (x, theta, x_dot, theta_dot)."""
+        return self._dict.get("initial") or {}
+
+    @property
+    def models(self) -> list:
+        """The models compared (nuisances, friction laws) with their BIC."""
+        return self._dict.get("models") or []
+
+    @property
+    def limited_by_model(self) -> Optional[str]:
+        """What the model misses (None: the model is adequate)."""
+        return self._dict.get("limited_by_model")
+
+    @property
+    def warnings(self) -> list:
+        return self._dict.get("warnings") or []
+
+    def friction_plot(self, path: PathLike) -> None:
+        """Write the friction figure: each slide's |F|/|N| against its speed, with the laws."""
+        self._inner.friction_plot(os.fspath(path))
+
+    def _table_rows(self) -> list:
+        rows = []
+        for name, p in self.parameters.items():
+            if isinstance(p, dict) and "value" in p:
+                lo, hi = _interval(p)
+                rows.append(
+                    [name, f"{p['value']:.6g}", f"{p.get('stderr', float('nan')):.2g}",
+                     f"{lo:.6g} to {hi:.6g}" if lo is not None else ""]
+                )
+        return rows
+
+    def __repr__(self) -> str:
+        return f"<FitResult {self.answer}>"
+
+
+class JointResult(_Result):
+    """Releases of one rig fitted together (``appell fit --joint``)."""
+
+    def __init__(self, inner):
+        self._inner = inner
+        self._dict = self.to_dict()
+
+    @property
+    def failed(self) -> Optional[str]:
+        return self._inner.failed()
+
+    @property
+    def mu(self) -> Optional[float]:
+        return (self._dict.get("mu_kinetic") or {}).get("value")
+
+    @property
+    def stderr(self) -> Optional[float]:
+        return (self._dict.get("mu_kinetic") or {}).get("stderr")
+
+    @property
+    def interval(self):
+        return _interval(self._dict.get("mu_kinetic") or {})
+
+    @property
+    def releases(self) -> list:
+        """One row per release: its name, its own mu, and how it agrees with the others."""
+        return self._dict.get("releases") or []
+
+    def __repr__(self) -> str:
+        return f"<JointResult {self.answer}>"
+
+
+def fit(
+    recording: Union[PathLike, Sequence[PathLike], Recording],
+    rig: Union[Rig, PathLike],
+    *,
+    plot: Optional[PathLike] = None,
+    friction_plot: Optional[PathLike] = None,
+    **options,
+) -> FitResult:
+    """Fit mu and the initial state to one recording, as ``appell fit`` does.
+
+    ``recording`` is a file (a Tracker pair: a list of two files) read with ``READ_OPTIONS``,
+    or a :class:`Recording` (arrays: rail frame, metres). ``rig`` is a :class:`Rig` or a rig
+    file. ``options``: ``FIT_OPTIONS`` and, for files, ``READ_OPTIONS``."""
+    r = _rig(rig)
+    if isinstance(recording, Recording):
+        read, fit_opts = _split(options, "fit", read_ok=False)
+        arrays = (recording.t.tobytes(), recording.slider.tobytes(), recording.bob.tobytes())
+        inner = _appell.fit_py([], arrays, r.text, r.label, read, fit_opts)
+    else:
+        read, fit_opts = _split(options, "fit")
+        inner = _appell.fit_py(_paths(recording), None, r.text, r.label, read, fit_opts)
+    result = FitResult(inner)
+    if plot is not None:
+        result.plot(plot)
+    if friction_plot is not None:
+        result.friction_plot(friction_plot)
+    return result
+
+
+def fit_joint(
+    releases: Union[PathLike, Sequence[Union[PathLike, Sequence[PathLike]]]],
+    rig: Union[Rig, PathLike],
+    *,
+    same_camera: bool = False,
+    keep_going: bool = False,
+    plot: Optional[PathLike] = None,
+    **options,
+) -> JointResult:
+    """Fit releases of one rig together (``appell fit --joint``): the friction law, tilt and
+    pendulum shared, each release's state its own. ``releases`` is a directory of recordings
+    or a list of releases (a file, or a Tracker pair as a list of two)."""
+    r = _rig(rig)
+    read, fit_opts = _split(options, "fit_joint")
+    if isinstance(releases, (str, os.PathLike)) and os.path.isdir(releases):
+        directory, lists = os.fspath(releases), []
+    else:
+        directory = None
+        lists = [_paths(rel) for rel in _strings(releases)]
+    inner = _appell.fit_joint_py(
+        directory, lists, r.text, r.label, read, fit_opts, bool(same_camera), bool(keep_going)
+    )
+    result = JointResult(inner)
+    if plot is not None:
+        result.plot(plot)
+    return result
+
+
+def _toml_text(source: PathLike) -> tuple:
+    label = os.fspath(source)
+    return _appell.read_toml_py(label), label
+
+
+class Simulation:
+    """A simulated run: ``columns`` (numpy arrays t, x, theta, x_dot, theta_dot, the markers,
+    and energy when the scene asks), ``mode`` per sample, ``events``, ``timeline``."""
+
+    def __init__(self, d: dict):
+        self.columns = {k: np.frombuffer(v, dtype=np.float64) for k, v in d["columns"].items()}
+        self.mode = np.array(d["mode"], dtype=object)
+        self._json = d["json"]
+        self.timeline = d["timeline"]
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self.mode if name == "mode" else self.columns[name]
+
+    def to_dict(self) -> dict:
+        """``appell simulate --json``."""
+        return json.loads(self._json)
+
+    @property
+    def events(self) -> list:
+        return self.to_dict().get("events", [])
+
+    def to_pandas(self):
+        import pandas as pd
+
+        df = pd.DataFrame(self.columns)
+        df.insert(1, "mode", self.mode)
+        return df
+
+    def __repr__(self) -> str:
+        return f"<Simulation {len(self.mode)} samples, {len(self.events)} events>"
+
+
+def simulate(scene: PathLike, *, frame_rate: Optional[float] = None) -> Simulation:
+    """Simulate a scene file, sampled at its ``[output] frame_rate`` (else ``frame_rate``, else
+    1000 Hz as ``appell simulate --out``)."""
+    text, label = _toml_text(scene)
+    return Simulation(
+        _appell.simulate_py(text, label, None if frame_rate is None else float(frame_rate))
+    )
+
+
+class _Figure:
+    _json: str
+    _text: str
+    _svg: str
+
+    def to_dict(self) -> dict:
+        return json.loads(self._json)
+
+    def report(self) -> str:
+        return self._text
+
+    def svg(self) -> str:
+        return self._svg
+
+    def _repr_html_(self) -> str:
+        return f"<div><pre>{html.escape(self._text)}</pre>{self._svg}</div>"
+
+
+class Plan(_Figure):
+    """Ranked releases that make the wanted transitions observable (``appell plan``)."""
+
+    def __init__(self, parts):
+        self._json, self._text, self._svg = parts
+
+    @property
+    def candidates(self) -> list:
+        return self.to_dict().get("candidates", [])
+
+    def __repr__(self) -> str:
+        return f"<Plan {len(self.candidates)} candidates>"
+
+
+def plan(spec: PathLike, after: Union[None, PathLike, FitResult, JointResult] = None) -> Plan:
+    """Plan releases from a plan file; ``after`` is an earlier fit (a result, or its JSON file)
+    whose values and covariance become the plan's prior."""
+    text, label = _toml_text(spec)
+    after_json, after_label, after_path = None, "", None
+    if isinstance(after, _Result):
+        after_json, after_label = after._inner.json(), "the fit given as after"
+    elif after is not None:
+        after_path = after_label = os.fspath(after)
+    return Plan(_appell.plan_py(text, label, after_json, after_label, after_path))
+
+
+def synth(
+    scene: PathLike,
+    output: Optional[PathLike] = None,
+    *,
+    fps: float = 1000.0,
+    duration: Optional[float] = None,
+    noise: float = 0.0,
+    dropout: float = 0.0,
+    outliers: float = 0.0,
+    outlier_size: float = 0.05,
+    seed: int = 0,
+) -> Recording:
+    """A synthetic recording of a scene with a known mu (``appell synth``); written to
+    ``output`` (CSV or MCAP by extension) when given. ``metadata['truth']`` holds the truth."""
+    text, label = _toml_text(scene)
+    d = _appell.synth_py(
+        text, label, float(fps), None if duration is None else float(duration), float(noise),
+        float(dropout), float(outliers), float(outlier_size), int(seed),
+        None if output is None else os.fspath(output),
+    )
+    rec = Recording._from_rust(d)
+    rec.metadata["truth"] = dict(d["truth"])
+    rec.metadata["stopped_at"] = d["stopped_at"]
+    return rec
+
+
+class Regions(_Figure):
+    """The stick and sliding regions, the paradox band and phase portraits (``appell
+    regions``)."""
+
+    def __init__(self, parts):
+        self._json, self._text, self._svg = parts
+
+    def __repr__(self) -> str:
+        return "<Regions>"
+
+
+def regions(rig: Union[Rig, PathLike], *, trajectories: int = 8, duration: float = 3.0) -> Regions:
+    """The rig's regions in the (theta, theta') plane with ``trajectories`` phase portraits."""
+    r = _rig(rig)
+    return Regions(_appell.regions_py(r.text, r.label, int(trajectories), float(duration)))
+
+
+def _fit_row(path, rig_text, rig_label, read, fit_opts) -> dict:
+    """One recording of fit_many: a table row, the error in its own column (never raised)."""
+    row = {"recording": os.fspath(path) if not isinstance(path, (list, tuple)) else ",".join(map(os.fspath, path))}
+    try:
+        inner = _appell.fit_py(_paths(path), None, rig_text, rig_label, read, fit_opts)
+        d = json.loads(inner.json())
+        mu = d.get("mu_kinetic") or {}
+        lo, hi = _interval(mu)
+        row.update(
+            mu_kinetic=mu.get("value"),
+            stderr=mu.get("stderr"),
+            ci95_low=lo,
+            ci95_high=hi,
+            limited_by_model=d.get("limited_by_model"),
+            answer=d.get("answer"),
+            error=None,
+            result=d,
+        )
+    except (ValueError, RuntimeError) as e:
+        row.update(
+            mu_kinetic=None, stderr=None, ci95_low=None, ci95_high=None,
+            limited_by_model=None, answer=None, error=str(e), result=None,
+        )
+    return row
+
+
+def fit_many(
+    paths: Iterable[Union[PathLike, Sequence[PathLike]]],
+    rig: Union[Rig, PathLike],
+    client=None,
+    *,
+    as_pandas: Optional[bool] = None,
+    **options,
+):
+    """Fit each recording on its own and gather one row per recording: ``recording``,
+    ``mu_kinetic``, ``stderr``, ``ci95_low``, ``ci95_high``, ``limited_by_model``,
+    ``answer``, ``error`` (a recording that cannot be fitted is a row with its error) and
+    ``result`` (the full ``--json``).
+
+    ``client`` is a ``dask.distributed.Client`` (``Client(LocalCluster())``, or
+    ``Client("tcp://scheduler:8786")`` on a cluster): each recording is one task. Without
+    one, the recordings are fitted here, one after another. The table is a pandas DataFrame
+    when pandas is installed (``as_pandas=False``: a list of dicts)."""
+    r = _rig(rig)
+    read, fit_opts = _split(options, "fit_many")
+    paths = list(paths)
+    if client is None:
+        rows = [_fit_row(p, r.text, r.label, read, fit_opts) for p in paths]
+    else:
+        futures = client.map(
+            _fit_row, paths, rig_text=r.text, rig_label=r.label, read=read, fit_opts=fit_opts,
+            pure=False,
+        )
+        rows = client.gather(futures)
+    if as_pandas is False:
+        return rows
+    try:
+        import pandas as pd
+    except ImportError:
+        if as_pandas:
+            raise
+        return rows
+    return pd.DataFrame(rows)

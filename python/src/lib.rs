@@ -1,0 +1,708 @@
+//! `appell._appell`: the Rust side of the Python package. A thin layer over the library's
+//! `pipeline`, so a fit from Python runs the steps `appell fit` runs and gives its numbers to
+//! the last digit. Arrays cross as native-endian `f64` bytes (numpy's `tobytes`/`frombuffer`),
+//! options as dicts with the CLI's names (the Python side fills every key, with the CLI's
+//! defaults). Every long call releases the GIL, so threads fit in parallel.
+
+use appell::data::synth::{self, SynthOptions};
+use appell::data::{read_recording, ReadOptions, Recording};
+use appell::fit::joint::{JointReport, JointSettings};
+use appell::fit::{FitReport, FitSettings, Observations};
+use appell::pipeline::{self, FitArgs, FitFailure, FitSetup, RecordingArgs};
+use appell::report::fit::{answer, fit_json, fit_text, FitFigure, FrictionFigure};
+use appell::report::joint::{joint_answer, joint_json, joint_text, JointFigure};
+use appell::report::plot::{render, svg_string};
+use appell::scene::Scene;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict};
+use std::path::{Path, PathBuf};
+
+/// Bad input: `ValueError` with the CLI's message (its causes joined).
+fn input(e: anyhow::Error) -> PyErr {
+    PyValueError::new_err(pipeline::messages(&e).join(": "))
+}
+
+/// A run that could not finish: `RuntimeError` with the CLI's message.
+fn run(e: anyhow::Error) -> PyErr {
+    PyRuntimeError::new_err(pipeline::messages(&e).join(": "))
+}
+
+fn failure(e: FitFailure) -> PyErr {
+    match e {
+        FitFailure::Input(e) => input(e),
+        FitFailure::Run(e) => run(e),
+    }
+}
+
+/// The reading options, every key present (the Python side's defaults are the CLI's).
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct ReadKw {
+    format: Option<String>,
+    slider: Option<String>,
+    bob: Option<String>,
+    scale: Option<f64>,
+    fps: Option<f64>,
+    plane: Option<String>,
+    y_down: bool,
+    y_up: bool,
+    rail_frame: bool,
+    rod_length: Option<f64>,
+    min_likelihood: f64,
+    drop_outliers: bool,
+    t_start: Option<f64>,
+    t_end: Option<f64>,
+    topic: Vec<String>,
+}
+
+impl ReadKw {
+    fn args(self) -> RecordingArgs {
+        RecordingArgs {
+            format: self.format,
+            slider: self.slider,
+            bob: self.bob,
+            scale: self.scale,
+            fps: self.fps,
+            plane: self.plane,
+            y_down: self.y_down,
+            y_up: self.y_up,
+            rail_frame: self.rail_frame,
+            rod_length: self.rod_length,
+            min_likelihood: self.min_likelihood,
+            drop_outliers: self.drop_outliers,
+            t_start: self.t_start,
+            t_end: self.t_end,
+            topic: self.topic,
+        }
+    }
+
+    /// The readers' options, checked with the CLI's messages; also the `--scale` given.
+    fn resolve(self) -> PyResult<(ReadOptions, Option<f64>)> {
+        let scale = self.scale;
+        let opts = self.args().resolve().map_err(PyValueError::new_err)?;
+        Ok((opts, scale))
+    }
+}
+
+/// The fit's options, every key present.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+struct FitKw {
+    latitude: Option<f64>,
+    altitude: Option<f64>,
+    robust: Option<String>,
+    fit_rod_length: bool,
+    mu_static: String,
+    no_profile: bool,
+    starts: Vec<f64>,
+    noise: Vec<String>,
+    plain: bool,
+    #[pyo3(item("with"))]
+    with_: Vec<String>,
+    friction: Option<String>,
+}
+
+impl FitKw {
+    fn args(self) -> PyResult<FitArgs> {
+        let with = self
+            .with_
+            .iter()
+            .map(|n| pipeline::nuisance(n).map_err(|e| format!("with: {n:?}: {e}")))
+            .collect::<Result<Vec<_>, _>>()
+            .map_err(PyValueError::new_err)?;
+        let friction = self
+            .friction
+            .as_deref()
+            .map(|n| pipeline::friction_law(n).map_err(|e| format!("friction: {n:?}: {e}")))
+            .transpose()
+            .map_err(PyValueError::new_err)?;
+        Ok(FitArgs {
+            latitude: self.latitude,
+            altitude: self.altitude,
+            robust: self.robust,
+            fit_rod_length: self.fit_rod_length,
+            mu_static: self.mu_static,
+            no_profile: self.no_profile,
+            starts: self.starts,
+            noise: self.noise,
+            plain: self.plain,
+            with,
+            friction,
+        })
+    }
+}
+
+/// A rig file's text and the name it goes by (its path, or `Rig(...)` for one built in Python).
+fn setup(rig_text: &str, rig_label: &str, fit: FitKw, scale: Option<f64>) -> PyResult<FitSetup> {
+    FitSetup::from_text(rig_text, Path::new(rig_label), &fit.args()?, scale).map_err(input)
+}
+
+fn floats(bytes: &Bound<'_, PyBytes>, what: &str) -> PyResult<Vec<f64>> {
+    let b = bytes.as_bytes();
+    if b.len() % 8 != 0 {
+        return Err(PyValueError::new_err(format!(
+            "{what}: {} bytes is not a whole number of float64 values",
+            b.len()
+        )));
+    }
+    Ok(b.chunks_exact(8)
+        .map(|c| f64::from_ne_bytes(c.try_into().expect("8 bytes")))
+        .collect())
+}
+
+fn to_bytes<'py>(py: Python<'py>, v: &[f64]) -> Bound<'py, PyBytes> {
+    let mut b = Vec::with_capacity(v.len() * 8);
+    for x in v {
+        b.extend_from_slice(&x.to_ne_bytes());
+    }
+    PyBytes::new(py, &b)
+}
+
+/// A track as 2n floats, NaN where the marker was not seen.
+fn track_floats(track: &[Option<[f64; 2]>]) -> Vec<f64> {
+    track
+        .iter()
+        .flat_map(|p| p.unwrap_or([f64::NAN, f64::NAN]))
+        .collect()
+}
+
+/// 2n floats (NaN: not seen) as a track.
+fn float_track(v: &[f64], what: &str, n: usize) -> PyResult<Vec<Option<[f64; 2]>>> {
+    if v.len() != 2 * n {
+        return Err(PyValueError::new_err(format!(
+            "{what}: expected {n} rows of (x, y) to match t, got {} values",
+            v.len()
+        )));
+    }
+    Ok(v.chunks_exact(2)
+        .map(|c| {
+            if c[0].is_finite() && c[1].is_finite() {
+                Some([c[0], c[1]])
+            } else {
+                None
+            }
+        })
+        .collect())
+}
+
+/// A recording as the Python side builds it: `t`, `slider` and `bob` arrays and its metadata.
+fn recording_dict<'py>(py: Python<'py>, rec: &Recording) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("t", to_bytes(py, &rec.times))?;
+    d.set_item("slider", to_bytes(py, &track_floats(&rec.slider)))?;
+    d.set_item("bob", to_bytes(py, &track_floats(&rec.bob)))?;
+    let p = &rec.provenance;
+    let m = PyDict::new(py);
+    let sources: Vec<String> = p.sources.iter().map(|s| s.display().to_string()).collect();
+    m.set_item("sources", sources)?;
+    m.set_item("format", p.format.map(|f| f.name()))?;
+    m.set_item("format_detected", p.detected)?;
+    m.set_item("slider_name", &p.slider_name)?;
+    m.set_item("bob_name", &p.bob_name)?;
+    m.set_item("time_origin", p.time_origin)?;
+    m.set_item("scale", p.calibration.scale)?;
+    m.set_item("scale_source", &p.calibration.scale_source)?;
+    m.set_item("y_flipped", p.calibration.y_flipped)?;
+    m.set_item("rail_angle", p.calibration.rail_angle)?;
+    m.set_item("notes", p.notes.clone())?;
+    m.set_item("warnings", p.warnings.clone())?;
+    let meta = PyDict::new(py);
+    for (k, v) in &p.metadata {
+        meta.set_item(k, v)?;
+    }
+    m.set_item("file_metadata", meta)?;
+    d.set_item("metadata", m)?;
+    Ok(d)
+}
+
+/// Read a recording (a Tracker pair is two paths) as `appell convert` reads it.
+#[pyfunction]
+fn read_recording_py<'py>(
+    py: Python<'py>,
+    paths: Vec<PathBuf>,
+    read: ReadKw,
+) -> PyResult<Bound<'py, PyDict>> {
+    let (opts, _) = read.resolve()?;
+    let rec = py
+        .detach(|| read_recording(&paths, &opts))
+        .map_err(|e| input(e.into()))?;
+    recording_dict(py, &rec)
+}
+
+/// One recording's fit: the report, the observations (for the figure), where they came from.
+#[pyclass(frozen, module = "appell._appell")]
+struct Fit {
+    report: FitReport,
+    obs: Observations,
+    inputs: Vec<PathBuf>,
+    rig_label: PathBuf,
+    settings: FitSettings,
+    notes: Vec<String>,
+}
+
+#[pymethods]
+impl Fit {
+    /// The JSON of `appell fit --json`, as text.
+    fn json(&self) -> String {
+        let mut v = fit_json(&self.report);
+        pipeline::provenance(&mut v, &self.inputs, &self.rig_label);
+        v.to_string()
+    }
+
+    /// The report `appell fit` prints.
+    fn text(&self) -> String {
+        fit_text(&self.report)
+    }
+
+    /// The one-line answer: mu, its interval and the verdict.
+    fn answer(&self) -> String {
+        answer(&self.report)
+    }
+
+    /// Notes the CLI prints on stderr (frame times joined).
+    fn notes(&self) -> Vec<String> {
+        self.notes.clone()
+    }
+
+    /// The fit figure (data, model, residuals, modes) as SVG text.
+    fn svg(&self, py: Python<'_>) -> PyResult<String> {
+        let figure = FitFigure {
+            obs: &self.obs,
+            report: &self.report,
+        };
+        py.detach(|| svg_string(&figure)).map_err(|e| run(e.into()))
+    }
+
+    /// Write the fit figure (SVG or PNG by extension), never over an input.
+    fn plot(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        appell::output::refuse_input(&path, &self.inputs).map_err(|e| input(anyhow::anyhow!(e)))?;
+        let figure = FitFigure {
+            obs: &self.obs,
+            report: &self.report,
+        };
+        py.detach(|| render(&path, &figure))
+            .map_err(|e| run(e.into()))
+    }
+
+    /// Write the friction figure: each slide's |F| / |N| against its speed, with the laws.
+    fn friction_plot(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        appell::output::refuse_input(&path, &self.inputs).map_err(|e| input(anyhow::anyhow!(e)))?;
+        let Some(law) = &self.report.friction else {
+            return Err(PyRuntimeError::new_err(
+                "friction_plot: the recording never slides, so it shows no friction law",
+            ));
+        };
+        let name = self
+            .inputs
+            .first()
+            .map_or("recording".to_owned(), |p| p.display().to_string());
+        let figure = FrictionFigure {
+            rig: &self.report.rig,
+            law,
+            releases: vec![(
+                name,
+                appell::fit::law::slide_points(&self.report, &self.settings),
+            )],
+        };
+        py.detach(|| render(&path, &figure))
+            .map_err(|e| run(e.into()))
+    }
+}
+
+/// Fit one recording: from its files (`paths`), or from arrays (`t`, `slider`, `bob`; metres,
+/// seconds, rail frame, NaN where a marker was not seen).
+#[pyfunction]
+#[pyo3(signature = (paths, arrays, rig_text, rig_label, read, fit))]
+fn fit_py(
+    py: Python<'_>,
+    paths: Vec<PathBuf>,
+    arrays: Option<(Bound<'_, PyBytes>, Bound<'_, PyBytes>, Bound<'_, PyBytes>)>,
+    rig_text: &str,
+    rig_label: &str,
+    read: ReadKw,
+    fit: FitKw,
+) -> PyResult<Fit> {
+    let (opts, scale) = read.resolve()?;
+    let setup = setup(rig_text, rig_label, fit, scale)?;
+    let (obs, report, notes) = match arrays {
+        None => py
+            .detach(|| pipeline::fit_files(&paths, &opts, &setup, true))
+            .map_err(failure)?,
+        Some((t, s, b)) => {
+            let times = floats(&t, "t")?;
+            let n = times.len();
+            let rec = Recording {
+                slider: float_track(&floats(&s, "slider")?, "slider", n)?,
+                bob: float_track(&floats(&b, "bob")?, "bob", n)?,
+                times,
+                ..Recording::default()
+            };
+            py.detach(|| {
+                let obs = pipeline::observations_for_rig(&rec, &setup.rig_path, &setup.rig)
+                    .map_err(FitFailure::Input)?;
+                let report = pipeline::fit_observations(obs.clone(), &setup, "the arrays")?;
+                Ok((obs, report, Vec::new()))
+            })
+            .map_err(failure)?
+        }
+    };
+    Ok(Fit {
+        report,
+        obs,
+        inputs: paths,
+        rig_label: setup.rig_path.clone(),
+        settings: setup.settings,
+        notes,
+    })
+}
+
+/// A joint fit of releases of one rig.
+#[pyclass(frozen, module = "appell._appell")]
+struct Joint {
+    report: JointReport,
+    inputs: Vec<PathBuf>,
+    rig_label: PathBuf,
+    notes: Vec<String>,
+}
+
+#[pymethods]
+impl Joint {
+    /// The JSON of `appell fit --joint --json`, as text.
+    fn json(&self) -> String {
+        let mut v = joint_json(&self.report);
+        pipeline::provenance(&mut v, &self.inputs, &self.rig_label);
+        v.to_string()
+    }
+
+    /// The report `appell fit --joint` prints.
+    fn text(&self) -> String {
+        joint_text(&self.report)
+    }
+
+    /// The one-line answer.
+    fn answer(&self) -> String {
+        joint_answer(&self.report)
+    }
+
+    /// Notes and left-out releases the CLI prints on stderr.
+    fn notes(&self) -> Vec<String> {
+        self.notes.clone()
+    }
+
+    /// Why the joint fit failed (`None`: it did not).
+    fn failed(&self) -> Option<String> {
+        self.report.failed.clone()
+    }
+
+    /// The joint figure as SVG text.
+    fn svg(&self, py: Python<'_>) -> PyResult<String> {
+        let figure = JointFigure {
+            report: &self.report,
+        };
+        py.detach(|| svg_string(&figure)).map_err(|e| run(e.into()))
+    }
+
+    /// Write the joint figure (SVG or PNG by extension), never over an input.
+    fn plot(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
+        appell::output::refuse_input(&path, &self.inputs).map_err(|e| input(anyhow::anyhow!(e)))?;
+        let figure = JointFigure {
+            report: &self.report,
+        };
+        py.detach(|| render(&path, &figure))
+            .map_err(|e| run(e.into()))
+    }
+}
+
+/// Fit releases together: `releases` is one directory (its recordings) or a list of releases,
+/// each a list of files (a Tracker pair is two).
+#[pyfunction]
+#[pyo3(signature = (directory, releases, rig_text, rig_label, read, fit, same_camera, keep_going))]
+#[allow(clippy::too_many_arguments)]
+fn fit_joint_py(
+    py: Python<'_>,
+    directory: Option<PathBuf>,
+    releases: Vec<Vec<PathBuf>>,
+    rig_text: &str,
+    rig_label: &str,
+    read: ReadKw,
+    fit: FitKw,
+    same_camera: bool,
+    keep_going: bool,
+) -> PyResult<Joint> {
+    let (opts, scale) = read.resolve()?;
+    let setup = setup(rig_text, rig_label, fit, scale)?;
+    let mut notes = Vec::new();
+    let releases = match directory {
+        Some(dir) => {
+            let (files, skipped) =
+                pipeline::directory_files(&dir, opts.format.is_some()).map_err(input)?;
+            notes.extend(skipped.into_iter().map(|n| format!("note: {n}")));
+            files.into_iter().map(|f| vec![f]).collect()
+        }
+        None => releases,
+    };
+    let (paths, dropped) = pipeline::once_each(releases);
+    notes.extend(dropped.into_iter().map(|n| format!("note: {n}")));
+    let joint = JointSettings {
+        same_camera,
+        keep_going,
+    };
+    let (report, fit_notes) = py
+        .detach(|| pipeline::fit_joint_files(&paths, &opts, &setup, &joint))
+        .map_err(failure)?;
+    notes.extend(fit_notes);
+    Ok(Joint {
+        report,
+        inputs: paths.into_iter().flatten().collect(),
+        rig_label: setup.rig_path.clone(),
+        notes,
+    })
+}
+
+/// Simulate a scene (TOML text; `label` names it in messages): its JSON (as `appell simulate
+/// --json`), its timeline, and the samples column by column (floats as bytes; `mode` names).
+#[pyfunction]
+#[pyo3(signature = (text, label, frame_rate))]
+fn simulate_py<'py>(
+    py: Python<'py>,
+    text: &str,
+    label: &str,
+    frame_rate: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let path = Path::new(label);
+    let mut scene = Scene::from_toml(text, path).map_err(|e| input(e.into()))?;
+    if let Some(rate) = frame_rate.or(scene.output.frame_rate.is_none().then_some(1000.0)) {
+        appell::scene::check_frames(path, scene.duration, rate, "frame_rate")
+            .map_err(|e| input(e.into()))?;
+        scene.output.frame_rate = Some(rate);
+    }
+    let sol = py
+        .detach(|| {
+            appell::sim::simulate(
+                &scene.rig,
+                &scene.initial,
+                scene.duration,
+                &scene.options,
+                &scene.request(),
+            )
+        })
+        .map_err(|e| run(anyhow::anyhow!(e).context(format!("simulating {label}"))))?;
+    let d = PyDict::new(py);
+    d.set_item(
+        "json",
+        appell::report::simulation_json(&scene, &sol).to_string(),
+    )?;
+    d.set_item("timeline", appell::report::timeline(&scene, &sol))?;
+    let col = |f: &dyn Fn(&appell::sim::Sample<f64>) -> f64| -> Vec<f64> {
+        sol.samples.iter().map(f).collect()
+    };
+    let columns = PyDict::new(py);
+    columns.set_item("t", to_bytes(py, &col(&|s| s.t)))?;
+    for (i, name) in ["x", "theta", "x_dot", "theta_dot"].iter().enumerate() {
+        columns.set_item(name, to_bytes(py, &col(&|s| s.state[i])))?;
+    }
+    for (i, name) in ["slider_x", "slider_y", "bob_x", "bob_y"]
+        .iter()
+        .enumerate()
+    {
+        columns.set_item(
+            name,
+            to_bytes(
+                py,
+                &col(&|s| appell::model::markers(&scene.rig, &s.state)[i]),
+            ),
+        )?;
+    }
+    if scene.output.energy {
+        columns.set_item(
+            "energy",
+            to_bytes(py, &col(&|s| appell::model::energy(&scene.rig, &s.state))),
+        )?;
+        columns.set_item(
+            "friction_work",
+            to_bytes(py, &col(&|s| s.friction_work.unwrap_or(f64::NAN))),
+        )?;
+        columns.set_item(
+            "damping_work",
+            to_bytes(py, &col(&|s| s.damping_work.unwrap_or(f64::NAN))),
+        )?;
+    }
+    let modes: Vec<&str> = sol.samples.iter().map(|s| s.mode.name()).collect();
+    d.set_item("mode", modes)?;
+    d.set_item("columns", columns)?;
+    Ok(d)
+}
+
+/// A plan (TOML text), after an earlier fit's JSON if given: the JSON of `appell plan --json`,
+/// its table, and the figure as SVG text.
+#[pyfunction]
+#[pyo3(signature = (text, label, after_json, after_label, after_path))]
+fn plan_py(
+    py: Python<'_>,
+    text: &str,
+    label: &str,
+    after_json: Option<&str>,
+    after_label: &str,
+    after_path: Option<PathBuf>,
+) -> PyResult<(String, String, String)> {
+    use appell::plan::prior::Prior;
+    use appell::plan::PlanSpec;
+    let path = Path::new(label);
+    let mut spec = PlanSpec::from_toml(text, path).map_err(|e| input(e.into()))?;
+    if after_json.is_some() || after_path.is_some() {
+        let prior = match (after_json, &after_path) {
+            (Some(after), _) => {
+                let v: serde_json::Value = serde_json::from_str(after.trim()).map_err(|e| {
+                    PyValueError::new_err(format!(
+                        "{after_label}: not the JSON of `appell fit --json`: {e}"
+                    ))
+                })?;
+                Prior::from_json(&v, Path::new(after_label))
+            }
+            (None, Some(p)) => Prior::from_path(p),
+            (None, None) => unreachable!("one of the two is given"),
+        }
+        .map_err(|e| input(e.into()))?;
+        let after_path = after_path.as_deref().unwrap_or(Path::new(after_label));
+        prior.apply(&mut spec).map_err(|e| input(e.into()))?;
+        spec.check_work(path, Some(after_path))
+            .map_err(|e| input(e.into()))?;
+        spec.prior = Some(prior);
+    }
+    let report = py
+        .detach(|| appell::plan::plan(&spec))
+        .map_err(|e| run(e.into()))?;
+    let figure = appell::report::plan::PlanFigure { report: &report };
+    let svg = svg_string(&figure).map_err(|e| run(e.into()))?;
+    Ok((
+        appell::report::plan::plan_json(&report).to_string(),
+        appell::report::plan::plan_table(&report),
+        svg,
+    ))
+}
+
+/// A synthetic recording of a scene (TOML text) with the CLI's `synth` options; written to
+/// `output` (CSV or MCAP by extension) when given. Returns the recording and the truth.
+#[pyfunction]
+#[pyo3(signature = (text, label, fps, duration, noise, dropout, outliers, outlier_size, seed, output))]
+#[allow(clippy::too_many_arguments)]
+fn synth_py<'py>(
+    py: Python<'py>,
+    text: &str,
+    label: &str,
+    fps: f64,
+    duration: Option<f64>,
+    noise: f64,
+    dropout: f64,
+    outliers: f64,
+    outlier_size: f64,
+    seed: u64,
+    output: Option<PathBuf>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let opts = SynthOptions {
+        fps,
+        duration,
+        noise,
+        dropout,
+        outliers,
+        outlier_size,
+        seed,
+    };
+    opts.validate().map_err(PyValueError::new_err)?;
+    let path = Path::new(label);
+    let scene = Scene::from_toml(text, path).map_err(|e| input(e.into()))?;
+    appell::scene::check_frames(path, duration.unwrap_or(scene.duration), fps, "fps")
+        .map_err(|e| input(e.into()))?;
+    if let Some(out) = &output {
+        appell::output::refuse_input(out, &[path]).map_err(|e| input(anyhow::anyhow!(e)))?;
+    }
+    let syn = py
+        .detach(|| synth::synthesize(&scene, &opts))
+        .map_err(|e| run(anyhow::anyhow!(e).context(format!("simulating {label}"))))?;
+    if let Some(out) = &output {
+        py.detach(|| synth::write(out, &syn.recording, &syn.truth))
+            .map_err(|e| run(e.into()))?;
+    }
+    let d = recording_dict(py, &syn.recording)?;
+    let truth = PyDict::new(py);
+    for (k, v) in &syn.truth {
+        truth.set_item(k, v)?;
+    }
+    d.set_item("truth", truth)?;
+    d.set_item("stopped_at", syn.stopped_at)?;
+    Ok(d)
+}
+
+/// The regions of a rig (TOML text): the JSON of `appell regions --json`, its summary, and
+/// the figure as SVG text.
+#[pyfunction]
+#[pyo3(signature = (text, label, trajectories, duration))]
+fn regions_py(
+    py: Python<'_>,
+    text: &str,
+    label: &str,
+    trajectories: usize,
+    duration: f64,
+) -> PyResult<(String, String, String)> {
+    use appell::model::regions::RegionMap;
+    use appell::report::regions::{
+        figure_window, phase_portrait, regions_json, regions_summary, PortraitOptions, RegionFigure,
+    };
+    pipeline::check_portrait(trajectories, duration).map_err(PyValueError::new_err)?;
+    let rig = appell::scene::RigFile::parse(text, Path::new(label)).map_err(|e| input(e.into()))?;
+    py.detach(|| {
+        let map = RegionMap::new(&rig, &figure_window(&rig));
+        let paths = phase_portrait(
+            &rig,
+            &PortraitOptions {
+                trajectories,
+                duration,
+                ..PortraitOptions::default()
+            },
+        );
+        let svg = svg_string(&RegionFigure::new(&rig, &map, &paths)).map_err(|e| run(e.into()))?;
+        Ok((
+            regions_json(&map, &paths).to_string(),
+            regions_summary(&rig, &map, &paths),
+            svg,
+        ))
+    })
+}
+
+/// A TOML file's text (a rig, scene or plan file), with the CLI's size limit and messages.
+#[pyfunction]
+fn read_toml_py(path: PathBuf) -> PyResult<String> {
+    appell::scene::read_text(&path, appell::scene::MAX_TOML_BYTES).map_err(|e| input(e.into()))
+}
+
+/// Check a rig file's text as a fit loads it (`ValueError` naming the key at fault).
+#[pyfunction]
+fn check_rig_py(text: &str, label: &str) -> PyResult<()> {
+    appell::scene::RigFile::parse_on_earth(text, Path::new(label), pipeline::MU_GUESS, None)
+        .map(|_| ())
+        .map_err(|e| input(e.into()))
+}
+
+/// The version of the Rust library (`appell X.Y.Z`, as the CLI's JSON says).
+#[pyfunction]
+fn version() -> &'static str {
+    concat!("appell ", env!("CARGO_PKG_VERSION"))
+}
+
+#[pymodule]
+fn _appell(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(read_recording_py, m)?)?;
+    m.add_function(wrap_pyfunction!(fit_py, m)?)?;
+    m.add_function(wrap_pyfunction!(fit_joint_py, m)?)?;
+    m.add_function(wrap_pyfunction!(simulate_py, m)?)?;
+    m.add_function(wrap_pyfunction!(plan_py, m)?)?;
+    m.add_function(wrap_pyfunction!(synth_py, m)?)?;
+    m.add_function(wrap_pyfunction!(regions_py, m)?)?;
+    m.add_function(wrap_pyfunction!(version, m)?)?;
+    m.add_function(wrap_pyfunction!(read_toml_py, m)?)?;
+    m.add_function(wrap_pyfunction!(check_rig_py, m)?)?;
+    m.add_class::<Fit>()?;
+    m.add_class::<Joint>()?;
+    Ok(())
+}
