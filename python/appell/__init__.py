@@ -318,7 +318,14 @@ class FitResult(_Result):
 
     def __init__(self, inner):
         self._inner = inner
-        self._dict = self.to_dict()
+        self._parsed = None
+
+    @property
+    def _dict(self) -> dict:
+        # Parsed on first use: a fit in a loop that only keeps the answer never pays for it.
+        if self._parsed is None:
+            self._parsed = self.to_dict()
+        return self._parsed
 
     @property
     def mu(self) -> Optional[float]:
@@ -393,7 +400,14 @@ class JointResult(_Result):
 
     def __init__(self, inner):
         self._inner = inner
-        self._dict = self.to_dict()
+        self._parsed = None
+
+    @property
+    def _dict(self) -> dict:
+        # Parsed on first use: a fit in a loop that only keeps the answer never pays for it.
+        if self._parsed is None:
+            self._parsed = self.to_dict()
+        return self._parsed
 
     @property
     def failed(self) -> Optional[str]:
@@ -548,11 +562,12 @@ class Plan(_Figure):
         self._json, self._text, self._svg = parts
 
     @property
-    def candidates(self) -> list:
-        return self.to_dict().get("candidates", [])
+    def proposals(self) -> list:
+        """The proposed releases, best first (predicted standard error of mu)."""
+        return self.to_dict().get("proposals", [])
 
     def __repr__(self) -> str:
-        return f"<Plan {len(self.candidates)} candidates>"
+        return f"<Plan {len(self.proposals)} proposals>"
 
 
 def plan(spec: PathLike, after: Union[None, PathLike, FitResult, JointResult] = None) -> Plan:

@@ -239,10 +239,17 @@ struct Fit {
     rig_label: PathBuf,
     settings: FitSettings,
     notes: Vec<String>,
+    seconds: f64,
 }
 
 #[pymethods]
 impl Fit {
+    /// Wall time of the work in Rust (read, check, fit), seconds: the call's overhead is the
+    /// rest.
+    fn seconds(&self) -> f64 {
+        self.seconds
+    }
+
     /// The JSON of `appell fit --json`, as text.
     fn json(&self) -> String {
         let mut v = fit_json(&self.report);
@@ -323,6 +330,7 @@ fn fit_py(
     read: ReadKw,
     fit: FitKw,
 ) -> PyResult<Fit> {
+    let started = std::time::Instant::now();
     let (opts, scale) = read.resolve()?;
     let setup = setup(rig_text, rig_label, fit, scale)?;
     let (obs, report, notes) = match arrays {
@@ -354,6 +362,7 @@ fn fit_py(
         rig_label: setup.rig_path.clone(),
         settings: setup.settings,
         notes,
+        seconds: started.elapsed().as_secs_f64(),
     })
 }
 

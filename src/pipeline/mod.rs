@@ -157,6 +157,9 @@ pub fn provenance(v: &mut serde_json::Value, inputs: &[PathBuf], rig: &Path) {
     v["version"] = serde_json::json!(concat!("appell ", env!("CARGO_PKG_VERSION")));
 }
 
+/// A recording read for a rig, with its notes ([`read_for_rig`]).
+type Read = (Observations, Vec<String>);
+
 /// Read the releases (in parallel) and fit them together as `appell fit --joint` does. With
 /// `keep_going`, a release that cannot be read is named in the report's `left_out` and the
 /// others are fitted. The second value holds the notes worth showing.
@@ -167,7 +170,7 @@ pub fn fit_joint_files(
     joint: &JointSettings,
 ) -> Result<(JointReport, Vec<String>), FitFailure> {
     use rayon::prelude::*;
-    let read: Vec<(String, anyhow::Result<(Observations, Vec<String>)>)> = paths
+    let read: Vec<(String, anyhow::Result<Read>)> = paths
         .par_iter()
         .map(|p| {
             let name = release_name(p);
