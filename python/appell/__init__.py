@@ -251,9 +251,33 @@ def _rig(rig: Union[Rig, PathLike]) -> Rig:
 
 
 class _Result:
-    """What fit results share: the JSON, the text report, the figure."""
+    """What fit results share: mu, the JSON, the text report, the figure."""
 
-    _inner: Any
+    def __init__(self, inner):
+        self._inner = inner
+        self._parsed = None
+
+    @property
+    def _dict(self) -> dict:
+        # Parsed on first use: a fit in a loop that only keeps the answer never pays for it.
+        if self._parsed is None:
+            self._parsed = self.to_dict()
+        return self._parsed
+
+    @property
+    def mu(self) -> Optional[float]:
+        """mu_kinetic (None when the fit gave no value)."""
+        return (self._dict.get("mu_kinetic") or {}).get("value")
+
+    @property
+    def stderr(self) -> Optional[float]:
+        """mu_kinetic's standard error."""
+        return (self._dict.get("mu_kinetic") or {}).get("stderr")
+
+    @property
+    def interval(self):
+        """mu_kinetic's 95 % interval (low, high)."""
+        return _interval(self._dict.get("mu_kinetic") or {})
 
     def to_dict(self) -> dict:
         """The command's ``--json`` object."""
@@ -316,31 +340,6 @@ class FitResult(_Result):
     value), ``models`` (the models compared), ``to_dict()`` (``appell fit --json``),
     ``report()`` (its text), ``answer``, ``svg()``/``plot(path)``/``friction_plot(path)``."""
 
-    def __init__(self, inner):
-        self._inner = inner
-        self._parsed = None
-
-    @property
-    def _dict(self) -> dict:
-        # Parsed on first use: a fit in a loop that only keeps the answer never pays for it.
-        if self._parsed is None:
-            self._parsed = self.to_dict()
-        return self._parsed
-
-    @property
-    def mu(self) -> Optional[float]:
-        """mu_kinetic (None when the fit gave no value)."""
-        return (self._dict.get("mu_kinetic") or {}).get("value")
-
-    @property
-    def stderr(self) -> Optional[float]:
-        """mu_kinetic's standard error."""
-        return (self._dict.get("mu_kinetic") or {}).get("stderr")
-
-    @property
-    def interval(self):
-        """mu_kinetic's 95 % interval (low, high)."""
-        return _interval(self._dict.get("mu_kinetic") or {})
 
     @property
     def parts(self) -> dict:
@@ -398,32 +397,10 @@ class FitResult(_Result):
 class JointResult(_Result):
     """Releases of one rig fitted together (``appell fit --joint``)."""
 
-    def __init__(self, inner):
-        self._inner = inner
-        self._parsed = None
-
-    @property
-    def _dict(self) -> dict:
-        # Parsed on first use: a fit in a loop that only keeps the answer never pays for it.
-        if self._parsed is None:
-            self._parsed = self.to_dict()
-        return self._parsed
 
     @property
     def failed(self) -> Optional[str]:
         return self._inner.failed()
-
-    @property
-    def mu(self) -> Optional[float]:
-        return (self._dict.get("mu_kinetic") or {}).get("value")
-
-    @property
-    def stderr(self) -> Optional[float]:
-        return (self._dict.get("mu_kinetic") or {}).get("stderr")
-
-    @property
-    def interval(self):
-        return _interval(self._dict.get("mu_kinetic") or {})
 
     @property
     def releases(self) -> list:
@@ -440,21 +417,25 @@ def fit(
     *,
     plot: Optional[PathLike] = None,
     friction_plot: Optional[PathLike] = None,
+    threads: Optional[int] = None,
     **options,
 ) -> FitResult:
     """Fit mu and the initial state to one recording, as ``appell fit`` does.
 
     ``recording`` is a file (a Tracker pair: a list of two files) read with ``READ_OPTIONS``,
     or a :class:`Recording` (arrays: rail frame, metres). ``rig`` is a :class:`Rig` or a rig
-    file. ``options``: ``FIT_OPTIONS`` and, for files, ``READ_OPTIONS``."""
+    file. ``options``: ``FIT_OPTIONS`` and, for files, ``READ_OPTIONS``. ``threads``: None
+    (one fit at a time uses every core), or the fit's own pool of that many threads (1 when
+    you fit in parallel yourself, by threads or processes, so the fits do not queue for one
+    shared pool)."""
     r = _rig(rig)
     if isinstance(recording, Recording):
         read, fit_opts = _split(options, "fit", read_ok=False)
         arrays = (recording.t.tobytes(), recording.slider.tobytes(), recording.bob.tobytes())
-        inner = _appell.fit_py([], arrays, r.text, r.label, read, fit_opts)
+        inner = _appell.fit_py([], arrays, r.text, r.label, read, fit_opts, threads)
     else:
         read, fit_opts = _split(options, "fit")
-        inner = _appell.fit_py(_paths(recording), None, r.text, r.label, read, fit_opts)
+        inner = _appell.fit_py(_paths(recording), None, r.text, r.label, read, fit_opts, threads)
     result = FitResult(inner)
     if plot is not None:
         result.plot(plot)
@@ -470,6 +451,7 @@ def fit_joint(
     same_camera: bool = False,
     keep_going: bool = False,
     plot: Optional[PathLike] = None,
+    threads: Optional[int] = None,
     **options,
 ) -> JointResult:
     """Fit releases of one rig together (``appell fit --joint``): the friction law, tilt and
@@ -483,7 +465,8 @@ def fit_joint(
         directory = None
         lists = [_paths(rel) for rel in _strings(releases)]
     inner = _appell.fit_joint_py(
-        directory, lists, r.text, r.label, read, fit_opts, bool(same_camera), bool(keep_going)
+        directory, lists, r.text, r.label, read, fit_opts, bool(same_camera), bool(keep_going),
+        threads,
     )
     result = JointResult(inner)
     if plot is not None:
@@ -570,16 +553,27 @@ class Plan(_Figure):
         return f"<Plan {len(self.proposals)} proposals>"
 
 
-def plan(spec: PathLike, after: Union[None, PathLike, FitResult, JointResult] = None) -> Plan:
+def plan(
+    spec: PathLike,
+    after: Union[None, PathLike, FitResult, JointResult] = None,
+    *,
+    plot: Optional[PathLike] = None,
+) -> Plan:
     """Plan releases from a plan file; ``after`` is an earlier fit (a result, or its JSON file)
-    whose values and covariance become the plan's prior."""
+    whose values and covariance become the plan's prior; ``plot`` writes the figure (SVG or
+    PNG)."""
     text, label = _toml_text(spec)
     after_json, after_label, after_path = None, "", None
     if isinstance(after, _Result):
         after_json, after_label = after._inner.json(), "the fit given as after"
     elif after is not None:
         after_path = after_label = os.fspath(after)
-    return Plan(_appell.plan_py(text, label, after_json, after_label, after_path))
+    return Plan(
+        _appell.plan_py(
+            text, label, after_json, after_label, after_path,
+            None if plot is None else os.fspath(plot),
+        )
+    )
 
 
 def synth(
@@ -603,9 +597,17 @@ def synth(
         None if output is None else os.fspath(output),
     )
     rec = Recording._from_rust(d)
-    rec.metadata["truth"] = dict(d["truth"])
+    rec.metadata["truth"] = {k: _number(v) for k, v in d["truth"].items()}
     rec.metadata["stopped_at"] = d["stopped_at"]
     return rec
+
+
+def _number(text: str):
+    """A truth value as a number where it is one (the files store text)."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
 
 
 class Regions(_Figure):
@@ -619,17 +621,29 @@ class Regions(_Figure):
         return "<Regions>"
 
 
-def regions(rig: Union[Rig, PathLike], *, trajectories: int = 8, duration: float = 3.0) -> Regions:
-    """The rig's regions in the (theta, theta') plane with ``trajectories`` phase portraits."""
+def regions(
+    rig: Union[Rig, PathLike],
+    *,
+    trajectories: int = 8,
+    duration: float = 3.0,
+    plot: Optional[PathLike] = None,
+) -> Regions:
+    """The rig's regions in the (theta, theta') plane with ``trajectories`` phase portraits;
+    ``plot`` writes the figure (SVG or PNG)."""
     r = _rig(rig)
-    return Regions(_appell.regions_py(r.text, r.label, int(trajectories), float(duration)))
+    return Regions(
+        _appell.regions_py(
+            r.text, r.label, int(trajectories), float(duration),
+            None if plot is None else os.fspath(plot),
+        )
+    )
 
 
-def _fit_row(path, rig_text, rig_label, read, fit_opts) -> dict:
+def _fit_row(path, rig_text, rig_label, read, fit_opts, threads=1) -> dict:
     """One recording of fit_many: a table row, the error in its own column (never raised)."""
     row = {"recording": os.fspath(path) if not isinstance(path, (list, tuple)) else ",".join(map(os.fspath, path))}
     try:
-        inner = _appell.fit_py(_paths(path), None, rig_text, rig_label, read, fit_opts)
+        inner = _appell.fit_py(_paths(path), None, rig_text, rig_label, read, fit_opts, threads)
         d = json.loads(inner.json())
         mu = d.get("mu_kinetic") or {}
         lo, hi = _interval(mu)
@@ -651,12 +665,19 @@ def _fit_row(path, rig_text, rig_label, read, fit_opts) -> dict:
     return row
 
 
+def _fit_rows(paths, rig_text, rig_label, read, fit_opts, threads=1) -> list:
+    """One task of fit_many: a batch of recordings, a row each."""
+    return [_fit_row(p, rig_text, rig_label, read, fit_opts, threads) for p in paths]
+
+
 def fit_many(
     paths: Iterable[Union[PathLike, Sequence[PathLike]]],
     rig: Union[Rig, PathLike],
     client=None,
     *,
     as_pandas: Optional[bool] = None,
+    threads: Optional[int] = 1,
+    batch: Optional[int] = None,
     **options,
 ):
     """Fit each recording on its own and gather one row per recording: ``recording``,
@@ -666,19 +687,30 @@ def fit_many(
 
     ``client`` is a ``dask.distributed.Client`` (``Client(LocalCluster())``, or
     ``Client("tcp://scheduler:8786")`` on a cluster): each recording is one task. Without
-    one, the recordings are fitted here, one after another. The table is a pandas DataFrame
-    when pandas is installed (``as_pandas=False``: a list of dicts)."""
+    one, the recordings are fitted here, one after another. ``batch`` recordings make one
+    task (default: about eight tasks per worker, since a short recording's fit of 10-20 ms
+    is cheaper than a task's round trip through the scheduler; ``batch=1`` makes each
+    recording a task of its own, best when recordings differ much in length). Each fit runs on ``threads``
+    threads of its own (1: a task is one core, as Dask schedules it; None: the shared pool).
+    The table is a pandas DataFrame when pandas is installed (``as_pandas=False``: a list of
+    dicts)."""
     r = _rig(rig)
     read, fit_opts = _split(options, "fit_many")
     paths = list(paths)
     if client is None:
-        rows = [_fit_row(p, r.text, r.label, read, fit_opts) for p in paths]
+        rows = [_fit_row(p, r.text, r.label, read, fit_opts, threads) for p in paths]
     else:
+        if batch is None:
+            workers = max(1, len(client.scheduler_info().get("workers", {})))
+            batch = max(1, -(-len(paths) // (8 * workers)))
+        if int(batch) < 1:
+            raise ValueError(f"fit_many: batch must be at least 1, got {batch}")
+        chunks = [paths[i : i + int(batch)] for i in range(0, len(paths), int(batch))]
         futures = client.map(
-            _fit_row, paths, rig_text=r.text, rig_label=r.label, read=read, fit_opts=fit_opts,
-            pure=False,
+            _fit_rows, chunks, rig_text=r.text, rig_label=r.label, read=read,
+            fit_opts=fit_opts, threads=threads, pure=False,
         )
-        rows = client.gather(futures)
+        rows = [row for chunk in client.gather(futures) for row in chunk]
     if as_pandas is False:
         return rows
     try:

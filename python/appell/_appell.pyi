@@ -33,6 +33,7 @@ def fit_py(
     rig_label: str,
     read: dict[str, Any],
     fit: dict[str, Any],
+    threads: Optional[int],
 ) -> Fit: ...
 def fit_joint_py(
     directory: Optional[_Path],
@@ -43,6 +44,7 @@ def fit_joint_py(
     fit: dict[str, Any],
     same_camera: bool,
     keep_going: bool,
+    threads: Optional[int],
 ) -> Joint: ...
 def simulate_py(text: str, label: str, frame_rate: Optional[float]) -> dict[str, Any]: ...
 def plan_py(
@@ -51,6 +53,7 @@ def plan_py(
     after_json: Optional[str],
     after_label: str,
     after_path: Optional[_Path],
+    plot: Optional[_Path],
 ) -> Tuple[str, str, str]: ...
 def synth_py(
     text: str,
@@ -64,7 +67,9 @@ def synth_py(
     seed: int,
     output: Optional[_Path],
 ) -> dict[str, Any]: ...
-def regions_py(text: str, label: str, trajectories: int, duration: float) -> Tuple[str, str, str]: ...
+def regions_py(
+    text: str, label: str, trajectories: int, duration: float, plot: Optional[_Path]
+) -> Tuple[str, str, str]: ...
 def read_toml_py(path: _Path) -> str: ...
 def check_rig_py(text: str, label: str) -> None: ...
 def version() -> str: ...

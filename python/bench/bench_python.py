@@ -4,9 +4,9 @@
 
 1. Overhead per call: appell.fit's wall time in Python minus the time spent in Rust (read,
    check, fit), median over repeats, on the shipped example (default fit) and a plain fit.
-2. Two threads: two recordings fitted one after the other against two threads at once
-   (alternated runs, medians), with the fit's own thread pool as shipped and with
-   RAYON_NUM_THREADS=1 (run this script again with it set).
+2. Two threads: one fit alone against two recordings fitted in two Python threads at once
+   (alternated runs, medians), each fit on a pool of its own (threads=1) and on the shared
+   pool (threads=None, the default: a lone fit already uses both cores).
 3. fit_many: N short recordings (0.5 s at 400 Hz, synthesized with known mu into a temporary
    directory) on a LocalCluster of 1 worker and of 2 workers (1 thread each), alternated.
 """
@@ -42,32 +42,32 @@ def overhead(repeats):
 def two_threads(repeats):
     files = ["data/campaign/release_01.csv", "data/campaign/release_02.csv"]
     rig = "data/campaign/rig_measured.toml"
+    for threads in (1, None):
 
-    def one(f):
-        appell.fit(f, rig)
+        def one(f):
+            appell.fit(f, rig, threads=threads)
 
-    seq, par = [], []
-    for _ in range(repeats):
-        t0 = time.perf_counter()
-        for f in files:
-            one(f)
-        seq.append(time.perf_counter() - t0)
-        threads = [threading.Thread(target=one, args=(f,)) for f in files]
-        t0 = time.perf_counter()
-        for t in threads:
-            t.start()
-        for t in threads:
-            t.join()
-        par.append(time.perf_counter() - t0)
-    s, p = statistics.median(seq), statistics.median(par)
-    print(
-        f"two recordings (RAYON_NUM_THREADS={os.environ.get('RAYON_NUM_THREADS', 'unset')}): "
-        f"one after the other {s:.3f} s, two threads {p:.3f} s (one fit {s / 2:.3f} s; "
-        f"two threads take {p / (s / 2):.2f}x one fit)"
-    )
+        alone, par = [], []
+        for _ in range(repeats):
+            for f in files:
+                t0 = time.perf_counter()
+                one(f)
+                alone.append(time.perf_counter() - t0)
+            workers = [threading.Thread(target=one, args=(f,)) for f in files]
+            t0 = time.perf_counter()
+            for t in workers:
+                t.start()
+            for t in workers:
+                t.join()
+            par.append(time.perf_counter() - t0)
+        a, p = statistics.median(alone), statistics.median(par)
+        print(
+            f"threads={threads}: one fit alone {a * 1e3:.1f} ms, two fits in two Python threads "
+            f"{p * 1e3:.1f} ms ({p / a:.2f}x one fit; {2 * a / p:.2f}x the throughput)"
+        )
 
 
-def cluster(n, rounds):
+def cluster(n, rounds, batch):
     from distributed import Client, LocalCluster
 
     with tempfile.TemporaryDirectory() as d:
@@ -84,12 +84,13 @@ def cluster(n, rounds):
                                   dashboard_address=None) as lc, Client(lc) as client:
                     client.run(lambda: __import__("appell"))  # import before the clock
                     t0 = time.perf_counter()
-                    table = appell.fit_many(paths, "configs/rig_paper.toml", client=client)
+                    table = appell.fit_many(paths, "configs/rig_paper.toml", client=client,
+                                            batch=batch)
                     times[workers].append(time.perf_counter() - t0)
                     failed = table["error"].notna().sum()
         one, two = statistics.median(times[1]), statistics.median(times[2])
         print(
-            f"fit_many of {n} recordings: 1 worker {one:.2f} s, 2 workers {two:.2f} s "
+            f"fit_many of {n} recordings (batch={batch}): 1 worker {one:.2f} s, 2 workers {two:.2f} s "
             f"({two / one:.2f} of one worker; {failed} failed)"
         )
 
@@ -100,14 +101,15 @@ def main():
     ap.add_argument("--repeats", type=int, default=21)
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--only", choices=["overhead", "threads", "cluster"])
+    ap.add_argument("--batch", type=int, help="recordings per task (default: fit_many's)")
     a = ap.parse_args()
     os.chdir(ROOT)
     if a.only in (None, "overhead"):
         overhead(a.repeats)
     if a.only in (None, "threads"):
-        two_threads(max(5, a.repeats // 2))
+        two_threads(a.repeats)
     if a.only in (None, "cluster"):
-        cluster(a.recordings, a.rounds)
+        cluster(a.recordings, a.rounds, a.batch)
 
 
 if __name__ == "__main__":

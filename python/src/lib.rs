@@ -28,6 +28,47 @@ fn run(e: anyhow::Error) -> PyErr {
     PyRuntimeError::new_err(pipeline::messages(&e).join(": "))
 }
 
+/// The most threads one call may ask for.
+const MAX_THREADS: usize = 256;
+
+thread_local! {
+    /// The pool of this Python thread's fits with `threads=N` (kept: a thread per call costs
+    /// more than a short fit's overhead), with its size.
+    static POOL: std::cell::RefCell<Option<(usize, std::sync::Arc<rayon::ThreadPool>)>> =
+        const { std::cell::RefCell::new(None) };
+}
+
+/// Run `work` on the shared thread pool (`threads` None: a lone fit uses every core), or on a
+/// pool of `threads` of this caller's own, so that fits run in parallel by threads or cluster
+/// workers do not queue for one shared pool.
+fn pooled<T: Send>(threads: Option<usize>, work: impl FnOnce() -> T + Send) -> PyResult<T> {
+    let Some(n) = threads else {
+        return Ok(work());
+    };
+    if !(1..=MAX_THREADS).contains(&n) {
+        return Err(PyValueError::new_err(format!(
+            "threads must be from 1 to {MAX_THREADS}, got {n}"
+        )));
+    }
+    let pool = POOL.with(|cell| -> PyResult<_> {
+        let mut cell = cell.borrow_mut();
+        if let Some((size, pool)) = cell.as_ref() {
+            if *size == n {
+                return Ok(pool.clone());
+            }
+        }
+        let pool = std::sync::Arc::new(
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .map_err(|e| PyRuntimeError::new_err(format!("threads={n}: {e}")))?,
+        );
+        *cell = Some((n, pool.clone()));
+        Ok(pool)
+    })?;
+    Ok(pool.install(work))
+}
+
 fn failure(e: FitFailure) -> PyErr {
     match e {
         FitFailure::Input(e) => input(e),
@@ -320,7 +361,8 @@ impl Fit {
 /// Fit one recording: from its files (`paths`), or from arrays (`t`, `slider`, `bob`; metres,
 /// seconds, rail frame, NaN where a marker was not seen).
 #[pyfunction]
-#[pyo3(signature = (paths, arrays, rig_text, rig_label, read, fit))]
+#[pyo3(signature = (paths, arrays, rig_text, rig_label, read, fit, threads))]
+#[allow(clippy::too_many_arguments)]
 fn fit_py(
     py: Python<'_>,
     paths: Vec<PathBuf>,
@@ -329,13 +371,14 @@ fn fit_py(
     rig_label: &str,
     read: ReadKw,
     fit: FitKw,
+    threads: Option<usize>,
 ) -> PyResult<Fit> {
     let started = std::time::Instant::now();
     let (opts, scale) = read.resolve()?;
     let setup = setup(rig_text, rig_label, fit, scale)?;
     let (obs, report, notes) = match arrays {
         None => py
-            .detach(|| pipeline::fit_files(&paths, &opts, &setup, true))
+            .detach(|| pooled(threads, || pipeline::fit_files(&paths, &opts, &setup, true)))?
             .map_err(failure)?,
         Some((t, s, b)) => {
             let times = floats(&t, "t")?;
@@ -347,11 +390,13 @@ fn fit_py(
                 ..Recording::default()
             };
             py.detach(|| {
-                let obs = pipeline::observations_for_rig(&rec, &setup.rig_path, &setup.rig)
-                    .map_err(FitFailure::Input)?;
-                let report = pipeline::fit_observations(obs.clone(), &setup, "the arrays")?;
-                Ok((obs, report, Vec::new()))
-            })
+                pooled(threads, || {
+                    let obs = pipeline::observations_for_rig(&rec, &setup.rig_path, &setup.rig)
+                        .map_err(FitFailure::Input)?;
+                    let report = pipeline::fit_observations(obs.clone(), &setup, "the arrays")?;
+                    Ok((obs, report, Vec::new()))
+                })
+            })?
             .map_err(failure)?
         }
     };
@@ -426,7 +471,7 @@ impl Joint {
 /// Fit releases together: `releases` is one directory (its recordings) or a list of releases,
 /// each a list of files (a Tracker pair is two).
 #[pyfunction]
-#[pyo3(signature = (directory, releases, rig_text, rig_label, read, fit, same_camera, keep_going))]
+#[pyo3(signature = (directory, releases, rig_text, rig_label, read, fit, same_camera, keep_going, threads))]
 #[allow(clippy::too_many_arguments)]
 fn fit_joint_py(
     py: Python<'_>,
@@ -438,6 +483,7 @@ fn fit_joint_py(
     fit: FitKw,
     same_camera: bool,
     keep_going: bool,
+    threads: Option<usize>,
 ) -> PyResult<Joint> {
     let (opts, scale) = read.resolve()?;
     let setup = setup(rig_text, rig_label, fit, scale)?;
@@ -458,7 +504,11 @@ fn fit_joint_py(
         keep_going,
     };
     let (report, fit_notes) = py
-        .detach(|| pipeline::fit_joint_files(&paths, &opts, &setup, &joint))
+        .detach(|| {
+            pooled(threads, || {
+                pipeline::fit_joint_files(&paths, &opts, &setup, &joint)
+            })
+        })?
         .map_err(failure)?;
     notes.extend(fit_notes);
     Ok(Joint {
@@ -546,7 +596,7 @@ fn simulate_py<'py>(
 /// A plan (TOML text), after an earlier fit's JSON if given: the JSON of `appell plan --json`,
 /// its table, and the figure as SVG text.
 #[pyfunction]
-#[pyo3(signature = (text, label, after_json, after_label, after_path))]
+#[pyo3(signature = (text, label, after_json, after_label, after_path, plot))]
 fn plan_py(
     py: Python<'_>,
     text: &str,
@@ -554,10 +604,12 @@ fn plan_py(
     after_json: Option<&str>,
     after_label: &str,
     after_path: Option<PathBuf>,
+    plot: Option<PathBuf>,
 ) -> PyResult<(String, String, String)> {
     use appell::plan::prior::Prior;
     use appell::plan::PlanSpec;
     let path = Path::new(label);
+    check_figure_path(plot.as_deref(), &[path])?;
     let mut spec = PlanSpec::from_toml(text, path).map_err(|e| input(e.into()))?;
     if after_json.is_some() || after_path.is_some() {
         let prior = match (after_json, &after_path) {
@@ -584,6 +636,12 @@ fn plan_py(
         .map_err(|e| run(e.into()))?;
     let figure = appell::report::plan::PlanFigure { report: &report };
     let svg = svg_string(&figure).map_err(|e| run(e.into()))?;
+    write_figure(
+        py,
+        plot,
+        &[path, after_path.as_deref().unwrap_or(path)],
+        &figure,
+    )?;
     Ok((
         appell::report::plan::plan_json(&report).to_string(),
         appell::report::plan::plan_table(&report),
@@ -646,21 +704,23 @@ fn synth_py<'py>(
 /// The regions of a rig (TOML text): the JSON of `appell regions --json`, its summary, and
 /// the figure as SVG text.
 #[pyfunction]
-#[pyo3(signature = (text, label, trajectories, duration))]
+#[pyo3(signature = (text, label, trajectories, duration, plot))]
 fn regions_py(
     py: Python<'_>,
     text: &str,
     label: &str,
     trajectories: usize,
     duration: f64,
+    plot: Option<PathBuf>,
 ) -> PyResult<(String, String, String)> {
     use appell::model::regions::RegionMap;
     use appell::report::regions::{
         figure_window, phase_portrait, regions_json, regions_summary, PortraitOptions, RegionFigure,
     };
     pipeline::check_portrait(trajectories, duration).map_err(PyValueError::new_err)?;
+    check_figure_path(plot.as_deref(), &[Path::new(label)])?;
     let rig = appell::scene::RigFile::parse(text, Path::new(label)).map_err(|e| input(e.into()))?;
-    py.detach(|| {
+    let (json, summary, svg, map, paths) = py.detach(|| {
         let map = RegionMap::new(&rig, &figure_window(&rig));
         let paths = phase_portrait(
             &rig,
@@ -671,12 +731,38 @@ fn regions_py(
             },
         );
         let svg = svg_string(&RegionFigure::new(&rig, &map, &paths)).map_err(|e| run(e.into()))?;
-        Ok((
+        PyResult::Ok((
             regions_json(&map, &paths).to_string(),
             regions_summary(&rig, &map, &paths),
             svg,
+            map,
+            paths,
         ))
-    })
+    })?;
+    let figure = RegionFigure::new(&rig, &map, &paths);
+    write_figure(py, plot, &[Path::new(label)], &figure)?;
+    Ok((json, summary, svg))
+}
+
+/// A figure's path checked before any work: SVG or PNG, and never one of the inputs.
+fn check_figure_path(plot: Option<&Path>, inputs: &[&Path]) -> PyResult<()> {
+    if let Some(p) = plot {
+        appell::report::plot::ImageFormat::from_path(p).map_err(|e| input(e.into()))?;
+        appell::output::refuse_input(p, inputs).map_err(|e| input(anyhow::anyhow!(e)))?;
+    }
+    Ok(())
+}
+
+/// Write `figure` to `plot` when given (SVG or PNG by extension), never over an input.
+fn write_figure(
+    py: Python<'_>,
+    plot: Option<PathBuf>,
+    inputs: &[&Path],
+    figure: &(impl appell::report::plot::Figure + Sync),
+) -> PyResult<()> {
+    let Some(p) = plot else { return Ok(()) };
+    check_figure_path(Some(&p), inputs)?;
+    py.detach(|| render(&p, figure)).map_err(|e| run(e.into()))
 }
 
 /// A TOML file's text (a rig, scene or plan file), with the CLI's size limit and messages.

@@ -1,6 +1,7 @@
 """simulate, synth, plan and regions from Python against the command line and physics."""
 
 import numpy as np
+import pytest
 
 import appell
 
@@ -26,7 +27,7 @@ def test_simulate_is_the_cli_and_closes_the_energy_balance(cli_json, cli, tmp_pa
 
 def test_synth_then_fit_recovers_the_known_mu(tmp_path):
     rec = appell.synth("configs/paper_rest_horizontal.toml", tmp_path / "s.csv", fps=500, noise=2e-4, seed=7)
-    truth = float(rec.metadata["truth"]["mu_kinetic"])
+    truth = rec.metadata["truth"]["mu_kinetic"]
     fitted = appell.fit(tmp_path / "s.csv", "configs/rig_paper.toml", no_profile=True)
     assert abs(fitted.mu - truth) < 3 * fitted.stderr
     # The arrays returned are the file written.
@@ -39,16 +40,22 @@ def test_plan_after_a_fit_is_the_cli(cli_json, tmp_path):
     joint = appell.fit_joint("data/campaign", rig)
     (tmp_path / "fit.json").write_text(joint._inner.json())
     spec = "configs/plan_campaign.toml"
-    from_result = appell.plan(spec, after=joint).to_dict()
+    from_result = appell.plan(spec, after=joint, plot=tmp_path / "plan.svg").to_dict()
+    assert (tmp_path / "plan.svg").read_text().startswith("<svg")
     from_file = appell.plan(spec, after=tmp_path / "fit.json").to_dict()
     assert from_result == from_file == cli_json("plan", spec, "--after", tmp_path / "fit.json")
     assert from_result["proposals"]
 
 
-def test_regions_are_the_cli(cli_json):
-    r = appell.regions("configs/rig_paradox.toml", trajectories=3, duration=1.0)
+def test_regions_are_the_cli(cli_json, tmp_path):
+    r = appell.regions("configs/rig_paradox.toml", trajectories=3, duration=1.0, plot=tmp_path / "r.png")
     assert r.to_dict() == cli_json("regions", "configs/rig_paradox.toml", "--trajectories", "3", "--duration", "1")
     assert "<svg" in r.svg()
+    assert (tmp_path / "r.png").read_bytes()[:4] == b"\x89PNG"
+    with pytest.raises(ValueError, match="--trajectories must be at most 1000"):
+        appell.regions("configs/rig_paradox.toml", trajectories=10**6)
+    with pytest.raises(ValueError):
+        appell.regions("configs/rig_paradox.toml", plot="configs/rig_paradox.toml")
 
 
 def test_the_stubs_name_every_function_of_the_extension(root):

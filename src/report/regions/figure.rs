@@ -93,7 +93,7 @@ impl<'a> RegionFigure<'a> {
         self.map.summary.paradox_possible()
     }
 
-    /// The key numbers printed beside the panels.
+    /// The key numbers printed beside the panels (a fitted rig's values to 7 digits, not 17).
     pub fn key_numbers(&self) -> Vec<String> {
         let s = &self.map.summary;
         let mut out = match self.rig.pendulum {
@@ -102,9 +102,9 @@ impl<'a> RegionFigure<'a> {
                     "rigid pendulum: r' = {:.3}, L = {:.4} m, l = {} m, mu_k = {}, mu_s = {}",
                     s.mass_ratio,
                     self.rig.rod_length,
-                    self.rig.marker_length,
-                    s.mu_kinetic,
-                    s.mu_static
+                    short(self.rig.marker_length),
+                    short(s.mu_kinetic),
+                    short(s.mu_static)
                 ),
                 format!(
                     "mu* = 2 sqrt(r' (1 + r')) = {:.3}, theta* = {:.1} deg",
@@ -114,7 +114,10 @@ impl<'a> RegionFigure<'a> {
             None => vec![
                 format!(
                     "m1/m2 = {:.3}, l = {} m, mu_k = {}, mu_s = {}",
-                    s.mass_ratio, self.rig.rod_length, s.mu_kinetic, s.mu_static
+                    s.mass_ratio,
+                    short(self.rig.rod_length),
+                    short(s.mu_kinetic),
+                    short(s.mu_static)
                 ),
                 format!(
                     "mu* = 2 sqrt(r (1 + r)) = {:.3}, theta* = {:.1} deg",
@@ -542,4 +545,9 @@ impl Figure for RegionFigure<'_> {
             LEGEND_WRAP,
         )
     }
+}
+
+/// A value as typed (0.3) or, for a fitted one, to 7 significant digits.
+fn short(x: f64) -> String {
+    crate::data::calibrate::significant(x)
 }
