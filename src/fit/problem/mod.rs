@@ -119,8 +119,9 @@ impl TrajectoryProblem {
         free: Vec<Param>,
         options: Options,
     ) -> Self {
-        let mut obs_index = Vec::new();
-        let mut frames = Vec::new();
+        // Sized once: a 10^6-frame recording would otherwise hold up to twice this while growing.
+        let mut obs_index = Vec::with_capacity(obs.times.len());
+        let mut frames = Vec::with_capacity(obs.times.len());
         let mut n_rows = 0;
         for (i, (s, b)) in obs.slider.iter().zip(&obs.bob).enumerate() {
             let present = usize::from(s.is_some()) + usize::from(b.is_some());
