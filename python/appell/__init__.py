@@ -15,8 +15,10 @@ threads fit in parallel.
 
 from __future__ import annotations
 
+import base64
 import html
 import json
+import math
 import os
 from typing import Any, Iterable, Mapping, Optional, Sequence, Union
 
@@ -320,14 +322,21 @@ class _Result:
             else ""
         )
         try:
-            figure = self.svg()
+            figure = _svg_img(self.svg())
         except (RuntimeError, ValueError) as e:
             figure = f"<p>(no figure: {html.escape(str(e))})</p>"
         return (
             f"<div><p><b>{html.escape(self.answer)}</b></p>{table}"
             f"<details><summary>report</summary><pre>{html.escape(self.report())}</pre></details>"
-            f"<div style='max-width:100%'>{figure}</div></div>"
+            f"{figure}</div>"
         )
+
+
+def _svg_img(svg: str) -> str:
+    """An SVG figure as an image that shrinks to the notebook's width (an inline <svg> keeps
+    its 1000 px and is cut off)."""
+    data = base64.b64encode(svg.encode()).decode()
+    return f"<img style='max-width:100%;height:auto' src='data:image/svg+xml;base64,{data}'/>"
 
 
 def _interval(entry: Mapping[str, Any]):
@@ -384,9 +393,16 @@ class FitResult(_Result):
         for name, p in self.parameters.items():
             if isinstance(p, dict) and "value" in p:
                 lo, hi = _interval(p)
+                se = p.get("stderr")
+                # Digits from the error, as the command's table: two of the standard error.
+                if isinstance(se, (int, float)) and math.isfinite(se) and se > 0:
+                    d = max(0, 1 - math.floor(math.log10(se)))
+                    fmt = lambda v: f"{v:.{d}f}"  # noqa: E731
+                else:
+                    fmt = lambda v: f"{v:.6g}"  # noqa: E731
                 rows.append(
-                    [name, f"{p['value']:.6g}", f"{p.get('stderr', float('nan')):.2g}",
-                     f"{lo:.6g} to {hi:.6g}" if lo is not None else ""]
+                    [name, fmt(p["value"]), fmt(se) if se is not None else "",
+                     f"{fmt(lo)} to {fmt(hi)}" if lo is not None else ""]
                 )
         return rows
 
@@ -535,7 +551,7 @@ class _Figure:
         return self._svg
 
     def _repr_html_(self) -> str:
-        return f"<div><pre>{html.escape(self._text)}</pre>{self._svg}</div>"
+        return f"<div><pre>{html.escape(self._text)}</pre>{_svg_img(self._svg)}</div>"
 
 
 class Plan(_Figure):

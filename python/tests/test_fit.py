@@ -86,8 +86,15 @@ def test_bad_input_is_a_value_error_with_the_cli_message(cli, tmp_path):
 
 
 def test_html_shows_the_answer_the_table_and_the_figure():
+    import base64
+    import re
+
     page = appell.fit(*EXAMPLE, no_profile=True)._repr_html_()
-    assert "mu_kinetic = " in page and "<table>" in page and "<svg" in page
+    assert "mu_kinetic = " in page and "<table>" in page
+    # The figure is the SVG, as an image that shrinks to the notebook's width.
+    data = re.search(r"src='data:image/svg\+xml;base64,([^']+)'", page).group(1)
+    assert base64.b64decode(data).decode().startswith("<svg")
+    assert "max-width:100%" in page
 
 
 def test_figures_are_written_and_never_over_an_input(tmp_path):
