@@ -45,7 +45,7 @@ mod prepare;
 pub mod priors;
 mod problem;
 mod select;
-mod solve;
+pub mod solve;
 mod stages;
 mod uncertainty;
 

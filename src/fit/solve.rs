@@ -43,6 +43,12 @@ pub(super) fn solve_traced(
     run_lm(problem, p0, max_iters, LevenbergMarquardt::default())
 }
 
+/// Whether a solve's termination reason says it stopped at its iteration limit, not at a
+/// minimum (its values and their covariance then describe no optimum).
+pub fn at_iteration_limit(reason: &str) -> bool {
+    reason == argmin::core::TerminationReason::MaxItersReached.text()
+}
+
 /// Run `lm` on `problem` from `p0`: optimum, cost, iterations and termination reason.
 pub(super) fn run_lm<P: lm::LeastSquares + Clone>(
     problem: &P,

@@ -255,6 +255,12 @@ pub(super) fn polish(f: &mut Fitting, settled: Option<String>, settings: &FitSet
             f.iterations += it;
             f.problem.set_values(&q);
             f.p = q;
+            if super::solve::at_iteration_limit(&reason) {
+                // Never silent: a value the solver was still moving is no estimate.
+                f.warnings.push(format!(
+                    "the final solve stopped at its iteration limit ({it} iterations) before converging: the values and intervals are not those of a minimum (the model may have more freedom than the recording pins down: try --friction coulomb, or fewer --with nuisances)"
+                ));
+            }
             reason
         }
         Err(e) => format!("final polish failed: {e}"),

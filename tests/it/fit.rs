@@ -448,3 +448,41 @@ fn long_recording_through_its_first_frames_matches_the_whole_fit() {
         assert!(lo < 0.01 && hi > 0.1, "{lo} {hi}");
     }
 }
+
+/// A solve stopped at its iteration limit is never reported as an answer: the answer line says
+/// "not converged" (not "model adequate") and a warning names the limit. The same recording
+/// with the default limit converges and is adequate, so the check can fail either way. (A
+/// Stribeck fit stopped at the limit once read "0.1 +- 1.1 ... model adequate".)
+#[test]
+fn a_fit_stopped_at_its_iteration_limit_says_so() {
+    use appell::pipeline::{fit_files, FitArgs, FitSetup};
+    use appell::report::fit::answer;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+    let rec = vec![root.join("data/example_recording.mcap")];
+    let rig = root.join("configs/rig_example.toml");
+    let opts = appell::data::ReadOptions::default();
+    let mut setup = FitSetup::new(&rig, &FitArgs::default(), None).unwrap();
+    setup.settings.profile = false;
+    let (_, converged, _) = fit_files(&rec, &opts, &setup, false).unwrap();
+    assert!(
+        answer(&converged).ends_with("model adequate"),
+        "{}",
+        answer(&converged)
+    );
+    setup.settings.max_iters = 2;
+    let (_, stopped, _) = fit_files(&rec, &opts, &setup, false).unwrap();
+    assert!(
+        answer(&stopped).ends_with("not converged: the solve stopped at its iteration limit"),
+        "{} ({})",
+        answer(&stopped),
+        stopped.stop_reason
+    );
+    assert!(
+        stopped
+            .warnings
+            .iter()
+            .any(|w| w.contains("iteration limit")),
+        "{:?}",
+        stopped.warnings
+    );
+}

@@ -51,6 +51,9 @@ pub fn answer(rep: &FitReport) -> String {
         );
     }
     let head = format!("mu_kinetic = {}{}", with_interval(mu), law_words(rep));
+    if crate::fit::solve::at_iteration_limit(&rep.stop_reason) {
+        return format!("{head}, not converged: the solve stopped at its iteration limit");
+    }
     if rep.adequacy.limited_by_model.is_none() {
         return format!("{head}, model adequate");
     }
