@@ -34,7 +34,9 @@ __all__ = [
     "Simulation",
     "Plan",
     "Regions",
+    "Inspection",
     "read_recording",
+    "inspect",
     "fit",
     "fit_joint",
     "fit_many",
@@ -206,6 +208,38 @@ def read_recording(path: Union[PathLike, Sequence[PathLike]], **options) -> Reco
         if name in options:
             raise TypeError(f"read_recording() got an unexpected keyword argument {name!r}")
     return Recording._from_rust(_appell.read_recording_py(_paths(path), read))
+
+
+class Inspection:
+    """What a recording holds before its options are known (``appell inspect``): the format,
+    the markers, times and units, which pair looks like the slider and the bob, the options
+    still missing, and ready ``fit``/``convert`` commands. ``to_dict()`` is ``--json``."""
+
+    def __init__(self, parts):
+        self._json, self._text = parts
+
+    def to_dict(self) -> dict:
+        return json.loads(self._json)
+
+    def report(self) -> str:
+        return self._text
+
+    def _repr_html_(self) -> str:
+        return f"<pre>{html.escape(self._text)}</pre>"
+
+    def __repr__(self) -> str:
+        return self._text
+
+
+def inspect(path: Union[PathLike, Sequence[PathLike]], **options) -> Inspection:
+    """What a recording file holds and every option still missing to read it as the rig
+    (``appell inspect``); options already known (``fps=``, ``slider=``...) are used and carried
+    into the suggested commands. A Tracker pair is a list of two files."""
+    read, _ = _split(options, "inspect")
+    for name in FIT_OPTIONS:
+        if name in options:
+            raise TypeError(f"inspect() got an unexpected keyword argument {name!r}")
+    return Inspection(_appell.inspect_py(_paths(path), read))
 
 
 def _toml_value(key: str, value: Any) -> str:

@@ -271,6 +271,19 @@ fn read_recording_py<'py>(
     recording_dict(py, &rec)
 }
 
+/// What a recording holds (`appell inspect`): its JSON and its text report.
+#[pyfunction]
+fn inspect_py(py: Python<'_>, paths: Vec<PathBuf>, read: ReadKw) -> PyResult<(String, String)> {
+    let (opts, _) = read.resolve()?;
+    let ins = py
+        .detach(|| appell::data::inspect::inspect(&paths, &opts))
+        .map_err(|e| input(e.into()))?;
+    Ok((
+        appell::report::inspect::inspect_json(&ins).to_string(),
+        appell::report::inspect::inspect_text(&ins),
+    ))
+}
+
 /// One recording's fit: the report, the observations (for the figure), where they came from.
 #[pyclass(frozen, module = "appell._appell")]
 struct Fit {
@@ -788,6 +801,7 @@ fn version() -> &'static str {
 #[pymodule]
 fn _appell(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(read_recording_py, m)?)?;
+    m.add_function(wrap_pyfunction!(inspect_py, m)?)?;
     m.add_function(wrap_pyfunction!(fit_py, m)?)?;
     m.add_function(wrap_pyfunction!(fit_joint_py, m)?)?;
     m.add_function(wrap_pyfunction!(simulate_py, m)?)?;

@@ -126,3 +126,12 @@ def test_joint_fit_is_the_cli_json(cli_json):
     joint = appell.fit_joint("data/campaign", rig)
     assert joint.to_dict() == cli_json("fit", "data/campaign", "--joint", "--rig", rig)
     assert joint.failed is None and len(joint.releases) == 6
+
+
+def test_inspect_is_the_cli(cli_json, cli):
+    ins = appell.inspect(SHOWCASE_DLC)
+    assert ins.to_dict() == cli_json("inspect", SHOWCASE_DLC)
+    code, out, _ = cli("inspect", SHOWCASE_DLC)
+    assert code == 0 and ins.report() == out
+    with pytest.raises(ValueError, match="nope.csv"):
+        appell.inspect("nope.csv")
