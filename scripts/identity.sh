@@ -8,6 +8,7 @@ n=0
 for f in $(find tests/data data ${3:+"$3"} -type f \( -name '*.csv' -o -name '*.tsv' -o -name '*.txt' -o -name '*.mcap' -o -name '*.h5' -o -name '*.xml' -o -name '*.trk' \) -not -path '*/fuzz/*' | sort); do
   k=$(echo $f | tr '/.' '__')
   $B convert $f $W/out.csv > $O/conv/$k.stdout 2> $O/conv/$k.stderr; echo $? > $O/conv/$k.rc
+  $B inspect --json $f > $O/conv/$k.inspect.json 2> $O/conv/$k.inspect.stderr; echo $? > $O/conv/$k.inspect.rc
   [ -f $W/out.csv ] && mv $W/out.csv $O/conv/$k.csv
   n=$((n+1))
 done
