@@ -50,11 +50,15 @@ pub fn answer(rep: &FitReport) -> String {
             mu.value
         );
     }
-    let head = format!("mu_kinetic = {}{}", with_interval(mu), law_words(rep));
+    let mut head = format!("mu_kinetic = {}{}", with_interval(mu), law_words(rep));
     if crate::fit::solve::at_iteration_limit(&rep.stop_reason) {
-        return format!("{head}, not converged: the solve stopped at its iteration limit");
-    }
-    if rep.adequacy.limited_by_model.is_none() {
+        // Said first, whatever else holds: the value is no minimum. What the model misses,
+        // when the checks say it, still follows.
+        head.push_str(", not converged: the solve stopped at its iteration limit");
+        if rep.adequacy.limited_by_model.is_none() {
+            return head;
+        }
+    } else if rep.adequacy.limited_by_model.is_none() {
         return format!("{head}, model adequate");
     }
     let a = &rep.adequacy;
