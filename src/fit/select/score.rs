@@ -66,8 +66,16 @@ pub(super) fn score_drops(
             return;
         }
         let mut aug = problem.clone();
+        // Only the parameters not free already: the rigid pendulum's mass ratio is free
+        // whenever the rig file's masses are measured, and a column twice made the group's
+        // pass fail, which silently dropped every candidate tested with it (the camera's
+        // among them).
         for n in group.iter() {
-            aug.free.extend(n.params());
+            for &q in n.params() {
+                if !aug.free.contains(&q) {
+                    aug.free.push(q);
+                }
+            }
         }
         // Each camera parameter once (candidates may share one: the bob's offset across the
         // rod is in both bob candidates).
@@ -88,11 +96,16 @@ pub(super) fn score_drops(
             if let Some(btb_inv) = btb.try_inverse() {
                 // The columns of each candidate's parameters in the augmented equations.
                 let mut cols: Vec<Vec<usize>> = Vec::new();
-                let mut col = k;
                 for n in group.iter() {
-                    cols.push((col..col + n.params().len()).collect());
-                    col += n.params().len();
+                    cols.push(
+                        n.params()
+                            .iter()
+                            .filter(|q| !problem.free.contains(q))
+                            .filter_map(|q| aug.free.iter().position(|f| f == q))
+                            .collect(),
+                    );
                 }
+                let col = aug.free.len();
                 for n in seen.iter() {
                     cols.push(
                         n.params()
@@ -103,6 +116,11 @@ pub(super) fn score_drops(
                     );
                 }
                 for (n, c) in group.iter().chain(seen.iter()).zip(&cols) {
+                    if c.is_empty() {
+                        // Nothing new to test: its parameters are all free already.
+                        out.push((*n, 0.0));
+                        continue;
+                    }
                     let g = nq.jtr.select_rows(c);
                     let bc = nq.jtj.rows(0, k).select_columns(c);
                     let ctc = nq.jtj.select_rows(c).select_columns(c);
