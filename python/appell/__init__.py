@@ -87,18 +87,19 @@ FIT_OPTIONS: Mapping[str, Any] = {
 }
 
 
-def _split(options: Mapping[str, Any], where: str, read_ok: bool = True):
-    """Options by kind, every key filled with its default; unknown names are a TypeError."""
+def _split(options: Mapping[str, Any], where: str, read_ok: bool = True, fit_ok: bool = True):
+    """Options by kind, every key filled with its default; a name the call does not take
+    (unknown, or a reading option for arrays, a fit option for a reading) is a TypeError."""
     read = dict(READ_OPTIONS)
     fit_opts = dict(FIT_OPTIONS)
     for name, value in options.items():
         key = "with_" if name == "with" else name
         if read_ok and key in read:
             read[key] = value
-        elif key in fit_opts:
+        elif fit_ok and key in fit_opts:
             fit_opts[key] = value
         else:
-            known = sorted(list(READ_OPTIONS) * read_ok + list(FIT_OPTIONS))
+            known = sorted(list(READ_OPTIONS) * read_ok + list(FIT_OPTIONS) * fit_ok)
             raise TypeError(
                 f"{where}() got an unexpected keyword argument {name!r}; "
                 f"it takes {', '.join(known)}"
@@ -203,10 +204,7 @@ def read_recording(path: Union[PathLike, Sequence[PathLike]], **options) -> Reco
     """Read a recording as ``appell convert`` does (CSV family, MCAP, DeepLabCut and SLEAP
     HDF5, Tracker, Motive, Qualisys, Kinovea...). A Tracker pair is a list of two files.
     Options: ``READ_OPTIONS`` (``fps=``, ``scale=``, ``rod_length=``, ``rail_frame=``...)."""
-    read, _ = _split(options, "read_recording")
-    for name in FIT_OPTIONS:
-        if name in options:
-            raise TypeError(f"read_recording() got an unexpected keyword argument {name!r}")
+    read, _ = _split(options, "read_recording", fit_ok=False)
     return Recording._from_rust(_appell.read_recording_py(_paths(path), read))
 
 
@@ -235,10 +233,7 @@ def inspect(path: Union[PathLike, Sequence[PathLike]], **options) -> Inspection:
     """What a recording file holds and every option still missing to read it as the rig
     (``appell inspect``); options already known (``fps=``, ``slider=``...) are used and carried
     into the suggested commands. A Tracker pair is a list of two files."""
-    read, _ = _split(options, "inspect")
-    for name in FIT_OPTIONS:
-        if name in options:
-            raise TypeError(f"inspect() got an unexpected keyword argument {name!r}")
+    read, _ = _split(options, "inspect", fit_ok=False)
     return Inspection(_appell.inspect_py(_paths(path), read))
 
 

@@ -337,18 +337,16 @@ impl Fit {
 
     /// Write the fit figure (SVG or PNG by extension), never over an input.
     fn plot(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
-        appell::output::refuse_input(&path, &self.inputs).map_err(|e| input(anyhow::anyhow!(e)))?;
         let figure = FitFigure {
             obs: &self.obs,
             report: &self.report,
         };
-        py.detach(|| render(&path, &figure))
-            .map_err(|e| run(e.into()))
+        write_figure(py, Some(path), &paths(&self.inputs), &figure)
     }
 
     /// Write the friction figure: each slide's |F| / |N| against its speed, with the laws.
     fn friction_plot(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
-        appell::output::refuse_input(&path, &self.inputs).map_err(|e| input(anyhow::anyhow!(e)))?;
+        check_figure_path(Some(&path), &paths(&self.inputs))?;
         let Some(law) = &self.report.friction else {
             return Err(PyRuntimeError::new_err(
                 "friction_plot: the recording never slides, so it shows no friction law",
@@ -366,8 +364,7 @@ impl Fit {
                 appell::fit::law::slide_points(&self.report, &self.settings),
             )],
         };
-        py.detach(|| render(&path, &figure))
-            .map_err(|e| run(e.into()))
+        write_figure(py, Some(path), &paths(&self.inputs), &figure)
     }
 }
 
@@ -472,12 +469,10 @@ impl Joint {
 
     /// Write the joint figure (SVG or PNG by extension), never over an input.
     fn plot(&self, py: Python<'_>, path: PathBuf) -> PyResult<()> {
-        appell::output::refuse_input(&path, &self.inputs).map_err(|e| input(anyhow::anyhow!(e)))?;
         let figure = JointFigure {
             report: &self.report,
         };
-        py.detach(|| render(&path, &figure))
-            .map_err(|e| run(e.into()))
+        write_figure(py, Some(path), &paths(&self.inputs), &figure)
     }
 }
 
@@ -755,6 +750,11 @@ fn regions_py(
     let figure = RegionFigure::new(&rig, &map, &paths);
     write_figure(py, plot, &[Path::new(label)], &figure)?;
     Ok((json, summary, svg))
+}
+
+/// The paths a figure must not be written over, as `check_figure_path` takes them.
+fn paths(files: &[PathBuf]) -> Vec<&Path> {
+    files.iter().map(PathBuf::as_path).collect()
 }
 
 /// A figure's path checked before any work: SVG or PNG, and never one of the inputs.

@@ -4,6 +4,12 @@
 use crate::fit::{FitSettings, Loss, Nuisance, StaticMode};
 use crate::model::FrictionLaw;
 
+/// The names `--mu-static` takes.
+pub const MU_STATIC_MODES: [&str; 3] = ["auto", "tied", "fixed"];
+
+/// The names `--robust` takes.
+pub const ROBUST_LOSSES: [&str; 2] = ["huber", "cauchy"];
+
 /// How a recording is fitted: every `appell fit` flag that is not about reading the recording
 /// or where the answer goes. Flatten into a command with `#[command(flatten)]`.
 #[derive(Debug, Clone, clap::Args)]
@@ -16,14 +22,14 @@ pub struct FitArgs {
     #[arg(long, value_name = "M", requires = "latitude", allow_negative_numbers = true, value_parser = altitude)]
     pub altitude: Option<f64>,
     /// Robust loss for mis-tracked frames.
-    #[arg(long, value_parser = ["huber", "cauchy"])]
+    #[arg(long, value_parser = ROBUST_LOSSES)]
     pub robust: Option<String>,
     /// Also fit the rod length.
     #[arg(long)]
     pub fit_rod_length: bool,
     /// mu_static: freed when the recording shows a stick-to-slide onset (auto), always equal
     /// to mu_kinetic (tied), or held at the rig's value (fixed).
-    #[arg(long, default_value = "auto", value_parser = ["auto", "tied", "fixed"])]
+    #[arg(long, default_value = "auto", value_parser = MU_STATIC_MODES)]
     pub mu_static: String,
     /// Skip the profile intervals (faster; intervals are then value +- 1.96 stderr).
     #[arg(long)]
@@ -96,37 +102,47 @@ pub fn nuisance(name: &str) -> Result<Nuisance, String> {
         })
 }
 
-/// A number within `[lo, hi]`, for `--latitude` and `--altitude`.
-fn within(text: &str, [lo, hi]: [f64; 2], unit: &str) -> Result<f64, String> {
-    match text.trim().parse::<f64>() {
-        Ok(v) if (lo..=hi).contains(&v) => Ok(v),
+/// `v` within `[lo, hi]`, for `--latitude` and `--altitude`.
+fn within(v: Option<f64>, [lo, hi]: [f64; 2], unit: &str) -> Result<f64, String> {
+    match v {
+        Some(v) if (lo..=hi).contains(&v) => Ok(v),
         _ => Err(format!("expected a number of {unit} from {lo} to {hi}")),
     }
 }
 
+/// `--latitude` (deg) checked.
+fn latitude_value(v: Option<f64>) -> Result<f64, String> {
+    within(v, crate::scene::LATITUDE_RANGE, "degrees")
+}
+
+/// `--altitude` (m) checked.
+fn altitude_value(v: Option<f64>) -> Result<f64, String> {
+    within(v, crate::scene::ALTITUDE_RANGE, "metres")
+}
+
 /// Parse `--latitude` (deg).
 fn latitude(text: &str) -> Result<f64, String> {
-    within(text, crate::scene::LATITUDE_RANGE, "degrees")
+    latitude_value(text.trim().parse().ok())
 }
 
 /// Parse `--altitude` (m).
 fn altitude(text: &str) -> Result<f64, String> {
-    within(text, crate::scene::ALTITUDE_RANGE, "metres")
+    altitude_value(text.trim().parse().ok())
 }
 
 impl FitArgs {
     /// The lab's site for Earth's normal gravity: (latitude deg, altitude m), checked (clap
     /// checks the command line; other callers get the same message here).
     pub fn site(&self) -> Result<Option<(f64, f64)>, String> {
-        let check = |flag: &str, v: f64, parse: fn(&str) -> Result<f64, String>| {
-            parse(&v.to_string()).map_err(|e| format!("{flag}: {e}, got {v}"))
+        let check = |flag: &str, v: f64, range: fn(Option<f64>) -> Result<f64, String>| {
+            range(Some(v)).map_err(|e| format!("{flag}: {e}, got {v}"))
         };
         match (self.latitude, self.altitude) {
             (None, None) => Ok(None),
             (None, Some(_)) => Err("--altitude needs --latitude".into()),
             (Some(lat), alt) => Ok(Some((
-                check("--latitude", lat, latitude)?,
-                check("--altitude", alt.unwrap_or(0.0), altitude)?,
+                check("--latitude", lat, latitude_value)?,
+                check("--altitude", alt.unwrap_or(0.0), altitude_value)?,
             ))),
         }
     }
@@ -186,9 +202,9 @@ impl FitArgs {
                 ))
             }
         };
-        named("--mu-static", &self.mu_static, &["auto", "tied", "fixed"])?;
+        named("--mu-static", &self.mu_static, &MU_STATIC_MODES)?;
         if let Some(r) = &self.robust {
-            named("--robust", r, &["huber", "cauchy"])?;
+            named("--robust", r, &ROBUST_LOSSES)?;
         }
         if let Some(bad) = self.starts.iter().find(|s| !(s.is_finite() && **s >= 0.0)) {
             return Err(format!(

@@ -15,7 +15,7 @@ use crate::data::{read_recording, ReadOptions, Recording};
 use crate::fit::joint::{fit_joint, JointError, JointReport, JointSettings, Release};
 use crate::fit::{check_recording, check_rod_length, fit, FitReport, FitSettings, Observations};
 use crate::model::Rig;
-use crate::scene::{RigFile, RigSpec};
+use crate::scene::RigFile;
 use std::path::{Path, PathBuf};
 
 /// A rig file loaded for fitting: the rig (mu values only starting guesses), the settings with
@@ -27,8 +27,6 @@ pub struct FitSetup {
     pub rig_path: PathBuf,
     /// The rig at the file's values.
     pub rig: Rig<f64>,
-    /// The `[rig]` section as written, its `*_sd` keys included.
-    pub spec: RigSpec,
     /// The fit's settings, the measurement included.
     pub settings: FitSettings,
 }
@@ -60,7 +58,6 @@ impl FitSetup {
         Ok(FitSetup {
             rig_path: rig_path.to_owned(),
             rig,
-            spec,
             settings,
         })
     }
