@@ -2,9 +2,9 @@
 //! the work done anyway.
 
 use super::median_seconds;
+use crate::model::dual::Dual;
 use crate::model::{Rig, State};
 use crate::sim::{simulate, Options, Request};
-use num_dual::DualSVec64;
 use serde::Serialize;
 
 /// One skip and its measured saving.
@@ -34,8 +34,8 @@ pub fn skip_benchmark(batches: usize) -> Vec<SkipCase> {
     let stuck = Rig::paper(2.5);
     let swing: State<f64> = [0.0, 0.4, 0.0, 0.0];
     let dual_time = {
-        let rig = paper.lift::<DualSVec64<5>>();
-        let y0 = rest.map(DualSVec64::<5>::from);
+        let rig = paper.lift::<Dual<5>>();
+        let y0 = rest.map(Dual::<5>::from);
         median_seconds(
             || simulate(&rig, &y0, 2.0, &opts, &Request::default()),
             batches,

@@ -2,6 +2,7 @@
 //! model holds. Every formula of `../shared/PHYSICS.md` lives here once; the integrator, the
 //! fit, the planner and the region analysis all call these functions.
 
+pub mod dual;
 mod forces;
 mod friction;
 mod markers;
@@ -61,6 +62,13 @@ impl<const N: usize> Scalar for num_dual::DualSVec64<N> {
                 .unwrap_generic(nalgebra::Const::<N>, nalgebra::U1)
                 .iter()
                 .all(|&d| d == 0.0)
+    }
+}
+
+impl<const N: usize> Scalar for dual::Dual<N> {
+    #[inline]
+    fn is_exact_zero(&self) -> bool {
+        self.re == 0.0 && self.eps.iter().all(|&d| d == 0.0)
     }
 }
 

@@ -5,13 +5,13 @@
 use super::param::CAMERA_PARAMS;
 use super::{to_err, Param, TrajectoryProblem};
 use crate::fit::lm::{LeastSquares, Normal};
+use crate::model::dual::Dual;
 use crate::model::{
     observed_markers_with, re_state, Scalar as _, LOAD_EXPONENT_MAX, LOAD_EXPONENT_MIN,
 };
 use crate::sim::{Sample, SimError};
 use argmin::core::Error;
-use nalgebra::{DMatrix, DVector, U1};
-use num_dual::{Derivative, DualSVec64};
+use nalgebra::{DMatrix, DVector};
 use std::sync::atomic::Ordering;
 
 /// The most parameters a fit frees at once (the dual-number Jacobian is built for each count).
@@ -63,15 +63,8 @@ macro_rules! by_width {
 
 /// `p` as dual numbers of width `N` >= `p.len()`, parameter i seeded in slot i (the slots
 /// beyond carry no seed).
-fn seed<const N: usize>(p: &DVector<f64>) -> Vec<DualSVec64<N>> {
-    (0..p.len())
-        .map(|i| {
-            DualSVec64::<N>::new(
-                p[i],
-                Derivative::derivative_generic(nalgebra::Const::<N>, U1, i),
-            )
-        })
-        .collect()
+fn seed<const N: usize>(p: &DVector<f64>) -> Vec<Dual<N>> {
+    (0..p.len()).map(|i| Dual::<N>::variable(p[i], i)).collect()
 }
 
 impl TrajectoryProblem {
@@ -101,7 +94,7 @@ impl TrajectoryProblem {
         self.for_each_residual(&seeded, |row, frame, marker, d| {
             let v = d * (self.row_weight(row) / self.sigma[marker]);
             let r = v.re;
-            let e = v.eps.unwrap_generic(nalgebra::Const::<N>, U1);
+            let e = v.eps;
             ss += r * r;
             // Over the whole width N, a constant, so the loops unroll: the unseeded slots
             // only ever add zeros to entries nobody reads.
@@ -155,7 +148,7 @@ impl TrajectoryProblem {
             pr.for_each_residual(&seeded, |row, _, marker, d| {
                 let v = d * (pr.row_weight(row) / pr.sigma[marker]);
                 res[row] = v.re;
-                let e = v.eps.unwrap_generic(nalgebra::Const::<N>, U1);
+                let e = v.eps;
                 for c in 0..k {
                     jac[(row, c)] = e[c];
                 }
@@ -229,22 +222,20 @@ impl TrajectoryProblem {
         self.for_each_residual_at(
             &seed::<N>(p),
             extra.contains(&Param::Lag),
-            |s: &Sample<DualSVec64<N>>| {
+            |s: &Sample<Dual<N>>| {
                 let y = re_state(&s.state);
                 // The lag's accelerations in f64: nothing in them depends on the camera.
                 let acc = (!cam_m.lag.is_exact_zero()).then(|| {
                     let (a, b) = at_p.rig.accelerations(s.mode, &y);
-                    (DualSVec64::from(a), DualSVec64::from(b))
+                    (Dual::from(a), Dual::from(b))
                 });
-                observed_markers_with(rig_m.marker_length, &cam_m, &y.map(DualSVec64::from), acc)
+                observed_markers_with(rig_m.marker_length, &cam_m, &y.map(Dual::from), acc)
             },
             |row, _, marker, coord, d, cam| {
                 let scale = self.row_weight(row) / self.sigma[marker];
                 let r = d.re * scale;
-                let e = d.eps.unwrap_generic(nalgebra::Const::<N>, U1);
-                let c = cam[2 * marker + coord]
-                    .eps
-                    .unwrap_generic(nalgebra::Const::<M>, U1);
+                let e = d.eps;
+                let c = cam[2 * marker + coord].eps;
                 let mut g = [0.0; W];
                 g[..k]
                     .iter_mut()
