@@ -269,11 +269,7 @@ fn carry_over(
     while len < n {
         // Doubling, without a last stage much shorter than the one before it.
         len = if 3 * len >= n { n } else { 2 * len };
-        let stage = problem.on(if len == n {
-            obs.clone()
-        } else {
-            Arc::new(obs.prefix(len))
-        });
+        let stage = problem.on_prefix(obs.clone(), len);
         let mut lm = LevenbergMarquardt::default();
         if len < n {
             (lm.ftol, lm.xtol) = (STAGE_FTOL, STAGE_FTOL);

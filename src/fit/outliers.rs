@@ -195,12 +195,15 @@ pub(super) fn residual_outliers(
     // The scale: the measured noise, or the residuals' own robust spread when larger (a fit
     // that misses the motion has large residuals everywhere, and those are not outliers).
     let scale = [0, 1].map(|m| {
-        let mut a: Vec<f64> = problem
-            .rows()
-            .zip(&raw)
-            .filter(|(row, _)| row.marker == m)
-            .map(|(_, r)| r.abs())
-            .collect();
+        // Sized once: grown by doubling, a million frames' worth holds up to twice itself.
+        let mut a = Vec::with_capacity(problem.rows().filter(|row| row.marker == m).count());
+        a.extend(
+            problem
+                .rows()
+                .zip(&raw)
+                .filter(|(row, _)| row.marker == m)
+                .map(|(_, r)| r.abs()),
+        );
         // The median by selection, not a sort: linear in a million frames.
         let mid = a.len() / 2;
         let median = if a.is_empty() {

@@ -4,7 +4,7 @@
 //! estimates, the adequacy and its widenings, mu_static's result and the report. Each stage says what it reads and returns;
 //! the driver only orders them.
 
-use super::adequacy::{self, adequacy_sentence, is_noise_free, marker_rms, WINDOWS_P};
+use super::adequacy::{self, adequacy_sentence, is_noise_free, WINDOWS_P};
 use super::base::Base;
 use super::intervals::{model_uncertainty, pinned_friction, widen, within_bounds};
 use super::law;
@@ -433,7 +433,7 @@ pub(super) fn adequacy(
     };
     let windows_p = uncertainty::window_consistency(&windows);
     let block_ratio = mu_index.map_or(1.0, |i| a.se_block[i] / a.se[i]);
-    let runs_p = uncertainty::runs_p_value(problem, a.r.as_slice());
+    let runs_p = a.residuals.runs_p;
     // A value no real rig has is evidence that the model explains the recording with
     // something the rig does not have: it flags the fit (below). It does not widen the
     // interval: a real rig can have it (a worn pivot), and then the model is right.
@@ -476,7 +476,7 @@ pub(super) fn adequacy(
             None => why.clone(),
         });
     }
-    let (rms_per_marker_m, rms_residual_m) = marker_rms(problem, a.r.as_slice(), f.p.len());
+    let (rms_per_marker_m, rms_residual_m) = (a.residuals.rms_per_marker_m, a.residuals.rms_m);
     let noise_free = is_noise_free(
         problem.sigma,
         rms_residual_m,
@@ -517,7 +517,7 @@ pub(super) fn adequacy(
     }
     Verdict {
         implausible,
-        lag1: uncertainty::lag1(problem, a.r.as_slice()),
+        lag1: a.residuals.lag1,
         windows,
         window_cut,
         windows_p,

@@ -4,7 +4,7 @@
 //! frames, fits of the recording's windows (a slide each), and the profile interval for a parameter.
 
 use super::lm::{LeastSquares, Normal};
-use super::problem::{Observations, Param, TrajectoryProblem};
+use super::problem::{Param, TrajectoryProblem};
 use super::solve::{solve, solve_loose, STAGE_FTOL};
 use super::FitSettings;
 use crate::model::Mode;
@@ -12,7 +12,6 @@ use crate::sim::{simulate, simulate_each, Request, Sample};
 use nalgebra::{DMatrix, DVector};
 use rayon::prelude::*;
 use statrs::distribution::{ChiSquared, ContinuousCDF, FisherSnedecor};
-use std::sync::Arc;
 
 /// Goodness of fit and the covariances at an optimum.
 #[derive(Debug, Clone)]
@@ -35,8 +34,23 @@ pub struct Assessment {
     pub se_block: Vec<f64>,
     /// Frames per block of the block covariance.
     pub block_frames: usize,
-    /// The residuals (weighted) at the optimum.
-    pub r: DVector<f64>,
+    /// What the adequacy checks read from the residuals at the optimum, taken while they
+    /// were at hand (the residuals are not kept: four numbers a frame, 32 MB for a million
+    /// frames, held through the windows' fits).
+    pub residuals: ResidualStats,
+}
+
+/// Statistics of a fit's residuals at its optimum.
+#[derive(Debug, Clone, Copy)]
+pub struct ResidualStats {
+    /// Lag-1 autocorrelation ([`lag1`]).
+    pub lag1: f64,
+    /// The runs test's p-value (Wald and Wolfowitz's, on the residuals' signs).
+    pub runs_p: f64,
+    /// RMS per marker (slider, bob) in metres, degrees of freedom corrected.
+    pub rms_per_marker_m: [f64; 2],
+    /// Overall RMS in metres.
+    pub rms_m: f64,
 }
 
 /// The chi-square, its p-value and the covariances of `problem` at `p`.
@@ -45,11 +59,28 @@ pub fn assess(
     p: &DVector<f64>,
     noise_dof: f64,
 ) -> Result<Assessment, String> {
-    // The residuals first (one simulation in f64): the block length comes from their
+    // The residuals first (one simulation in f64, streamed into what the checks read: the
+    // residual vector is never held whole): the block length comes from their
     // autocorrelation, and the normal equations are then summed with the block sums in one
     // dual-number run, without the Jacobian in memory.
-    let r = problem.residuals(p).map_err(|e| e.to_string())?;
-    let block = block_length(problem, r.as_slice());
+    let n_frames = problem.frame_times().len();
+    let mut streams: Vec<Vec<f64>> = (0..4).map(|_| Vec::with_capacity(n_frames)).collect();
+    let mut rms = super::adequacy::MarkerRms::default();
+    problem
+        .for_each_weighted(p.as_slice(), |row, marker, coord, v| {
+            streams[2 * marker + coord].push(v);
+            rms.add(marker, v, problem.row_weight(row), problem.sigma[marker]);
+        })
+        .map_err(|e| e.to_string())?;
+    let block = block_length(problem, &streams);
+    let (rms_per_marker_m, rms_m) = rms.finish(p.len());
+    let residuals = ResidualStats {
+        lag1: lag1_of(&streams),
+        runs_p: runs_p(&streams),
+        rms_per_marker_m,
+        rms_m,
+    };
+    drop(streams);
     let normal = problem
         .normal_equations_blocked(p, Some(block))
         .map_err(|e| e.to_string())?;
@@ -77,7 +108,7 @@ pub fn assess(
         se: c.se,
         se_block: c.se_block,
         block_frames: block,
-        r,
+        residuals,
     })
 }
 
@@ -139,9 +170,8 @@ pub fn covariances(normal: Normal, used: usize, n_blocks: f64) -> Covariances {
 
 /// Frames per block: twice the lag at which the residuals' autocorrelation falls below 0.1,
 /// at least 5 frames and at most a tenth of the recording (at least ten blocks).
-fn block_length(problem: &TrajectoryProblem, r: &[f64]) -> usize {
+fn block_length(problem: &TrajectoryProblem, streams: &[Vec<f64>]) -> usize {
     let n_frames = problem.frame_times().len().max(1);
-    let streams = streams(problem, r);
     let den: f64 = streams.iter().flatten().map(|v| v * v).sum();
     let mut lag_small = 1;
     if den > 0.0 {
@@ -161,7 +191,9 @@ fn block_length(problem: &TrajectoryProblem, r: &[f64]) -> usize {
 
 /// The residuals split into their coordinate streams (slider x, y, bob x, y), in frame order.
 fn streams(problem: &TrajectoryProblem, r: &[f64]) -> Vec<Vec<f64>> {
-    let mut out = vec![Vec::new(); 4];
+    // Sized once: each stream holds at most one value a frame.
+    let n = problem.frame_times().len();
+    let mut out: Vec<Vec<f64>> = (0..4).map(|_| Vec::with_capacity(n)).collect();
     for (row, &v) in problem.rows().zip(r) {
         out[2 * row.marker + row.coord].push(v);
     }
@@ -170,7 +202,11 @@ fn streams(problem: &TrajectoryProblem, r: &[f64]) -> Vec<Vec<f64>> {
 
 /// Lag-1 autocorrelation of the residuals, per coordinate stream, pooled (0 for white noise).
 pub fn lag1(problem: &TrajectoryProblem, r: &[f64]) -> f64 {
-    let streams = streams(problem, r);
+    lag1_of(&streams(problem, r))
+}
+
+/// [`lag1`] of residual streams.
+fn lag1_of(streams: &[Vec<f64>]) -> f64 {
     let den: f64 = streams.iter().flatten().map(|v| v * v).sum();
     let num: f64 = streams
         .iter()
@@ -188,12 +224,7 @@ pub fn lag1(problem: &TrajectoryProblem, r: &[f64]) -> f64 {
 /// A model that misses a smooth part of the motion leaves long runs whatever the noise level:
 /// the test needs no noise measurement, so it still sees the miss where the noise measured
 /// from the tracks is too large for the chi-square to (correlated tracking noise, motion blur).
-/// 1 without residuals.
-pub fn runs_p_value(problem: &TrajectoryProblem, r: &[f64]) -> f64 {
-    runs_p(&streams(problem, r))
-}
-
-/// [`runs_p_value`] of residual streams.
+/// 1 without residuals. Per coordinate stream ([`streams`]).
 fn runs_p(streams: &[Vec<f64>]) -> f64 {
     let (mut runs, mut mean, mut var) = (0.0, 0.0, 0.0);
     for s in streams {
@@ -359,11 +390,6 @@ pub fn windows(
         .filter_map(|w| {
             let (a, b) = (bounds[w], bounds[w + 1]);
             let t0 = obs.times[a];
-            let sub = Observations {
-                times: obs.times[a..=b].iter().map(|t| t - t0).collect(),
-                slider: obs.slider[a..=b].to_vec(),
-                bob: obs.bob[a..=b].to_vec(),
-            };
             let start = sol.samples[w];
             let mut free = vec![Param::MuKinetic, Param::X, Param::Theta, Param::ThetaDot];
             let mut y0 = start.state;
@@ -372,8 +398,16 @@ pub fn windows(
             } else {
                 free.push(Param::XDot);
             }
-            let mut m =
-                TrajectoryProblem::new(Arc::new(sub), problem.rig, y0, free, problem.options);
+            // The stretch's frames shared with the whole recording, not copied.
+            let mut m = TrajectoryProblem::window(
+                problem.shared_observations().clone(),
+                a..b + 1,
+                t0,
+                problem.rig,
+                y0,
+                free,
+                problem.options,
+            );
             m.camera = problem.camera;
             m.tie_static = problem.tie_static && !problem.free.contains(&Param::MuStatic);
             m.sigma = problem.sigma;

@@ -82,7 +82,8 @@ pub fn read_for_rig(
         .filter(|n| n.starts_with(crate::data::TIMES_JOINED_NOTE))
         .map(|n| format!("{}: {n}", files.join(" + ")))
         .collect();
-    Ok((observations_for_rig(&rec, rig_path, rig)?, notes))
+    check_for_rig(&rec, rig_path, rig)?;
+    Ok((Observations::from(rec), notes))
 }
 
 /// A recording (read, or made from arrays) checked for the rig as [`read_for_rig`] checks
@@ -92,6 +93,12 @@ pub fn observations_for_rig(
     rig_path: &Path,
     rig: &Rig<f64>,
 ) -> anyhow::Result<Observations> {
+    check_for_rig(rec, rig_path, rig)?;
+    Ok(Observations::from(rec))
+}
+
+/// The checks of [`read_for_rig`].
+fn check_for_rig(rec: &Recording, rig_path: &Path, rig: &Rig<f64>) -> anyhow::Result<()> {
     check_recording(rec)?;
     check_rod_length(rig_path, rig, rec)?;
     // Before any integration: a rig too stiff to fit in minutes is refused, naming its key.
@@ -100,7 +107,7 @@ pub fn observations_for_rig(
         rig,
         crate::scene::RigOrigin::File { friction: "rig" },
     )?;
-    Ok(Observations::from(rec))
+    Ok(())
 }
 
 /// Why a fit gave no report: its input (exit code 2 on the command line, `ValueError` in

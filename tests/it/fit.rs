@@ -3,9 +3,11 @@
 //! recordings that cannot identify mu.
 
 use crate::helpers::*;
+use appell::data::synth::{synthesize, SynthOptions};
 use appell::fit::lm::LeastSquares;
 use appell::fit::{fit, FitSettings, Loss, Observations, Param, StaticResult, TrajectoryProblem};
 use appell::model::{Rig, State};
+use appell::scene::Scene;
 use appell::sim::Options;
 use std::f64::consts::FRAC_PI_2;
 use std::sync::Arc;
@@ -384,29 +386,30 @@ fn camera_columns_from_the_observation_model_match_the_full_run() {
         .is_err());
 }
 
+/// The paper scene released from rest, rod horizontal (`configs/paper_rest_horizontal.toml`),
+/// and a recording of it.
+fn paper_recording(opts: SynthOptions) -> (Scene, appell::data::Recording) {
+    let path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/paper_rest_horizontal.toml");
+    let scene = Scene::from_toml(&std::fs::read_to_string(&path).unwrap(), &path).unwrap();
+    let syn = synthesize(&scene, &opts).unwrap();
+    (scene, syn.recording)
+}
+
 /// A long recording (20 s at 1 kHz of the paper scene's stick-slip, 0.5 mm noise) fitted the
 /// long way (starts on the first 4000 frames, then carried over the rest by doubling, profile
 /// checked at the Wald ends) lands on the optimum of the whole-recording fit from every start,
 /// and both cover the truth.
 #[test]
 fn long_recording_through_its_first_frames_matches_the_whole_fit() {
-    use appell::data::synth::{synthesize, SynthOptions};
-    use appell::scene::Scene;
-    let path =
-        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/paper_rest_horizontal.toml");
-    let scene = Scene::from_toml(&std::fs::read_to_string(&path).unwrap(), &path).unwrap();
-    let syn = synthesize(
-        &scene,
-        &SynthOptions {
-            fps: 1000.0,
-            duration: Some(20.0),
-            noise: 5e-4,
-            seed: 3,
-            ..SynthOptions::default()
-        },
-    )
-    .unwrap();
-    let obs = Observations::from(&syn.recording);
+    let (scene, rec) = paper_recording(SynthOptions {
+        fps: 1000.0,
+        duration: Some(20.0),
+        noise: 5e-4,
+        seed: 3,
+        ..SynthOptions::default()
+    });
+    let obs = Observations::from(&rec);
     let truth = scene.rig.mu_kinetic;
     let run = |prefix: usize| {
         let settings = FitSettings {
@@ -486,4 +489,60 @@ fn a_fit_stopped_at_its_iteration_limit_says_so() {
         "{:?}",
         stopped.warnings
     );
+}
+
+/// A stretch of a recording fitted through the whole recording's shared frames
+/// (`TrajectoryProblem::window`, no copy) gives the same residuals, bit for bit, and the same
+/// normal equations as the stretch copied out with its times shifted to start at zero: with
+/// missing positions inside it, so the row layout is not the identity.
+#[test]
+fn a_window_of_shared_frames_is_the_copied_stretch() {
+    let (scene, rec) = paper_recording(SynthOptions {
+        fps: 200.0,
+        duration: Some(1.0),
+        noise: 5e-4,
+        dropout: 0.05,
+        seed: 5,
+        ..SynthOptions::default()
+    });
+    let obs = Arc::new(Observations::from(&rec));
+    let (a, b) = (40, 160);
+    assert!(
+        obs.slider[a..b].iter().any(Option::is_none) || obs.bob[a..b].iter().any(Option::is_none)
+    );
+    let t0 = obs.times[a];
+    let copied = Observations {
+        times: obs.times[a..b].iter().map(|t| t - t0).collect(),
+        slider: obs.slider[a..b].to_vec(),
+        bob: obs.bob[a..b].to_vec(),
+    };
+    let free = vec![Param::MuKinetic, Param::X, Param::Theta, Param::ThetaDot];
+    let y0 = [0.01, 1.0, 0.0, -0.5];
+    let mut shared = TrajectoryProblem::window(
+        obs.clone(),
+        a..b,
+        t0,
+        scene.rig,
+        y0,
+        free.clone(),
+        Options::default(),
+    );
+    let mut alone =
+        TrajectoryProblem::new(Arc::new(copied), scene.rig, y0, free, Options::default());
+    shared.sigma = [5e-4; 2];
+    alone.sigma = [5e-4; 2];
+    let p = alone.values();
+    assert_eq!(shared.n_rows(), alone.n_rows());
+    let (r1, r2) = (
+        shared.raw_residuals(&p).unwrap(),
+        alone.raw_residuals(&p).unwrap(),
+    );
+    assert!(!r1.is_empty());
+    assert!(r1.iter().zip(&r2).all(|(x, y)| x.to_bits() == y.to_bits()));
+    let (n1, n2) = (
+        shared.normal_equations(&p).unwrap(),
+        alone.normal_equations(&p).unwrap(),
+    );
+    assert_eq!(n1.cost.to_bits(), n2.cost.to_bits());
+    assert_eq!(n1.jtj, n2.jtj);
 }

@@ -119,16 +119,37 @@ impl TrajectoryProblem {
         free: Vec<Param>,
         options: Options,
     ) -> Self {
+        let len = obs.times.len();
+        Self::window(obs, 0..len, 0.0, rig, initial, free, options)
+    }
+
+    /// [`Self::new`] over the frames `range` of `obs` only, sharing them (a long recording's
+    /// fit of its first frames, a stretch of it fitted alone, need no copy of them), with
+    /// time `t0` as the run's zero. Its residuals, normal equations and rows cover those
+    /// frames; [`Self::observations`] still gives all of `obs` (a solver needs no more than
+    /// the former).
+    pub fn window(
+        obs: Arc<Observations>,
+        range: std::ops::Range<usize>,
+        t0: f64,
+        rig: Rig<f64>,
+        initial: State<f64>,
+        free: Vec<Param>,
+        options: Options,
+    ) -> Self {
+        let end = range.end.min(obs.times.len());
+        let start = range.start.min(end);
         // Sized once: a 10^6-frame recording would otherwise hold up to twice this while growing.
-        let mut obs_index = Vec::with_capacity(obs.times.len());
-        let mut frames = Vec::with_capacity(obs.times.len());
+        let mut obs_index = Vec::with_capacity(end - start);
+        let mut frames = Vec::with_capacity(end - start);
         let mut n_rows = 0;
-        for (i, (s, b)) in obs.slider.iter().zip(&obs.bob).enumerate() {
+        for i in start..end {
+            let (s, b) = (&obs.slider[i], &obs.bob[i]);
             let present = usize::from(s.is_some()) + usize::from(b.is_some());
             if present > 0 {
                 n_rows += 2 * present;
                 obs_index.push(i);
-                frames.push(obs.times[i]);
+                frames.push(obs.times[i] - t0);
             }
         }
         TrajectoryProblem {
@@ -183,8 +204,22 @@ impl TrajectoryProblem {
     /// The same model, values and settings over other observations (every row weight one;
     /// the counters stay shared).
     pub fn on(&self, obs: Arc<Observations>) -> TrajectoryProblem {
-        let mut pr =
-            TrajectoryProblem::new(obs, self.rig, self.initial, self.free.clone(), self.options);
+        let len = obs.times.len();
+        self.on_prefix(obs, len)
+    }
+
+    /// [`Self::on`] over the first `len` frames of `obs`, shared, not copied
+    /// ([`Self::window`]).
+    pub fn on_prefix(&self, obs: Arc<Observations>, len: usize) -> TrajectoryProblem {
+        let mut pr = TrajectoryProblem::window(
+            obs,
+            0..len,
+            0.0,
+            self.rig,
+            self.initial,
+            self.free.clone(),
+            self.options,
+        );
         pr.camera = self.camera;
         pr.priors = self.priors.clone();
         pr.plausible = self.plausible.clone();
@@ -217,6 +252,11 @@ impl TrajectoryProblem {
 
     /// The observations.
     pub fn observations(&self) -> &Observations {
+        &self.obs
+    }
+
+    /// The observations, shared.
+    pub fn shared_observations(&self) -> &Arc<Observations> {
         &self.obs
     }
 
@@ -444,6 +484,30 @@ impl TrajectoryProblem {
         Ok(out)
     }
 
+    /// Each weighted residual (predicted - observed) / sigma at `p`, in row order, handed to
+    /// `each(row, marker, coord, value)` as the simulation passes its frame (one simulation;
+    /// nothing per row is kept).
+    pub fn for_each_weighted(
+        &self,
+        p: &[f64],
+        mut each: impl FnMut(usize, usize, usize, f64),
+    ) -> Result<(), SimError> {
+        self.counters.residuals.fetch_add(1, Ordering::Relaxed);
+        self.for_each_residual_at(
+            p,
+            false,
+            |_| (),
+            |row, _, marker, coord, d, _| {
+                each(
+                    row,
+                    marker,
+                    coord,
+                    d * (self.row_weight(row) / self.sigma[marker]),
+                )
+            },
+        )
+    }
+
     /// Weighted residuals as a vector (one simulation).
     pub fn residuals(&self, p: &DVector<f64>) -> Result<DVector<f64>, Error> {
         self.counters.residuals.fetch_add(1, Ordering::Relaxed);
@@ -484,6 +548,18 @@ pub(super) fn idx(problem: &TrajectoryProblem, p: Param) -> Option<usize> {
 
 fn to_err(e: SimError) -> Error {
     Error::msg(e.to_string())
+}
+
+impl From<crate::data::Recording> for Observations {
+    /// The recording's tracks moved, not copied (a million frames are 56 MB each way), and
+    /// the reader's spare capacity given back.
+    fn from(rec: crate::data::Recording) -> Self {
+        let (mut times, mut slider, mut bob) = (rec.times, rec.slider, rec.bob);
+        times.shrink_to_fit();
+        slider.shrink_to_fit();
+        bob.shrink_to_fit();
+        Observations { times, slider, bob }
+    }
 }
 
 impl From<&crate::data::Recording> for Observations {
