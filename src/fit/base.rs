@@ -272,7 +272,7 @@ fn carry_over(
         let stage = problem.on_prefix(obs.clone(), len);
         let mut lm = LevenbergMarquardt::default();
         if len < n {
-            (lm.ftol, lm.xtol) = (STAGE_FTOL, STAGE_FTOL);
+            (lm.ftol, lm.fatol, lm.xtol) = (STAGE_FTOL, f64::INFINITY, STAGE_FTOL);
         }
         let (q, _, it, why) = run_lm(&stage, p, settings.max_iters, lm).map_err(|e| {
             FitError::NoStart(format!(
@@ -369,6 +369,17 @@ pub(super) fn fit(
     // weights change after it.
     let mut settled = None;
     if long {
+        // The rig file's priors and freed measurements taken now, so that the doubling stages
+        // fit them on the way: the measured-rig stage then has nothing left to refit over
+        // the whole recording (with the whole recording's frame step, as that stage sets).
+        problem.set_values(&p);
+        if super::stages::apply_measured(
+            &mut problem,
+            super::stages::frame_step(&obs.times),
+            settings,
+        ) {
+            p = problem.values();
+        }
         let (whole, q, it, reason) = carry_over(problem, p, obs, prefix, settings)?;
         (problem, p, settled) = (whole, q, Some(reason));
         iterations += it;

@@ -28,7 +28,8 @@ pub(super) fn solve_loose<P: lm::LeastSquares + Clone>(
 ) -> Solved {
     let mut lm = LevenbergMarquardt::default();
     if let Some(tol) = ftol {
-        lm.ftol = tol;
+        // Only the next fit's start: no absolute tolerance.
+        (lm.ftol, lm.fatol) = (tol, f64::INFINITY);
         lm.xtol = tol;
     }
     run_lm(problem, p0, max_iters, lm).map(|(p, c, i, _)| (p, c, i))

@@ -52,14 +52,37 @@ pub(super) struct Seen {
 /// correct what they can; mu's interval carries the rest). `--fit-rod-length` frees the rod
 /// without a prior.
 pub(super) fn measured_rig(f: &mut Fitting, settings: &FitSettings) {
-    let problem = &mut f.problem;
-    let times = &problem.observations().times;
+    let frame = frame_step(&f.problem.observations().times);
+    let freed = apply_measured(&mut f.problem, frame, settings);
+    f.p = f.problem.values();
+    if freed {
+        if let Ok((q, _, it)) = solve(&f.problem, f.p.clone(), settings.max_iters) {
+            f.iterations += it;
+            f.problem.set_values(&q);
+            f.p = q;
+        }
+        f.moved = true;
+    }
+}
+
+/// The median step between frame times (1 ms for a single frame).
+pub(super) fn frame_step(times: &[f64]) -> f64 {
     let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
-    let frame = if steps.is_empty() {
+    if steps.is_empty() {
         1e-3
     } else {
         crate::data::calibrate::median(&mut steps)
-    };
+    }
+}
+
+/// [`measured_rig`]'s priors and freed parameters set on `problem` (frames `frame` s apart),
+/// without the refit. Returns whether a parameter was freed. A long recording's base fit
+/// takes them before its doubling stages, which then fit them on the way ([`super::base`]).
+pub(super) fn apply_measured(
+    problem: &mut TrajectoryProblem,
+    frame: f64,
+    settings: &FitSettings,
+) -> bool {
     let ranges = priors::plausible_ranges(&problem.rig, frame);
     let mut all = priors::nuisance_priors(&ranges);
     let mut freed = false;
@@ -81,15 +104,7 @@ pub(super) fn measured_rig(f: &mut Fitting, settings: &FitSettings) {
         .map_or(problem.rig.mass_ratio(), |m| m.mass_ratio.0);
     problem.priors = Arc::new(all);
     problem.plausible = Arc::new(priors::Plausibility { ranges, file_ratio });
-    f.p = problem.values();
-    if freed {
-        if let Ok((q, _, it)) = solve(problem, f.p.clone(), settings.max_iters) {
-            f.iterations += it;
-            problem.set_values(&q);
-            f.p = q;
-        }
-        f.moved = true;
-    }
+    freed
 }
 
 /// Does the fitted motion slide? A slide shorter than the slider's noise is not seen;
