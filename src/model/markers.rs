@@ -48,6 +48,23 @@ impl<T: Scalar> Default for Camera<T> {
     }
 }
 
+impl<T: Scalar> Camera<T> {
+    /// Every field exactly zero, derivatives included: the ideal camera, whose positions are
+    /// [`markers`]' (the same numbers, without the camera's arithmetic).
+    pub fn is_ideal(&self) -> bool {
+        [
+            self.scale_error,
+            self.bob_along,
+            self.bob_across,
+            self.slider_dx,
+            self.slider_dy,
+            self.lag,
+        ]
+        .iter()
+        .all(Scalar::is_exact_zero)
+    }
+}
+
 impl Camera<f64> {
     /// The same camera in another scalar type (derivative parts zero).
     pub fn lift<T: Scalar>(&self) -> Camera<T> {

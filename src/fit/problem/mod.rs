@@ -12,7 +12,7 @@ pub use normal::MAX_FREE;
 pub use param::Param;
 
 use crate::fit::priors::{Plausibility, Prior};
-use crate::model::{observed_markers, Camera, Rig, Scalar, State};
+use crate::model::{markers, observed_markers, Camera, Rig, Scalar, State};
 use crate::sim::{simulate_each, Options, Request, Sample, SimError};
 use argmin::core::Error;
 use nalgebra::DVector;
@@ -434,9 +434,15 @@ impl TrajectoryProblem {
         let obs = &*self.obs;
         let t_end = layout.request.sample_times.last().copied().unwrap_or(0.0);
         let (mut frame, mut row) = (0, 0);
+        // Decided once a run: the ideal camera's positions skip its arithmetic at every frame.
+        let ideal = camera.is_ideal();
         let mut sink = |s: Sample<T>| {
             let i = layout.obs_index[frame];
-            let m = observed_markers(&rig, &camera, s.mode, &s.state);
+            let m = if ideal {
+                markers(&rig, &s.state)
+            } else {
+                observed_markers(&rig, &camera, s.mode, &s.state)
+            };
             let x = at(&s);
             for (marker, pos) in [(0, &obs.slider[i]), (1, &obs.bob[i])] {
                 if let Some(o) = pos {
