@@ -328,6 +328,7 @@ pub(super) fn fit(
     obs: &Arc<Observations>,
     rig: &Rig<f64>,
     sigma: [f64; 2],
+    frame: f64,
     settings: &FitSettings,
     warnings: &mut Vec<String>,
 ) -> Result<Base, FitError> {
@@ -371,13 +372,9 @@ pub(super) fn fit(
     if long {
         // The rig file's priors and freed measurements taken now, so that the doubling stages
         // fit them on the way: the measured-rig stage then has nothing left to refit over
-        // the whole recording (with the whole recording's frame step, as that stage sets).
+        // the whole recording.
         problem.set_values(&p);
-        if super::stages::apply_measured(
-            &mut problem,
-            super::stages::frame_step(&obs.times),
-            settings,
-        ) {
+        if super::stages::apply_measured(&mut problem, frame, settings) {
             p = problem.values();
         }
         let (whole, q, it, reason) = carry_over(problem, p, obs, prefix, settings)?;

@@ -486,7 +486,14 @@ pub fn fit(
         .collect();
     let started = priors::start_from_markers(&data.obs, rig_guess, settings.measured.as_ref());
     let rig_guess = &started;
-    let base = base::fit(&data.obs, rig_guess, data.sigma, settings, &mut warnings)?;
+    let base = base::fit(
+        &data.obs,
+        rig_guess,
+        data.sigma,
+        data.frame,
+        settings,
+        &mut warnings,
+    )?;
     let mut f = stages::Fitting {
         problem: base.problem.clone(),
         p: base.p.clone(),
@@ -494,7 +501,7 @@ pub fn fit(
         warnings,
         moved: false,
     };
-    stages::measured_rig(&mut f, settings);
+    stages::measured_rig(&mut f, data.frame, settings);
     let late = residual_outliers(&mut f.problem, &mut f.p, settings, &mut f.iterations, false);
     let seen = stages::seen(&f, &data.obs)?;
     let (models, nuisances, screening) =

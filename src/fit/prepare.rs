@@ -21,6 +21,8 @@ pub(super) struct Prepared {
     pub noise_dof: f64,
     /// Positions dropped from the tracks (slider, bob).
     pub dropped: [usize; 2],
+    /// The median step between frame times (s), for the nuisances' plausible ranges.
+    pub frame: f64,
 }
 
 /// The data checked, the noise measured, the mis-tracked positions dropped.
@@ -36,6 +38,7 @@ pub(super) fn prepare(obs: Observations, settings: &FitSettings) -> Result<Prepa
     }
     let noise_dof = noise.iter().flatten().map(|e| e.dof).sum::<f64>().max(2.0);
     Ok(Prepared {
+        frame: super::stages::frame_step(&obs.times),
         obs: Arc::new(obs),
         n_frames,
         sigma,

@@ -51,8 +51,7 @@ pub(super) struct Seen {
 /// ratio are freed with the measurement's priors and the base model refitted (the data
 /// correct what they can; mu's interval carries the rest). `--fit-rod-length` frees the rod
 /// without a prior.
-pub(super) fn measured_rig(f: &mut Fitting, settings: &FitSettings) {
-    let frame = frame_step(&f.problem.observations().times);
+pub(super) fn measured_rig(f: &mut Fitting, frame: f64, settings: &FitSettings) {
     let freed = apply_measured(&mut f.problem, frame, settings);
     f.p = f.problem.values();
     if freed {

@@ -563,6 +563,20 @@ pub fn profile_interval(
         Some((2.0 * cost - s_min, opt))
     };
     let start: DVector<f64> = DVector::from_iterator(others.len(), others.iter().map(|&i| p[i]));
+    // Where the other parameters move, to first order, when this one moves by dv from a
+    // point whose optimum is `opt`: each profile fit starts there and needs fewer iterations.
+    let shift = |opt: &DVector<f64>, dv: f64| -> DVector<f64> {
+        match cov {
+            Some(c) if c[(k, k)] > 0.0 => DVector::from_iterator(
+                others.len(),
+                others
+                    .iter()
+                    .zip(opt.iter())
+                    .map(|(&i, &o)| o + c[(i, k)] / c[(k, k)] * dv),
+            ),
+            _ => opt.clone(),
+        }
+    };
     // A long recording's interval is so narrow that the chi-square is quadratic across it to
     // high accuracy: one profile point at each Wald end checks that, and when its rise is
     // within 20% of the target, the end follows from it (exact for a quadratic). Otherwise,
@@ -575,15 +589,7 @@ pub fn profile_interval(
         for (side, dir) in [-1.0f64, 1.0].iter().enumerate() {
             let v = p[k] + dir * half;
             // Where the other parameters go when this one is held at v, to first order.
-            let warm = match cov {
-                Some(c) if c[(k, k)] > 0.0 => DVector::from_iterator(
-                    others.len(),
-                    others
-                        .iter()
-                        .map(|&i| p[i] + c[(i, k)] / c[(k, k)] * (v - p[k])),
-                ),
-                _ => start.clone(),
-            };
+            let warm = shift(&start, v - p[k]);
             // From there one Gauss-Newton step is as good as the whole minimisation (the
             // prediction misses by second-order terms): the minimum is the chi-square there
             // less the step's predicted drop, g'H^-1 g, from one pass over the recording.
@@ -606,20 +612,6 @@ pub fn profile_interval(
             return Some(quick);
         }
     }
-    // Where the other parameters move, to first order, when this one moves by dv from a
-    // point whose optimum is `opt`: each profile fit starts there and needs fewer iterations.
-    let shift = |opt: &DVector<f64>, dv: f64| -> DVector<f64> {
-        match cov {
-            Some(c) if c[(k, k)] > 0.0 => DVector::from_iterator(
-                others.len(),
-                others
-                    .iter()
-                    .zip(opt.iter())
-                    .map(|(&i, &o)| o + c[(i, k)] / c[(k, k)] * dv),
-            ),
-            _ => opt.clone(),
-        }
-    };
     let side = |dir: f64| -> Option<f64> {
         // At its lower limit already (a one-sided profile): that is the low end.
         if dir < 0.0 && p[k] <= lower_limit {

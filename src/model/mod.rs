@@ -53,18 +53,6 @@ impl Scalar for num_dual::Dual64 {
     }
 }
 
-impl<const N: usize> Scalar for num_dual::DualSVec64<N> {
-    #[inline]
-    fn is_exact_zero(&self) -> bool {
-        self.re == 0.0
-            && self
-                .eps
-                .unwrap_generic(nalgebra::Const::<N>, nalgebra::U1)
-                .iter()
-                .all(|&d| d == 0.0)
-    }
-}
-
 impl<const N: usize> Scalar for dual::Dual<N> {
     #[inline]
     fn is_exact_zero(&self) -> bool {

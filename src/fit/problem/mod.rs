@@ -524,13 +524,9 @@ impl TrajectoryProblem {
     /// The weighted sum of squares at `p`, summed as the simulation runs (nothing stored),
     /// with the priors' terms ([`Self::prior_chi2`]).
     pub fn chi2(&self, p: &DVector<f64>) -> Result<f64, Error> {
-        self.counters.residuals.fetch_add(1, Ordering::Relaxed);
         let mut ss = self.prior_chi2(p.as_slice());
-        self.for_each_residual(p.as_slice(), |row, _, marker, d: f64| {
-            let v = d * (self.row_weight(row) / self.sigma[marker]);
-            ss += v * v;
-        })
-        .map_err(to_err)?;
+        self.for_each_weighted(p.as_slice(), |_, _, _, v| ss += v * v)
+            .map_err(to_err)?;
         Ok(ss)
     }
 
