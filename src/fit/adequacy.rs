@@ -60,8 +60,15 @@ const NOISE_FREE_CHI2: f64 = 0.01;
 /// model that misfits a noise-free recording leaves residuals far above the model's accuracy:
 /// it is not noise-free and keeps its flag.
 pub fn is_noise_free(sigma: [f64; 2], rms: f64, scale: f64, rtol: f64, reduced_chi2: f64) -> bool {
-    sigma[0].max(sigma[1]).max(rms) < NOISE_FREE_TOLERANCES * rtol * scale
+    sigma[0].max(sigma[1]).max(rms) < numerical_accuracy_m(rtol, scale)
         || reduced_chi2 < NOISE_FREE_CHI2
+}
+
+/// What the model's own marker positions resolve (m): [`NOISE_FREE_TOLERANCES`] x `rtol` x
+/// `scale` (the markers' distance from the pivot). A residual below it is the integrator's,
+/// not the data's.
+pub fn numerical_accuracy_m(rtol: f64, scale: f64) -> f64 {
+    NOISE_FREE_TOLERANCES * rtol * scale
 }
 
 /// Below this p-value the runs test says the residuals are not noise (four streams of

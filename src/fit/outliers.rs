@@ -3,6 +3,7 @@
 //! noise at camera rates) is dropped from the fit and counted. After a fit, the positions whose
 //! residual the model cannot explain ([`residual_outliers`]) are dropped or down-weighted.
 
+use super::adequacy::numerical_accuracy_m;
 use super::problem::{Observations, TrajectoryProblem};
 use super::solve::solve;
 use super::FitSettings;
@@ -213,10 +214,17 @@ pub(super) fn residual_outliers(
         };
         problem.sigma[m].max(median / 0.6745)
     });
+    // A residual the model's own positions do not resolve is no evidence of mis-tracking: on
+    // a noise-free recording the scale is the integrator's error, whose peaks (near events)
+    // are many times its median.
+    let floor = numerical_accuracy_m(settings.options.rtol, problem.rig.marker_length);
     // A position is one frame's marker: both its coordinates go together.
     let mut bad = std::collections::HashSet::new();
     for (i, (row, &r)) in problem.rows().zip(&raw).enumerate() {
-        if problem.row_weight(i) > 0.0 && (r / scale[row.marker]).abs() > RESIDUAL_OUTLIER {
+        if problem.row_weight(i) > 0.0
+            && (r / scale[row.marker]).abs() > RESIDUAL_OUTLIER
+            && r.abs() > floor
+        {
             bad.insert((row.frame, row.marker));
         }
     }

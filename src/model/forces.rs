@@ -44,7 +44,7 @@ impl<T: Scalar> Shorthands<T> {
     /// loop would otherwise do on every right-hand side.
     #[inline(always)]
     pub fn new_on(rig: &Rig<T>, theta: T, w: T, plain: bool, k: &RigConstants<T>) -> Self {
-        let (sin, cos) = theta.sin_cos();
+        let (sin, cos) = theta.sine_cosine();
         let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);
         let lw2 = l * w * w;
         let d = m1 + m2 * cos * cos;
@@ -151,13 +151,13 @@ impl<T: Scalar> Rig<T> {
     pub fn normal_numerator_on(&self, y: &[T], plain: bool, k: &RigConstants<T>) -> T {
         let (theta, w) = (y[THETA], y[THETA_DOT]);
         if plain {
-            return self.normal_numerator_sc(theta.sin(), T::zero(), w, k);
+            return self.normal_numerator_sc(theta.sine(), T::zero(), w, k);
         }
         if self.pivot_damping.is_exact_zero() && self.viscous_friction.is_exact_zero() {
             // Only sin(theta) is needed: half the trigonometry.
-            return self.normal_numerator_sc(theta.sin(), T::zero(), w, k);
+            return self.normal_numerator_sc(theta.sine(), T::zero(), w, k);
         }
-        let (sin, cos) = theta.sin_cos();
+        let (sin, cos) = theta.sine_cosine();
         let q = self.normal_numerator_sc(sin, cos, w, k);
         if self.viscous_friction.is_exact_zero() {
             q
@@ -213,9 +213,9 @@ impl<T: Scalar> Rig<T> {
         let damped = !plain && !self.pivot_damping.is_exact_zero();
         // g_y cos(theta) - g_x sin(theta) = g cos(theta + alpha): one cosine, no sine.
         let mut a = if tilted {
-            self.gravity * (theta + self.rail_tilt).cos()
+            self.gravity * (theta + self.rail_tilt).cosine()
         } else {
-            self.gravity * theta.cos()
+            self.gravity * theta.cosine()
         };
         if damped {
             a -= k.damping_drive * w;
@@ -365,7 +365,7 @@ pub fn energy<T: Scalar>(rig: &Rig<T>, y: &State<T>) -> T {
     let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);
     let (gx, gy) = rig.gravity_components();
     let (xd, w) = (y[X_DOT], y[THETA_DOT]);
-    let (sin, cos) = y[THETA].sin_cos();
+    let (sin, cos) = y[THETA].sine_cosine();
     (m1 + m2) * xd * xd * 0.5 - m2 * l * xd * w * sin + m2 * l * l * w * w * 0.5
         - m2 * gy * l * sin
         - gx * ((m1 + m2) * y[X] + m2 * l * cos)
@@ -376,5 +376,5 @@ pub fn energy<T: Scalar>(rig: &Rig<T>, y: &State<T>) -> T {
 /// (m1 + m_p) x' - m_p d w sin(theta).
 pub fn momentum<T: Scalar>(rig: &Rig<T>, y: &State<T>) -> T {
     (rig.slider_mass + rig.bob_mass) * y[X_DOT]
-        - rig.bob_mass * rig.rod_length * y[THETA_DOT] * y[THETA].sin()
+        - rig.bob_mass * rig.rod_length * y[THETA_DOT] * y[THETA].sine()
 }

@@ -10,7 +10,7 @@ use super::{Mode, Rig, Scalar, State, THETA, THETA_DOT, X, X_DOT};
 /// pendulum's dynamics use its equivalent length instead).
 #[inline]
 pub fn markers<T: Scalar>(rig: &Rig<T>, y: &State<T>) -> [T; 4] {
-    let (sin, cos) = y[THETA].sin_cos();
+    let (sin, cos) = y[THETA].sine_cosine();
     let l = rig.marker_length;
     [y[X], T::from(0.0), y[X] + l * cos, -(l * sin)]
 }
@@ -104,7 +104,7 @@ pub fn observed_markers_with<T: Scalar>(
     accelerations: Option<(T, T)>,
 ) -> [T; 4] {
     let k = T::from(1.0) + camera.scale_error;
-    let (sin, cos) = y[THETA].sin_cos();
+    let (sin, cos) = y[THETA].sine_cosine();
     let lb = marker_length + camera.bob_along;
     let e = camera.bob_across;
     // Bob relative to the slider, y down, and its first two angular derivatives' factors.

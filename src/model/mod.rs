@@ -31,6 +31,18 @@ pub trait Scalar: DualNum<f64> + Copy + Send + Sync {
     /// derivative: num-dual's `is_zero` looks at the value only, so it must not decide.
     fn is_exact_zero(&self) -> bool;
 
+    /// sin and cos together. Every formula of the physics takes its trigonometry from here:
+    /// the `libm` crate's (musl's) kernels, not glibc's, whose sin and cos save and restore
+    /// the floating-point rounding mode on every call. That measured 7.8 against 3.6 ns a
+    /// sine here and was half of a simulation's time. Both are within one ulp.
+    fn sine_cosine(self) -> (Self, Self);
+
+    /// sin, as [`Scalar::sine_cosine`].
+    fn sine(self) -> Self;
+
+    /// cos, as [`Scalar::sine_cosine`].
+    fn cosine(self) -> Self;
+
     /// True for `f64` only. The simulator compiles a second copy of its stepper for plain
     /// rigs, with the real-rig tests gone from the right-hand side, for this type alone: the
     /// dual types' runs are few and their copies would only lengthen the build.
@@ -44,6 +56,21 @@ impl Scalar for f64 {
     fn is_exact_zero(&self) -> bool {
         *self == 0.0
     }
+
+    #[inline(always)]
+    fn sine_cosine(self) -> (f64, f64) {
+        libm::sincos(self)
+    }
+
+    #[inline(always)]
+    fn sine(self) -> f64 {
+        libm::sin(self)
+    }
+
+    #[inline(always)]
+    fn cosine(self) -> f64 {
+        libm::cos(self)
+    }
 }
 
 impl Scalar for num_dual::Dual64 {
@@ -51,12 +78,44 @@ impl Scalar for num_dual::Dual64 {
     fn is_exact_zero(&self) -> bool {
         self.re == 0.0 && self.eps == 0.0
     }
+
+    #[inline]
+    fn sine_cosine(self) -> (Self, Self) {
+        let (s, c) = libm::sincos(self.re);
+        (Self::new(s, c * self.eps), Self::new(c, -s * self.eps))
+    }
+
+    #[inline]
+    fn sine(self) -> Self {
+        self.sine_cosine().0
+    }
+
+    #[inline]
+    fn cosine(self) -> Self {
+        self.sine_cosine().1
+    }
 }
 
 impl<const N: usize> Scalar for dual::Dual<N> {
     #[inline]
     fn is_exact_zero(&self) -> bool {
         self.re == 0.0 && self.eps.iter().all(|&d| d == 0.0)
+    }
+
+    #[inline]
+    fn sine_cosine(self) -> (Self, Self) {
+        let (s, c) = libm::sincos(self.re);
+        (Self::new(s, self.eps * c), Self::new(c, self.eps * -s))
+    }
+
+    #[inline]
+    fn sine(self) -> Self {
+        Self::new(libm::sin(self.re), self.eps * libm::cos(self.re))
+    }
+
+    #[inline]
+    fn cosine(self) -> Self {
+        Self::new(libm::cos(self.re), self.eps * -libm::sin(self.re))
     }
 }
 

@@ -8,7 +8,7 @@
 //! theta where mu |a| = D). With tilt, the slide directions and the two sides of the plane
 //! differ.
 
-use super::{sign, FrictionLaw, Rig, Shorthands};
+use super::{sign, FrictionLaw, Rig, Scalar, Shorthands};
 use serde::Serialize;
 use std::f64::consts::PI;
 
@@ -615,9 +615,9 @@ pub fn stick_holds_forever(rig: &Rig<f64>, theta: f64, w: f64) -> bool {
         return false;
     }
     let (g, l) = (rig.gravity, rig.rod_length);
-    let energy = w * w - 2.0 * g / l * theta.sin();
+    let energy = w * w - 2.0 * g / l * theta.sine();
     let ratio = |th: f64| {
-        let w2 = energy + 2.0 * g / l * th.sin();
+        let w2 = energy + 2.0 * g / l * th.sine();
         if w2 < 0.0 {
             return 0.0; // not reachable on this level
         }

@@ -712,7 +712,7 @@ impl<T: Scalar> Rig<T> {
         if self.rail_tilt.is_exact_zero() {
             (T::zero(), self.gravity)
         } else {
-            let (s, c) = self.rail_tilt.sin_cos();
+            let (s, c) = self.rail_tilt.sine_cosine();
             (self.gravity * s, self.gravity * c)
         }
     }

@@ -63,7 +63,8 @@ fn impulsive_stop_loses_d_xdot_squared_over_two() {
         let (after, imp) = impulsive_stop(&rig, &y);
         let sh = Shorthands::at(&rig, &y);
         assert_eq!(after[2], 0.0);
-        assert!((after[3] - (y[3] - y[1].sin() * y[2] / rig.rod_length)).abs() < 1e-15);
+        // Within a few ulps: the model's sine (the libm crate's) and std's may differ by one.
+        assert!((after[3] - (y[3] - y[1].sin() * y[2] / rig.rod_length)).abs() < 4e-15);
         let lost = energy(&rig, &y) - energy(&rig, &after);
         assert!((lost - 0.5 * sh.d * y[2] * y[2]).abs() < 1e-14, "{lost}");
         assert!((imp.energy_lost - lost).abs() < 1e-14);

@@ -62,10 +62,30 @@ const T_END: f64 = 2.0;
 const RTOL: f64 = 1e-10;
 const ATOL: f64 = 1e-12;
 
+/// sin and cos of the physics: std's (glibc's) by default, or with `--features libm-trig`
+/// the libm crate's (musl's kernels), which appell's own physics uses since issue 40, so that
+/// the two can be compared with the same trigonometry.
+#[inline(always)]
+fn sin_cos(x: f64) -> (f64, f64) {
+    #[cfg(feature = "libm-trig")]
+    return libm::sincos(x);
+    #[cfg(not(feature = "libm-trig"))]
+    return x.sin_cos();
+}
+
+/// cos, as [`sin_cos`].
+#[inline(always)]
+fn cos(x: f64) -> f64 {
+    #[cfg(feature = "libm-trig")]
+    return libm::cos(x);
+    #[cfg(not(feature = "libm-trig"))]
+    return x.cos();
+}
+
 /// D, a, b, c, Q of physics.md.
 #[inline]
 fn shorthands(theta: f64, w: f64) -> (f64, f64, f64, f64, f64) {
-    let (s, c_) = theta.sin_cos();
+    let (s, c_) = sin_cos(theta);
     let d = M1 + M2 * c_ * c_;
     let a = M2 * s * c_;
     let b = -(M1 * G + M2 * G * s * s + M2 * L * w * w * s);
@@ -92,7 +112,7 @@ fn stick_margin(y: &Y4) -> f64 {
 struct Stick;
 impl ODE<f64, Y4> for Stick {
     fn diff(&self, _t: f64, y: &Y4, dy: &mut Y4) {
-        *dy = [0.0, y[3], 0.0, G / L * y[1].cos()];
+        *dy = [0.0, y[3], 0.0, G / L * cos(y[1])];
     }
 }
 
@@ -103,10 +123,11 @@ struct Slide {
 }
 impl ODE<f64, Y4> for Slide {
     fn diff(&self, _t: f64, y: &Y4, dy: &mut Y4) {
+        let (sn, cs) = sin_cos(y[1]);
         let (d, a, b, c, _) = shorthands(y[1], y[3]);
         let k = MU_K * self.s * self.sigma;
         let xdd = (c - k * b) / (d + k * a);
-        let tdd = (G * y[1].cos() + y[1].sin() * xdd) / L;
+        let tdd = (G * cs + sn * xdd) / L;
         *dy = [y[2], y[3], xdd, tdd];
     }
 }

@@ -53,7 +53,7 @@ pub fn impulsive_stop<T: Scalar>(rig: &Rig<T>, y: &[T]) -> (State<T>, Impulse) {
     let dx = -y[X_DOT];
     let mut after = [y[0], y[1], y[2], y[3]];
     after[X_DOT] = T::from(0.0);
-    after[THETA_DOT] = y[THETA_DOT] + y[THETA].sin() * dx / rig.rod_length;
+    after[THETA_DOT] = y[THETA_DOT] + y[THETA].sine() * dx / rig.rod_length;
     let sh = Shorthands::at(&rig.re(), &re_state(y));
     let dx = dx.re();
     let impulse = Impulse {
