@@ -60,6 +60,20 @@ pub fn skip_benchmark(batches: usize) -> Vec<SkipCase> {
             ),
         },
         SkipCase {
+            case: "integrating the stick phases that end in a slip (closed form; paper scene)",
+            with_skip_s: time(&paper, &rest, 2.0, &opts, &Request::default()),
+            without_skip_s: time(
+                &paper,
+                &rest,
+                2.0,
+                &Options {
+                    prove_stick: false,
+                    ..opts
+                },
+                &Request::default(),
+            ),
+        },
+        SkipCase {
             case: "dense samples when only events are asked (paper scene vs 1000 Hz frames)",
             with_skip_s: time(&paper, &rest, 2.0, &opts, &Request::default()),
             without_skip_s: time(&paper, &rest, 2.0, &opts, &frames),

@@ -533,7 +533,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         );
     } else {
         outln!(
-            "{name}: {} rtol {:e}: median {:.1} us per simulation (fastest {:.1} us, {} runs); {} steps, {} rejected, {} rhs evaluations, {} events",
+            "{name}: {} rtol {:e}: median {:.1} us per simulation (fastest {:.1} us, {} runs); {} steps, {} rejected, {} rhs evaluations, {} events{}",
             scene.options.method.name(),
             scene.options.rtol,
             timing.median_s * 1e6,
@@ -542,7 +542,8 @@ pub fn run(args: Args) -> Result<(), Failure> {
             timing.stats.steps,
             timing.stats.rejected,
             timing.stats.rhs_evals,
-            timing.stats.events
+            timing.stats.events,
+            appell::report::closed_form_note(&timing.stats)
         );
     }
     Ok(())

@@ -2,16 +2,19 @@
 //! "Pendulum model"): a reference independent of the integrator, and what the simulator uses
 //! for a stick phase proven to last (nothing to integrate).
 
-use crate::model::Rig;
-use std::f64::consts::{FRAC_PI_2, PI};
+use crate::model::{Rig, Scalar};
+use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
 /// Complete elliptic integral of the first kind K(k) (modulus k, 0 <= k < 1), by the
 /// arithmetic-geometric mean.
 pub fn elliptic_k(k: f64) -> f64 {
     let (mut a, mut b) = (1.0_f64, (1.0 - k * k).sqrt());
-    // Quadratic convergence: 40 rounds are far more than enough, and a fixed count cannot
-    // cycle on rounding the way a tolerance test can.
+    // Quadratic convergence: five or six rounds below k = 0.995. The cap of 40 rounds, not
+    // the test, ends a loop that rounding keeps from settling.
     for _ in 0..40 {
+        if a - b <= 4.0 * f64::EPSILON * a {
+            break;
+        }
         (a, b) = (0.5 * (a + b), (a * b).sqrt());
     }
     PI / (a + b)
@@ -82,7 +85,7 @@ fn carlson_rf(mut x: f64, mut y: f64, mut z: f64) -> f64 {
 
 /// Incomplete elliptic integral of the first kind F(psi, k) for |psi| <= pi/2.
 pub fn elliptic_f(psi: f64, k: f64) -> f64 {
-    let (s, c) = psi.sin_cos();
+    let (s, c) = psi.sine_cosine();
     s * carlson_rf(c * c, 1.0 - k * k * s * s, 1.0)
 }
 
@@ -116,6 +119,94 @@ pub fn stuck_state(rig: &Rig<f64>, theta: f64, theta_dot: f64, t: f64) -> Option
     Some((phi + FRAC_PI_2 + 2.0 * PI * turns, 2.0 * k * w0 * cn))
 }
 
+/// A stuck pendulum's swing on its energy level, parametrised by Jacobi's amplitude
+/// psi = am(u0 + w0 t, k) (w0 = sqrt(g/l)): with phi = theta - pi/2 the angle from hanging,
+/// sin(phi/2) = k sin(psi) and theta' = 2 k w0 cos(psi), so the state is an elementary
+/// function of psi, and psi grows with time at the rate w0 sqrt(1 - k^2 sin^2 psi) > 0. The
+/// time to reach a psi is Legendre's incomplete integral: t = (F(psi, k) - F(psi0, k)) / w0.
+/// A stick phase's guard is a function of the state alone, so its crossing is searched in
+/// psi with no elliptic function per evaluation, and only the crossing's time needs F.
+#[derive(Debug, Clone, Copy)]
+pub struct Swing {
+    w0: f64,
+    k: f64,
+    big_k: f64,
+    /// pi/2 plus the whole turns of the start: theta = offset + phi.
+    offset: f64,
+    /// The start's amplitude and F there.
+    psi0: f64,
+    f0: f64,
+}
+
+impl Swing {
+    /// The swing through (theta, theta'), or `None` over the top (modulus k >= 1) or so close
+    /// to it (k^2 >= 0.99) that the closed form loses accuracy, and at rest hanging (k = 0:
+    /// nothing moves).
+    pub fn new(rig: &Rig<f64>, theta: f64, theta_dot: f64) -> Option<Swing> {
+        let w0 = (rig.gravity / rig.rod_length).sqrt();
+        let turns = ((theta - FRAC_PI_2) / TAU).round();
+        let offset = FRAC_PI_2 + TAU * turns;
+        let half = (0.5 * (theta - offset)).sin();
+        let v = theta_dot / (2.0 * w0);
+        let k2 = half * half + v * v;
+        if !(k2 < 0.99 && k2 > 1e-24) {
+            return None;
+        }
+        let k = k2.sqrt();
+        // atan2 of both, not asin(half / k): exact in either quadrant and well conditioned at
+        // the turning points, where asin's slope is unbounded.
+        let psi0 = half.atan2(v);
+        let mut swing = Swing {
+            w0,
+            k,
+            big_k: elliptic_k(k),
+            offset,
+            psi0,
+            f0: 0.0,
+        };
+        swing.f0 = swing.f(psi0);
+        Some(swing)
+    }
+
+    /// The amplitude at the start.
+    pub fn psi0(&self) -> f64 {
+        self.psi0
+    }
+
+    /// (theta, theta') at amplitude `psi`.
+    pub fn state(&self, psi: f64) -> (f64, f64) {
+        let (s, c) = psi.sine_cosine();
+        (
+            self.offset + 2.0 * libm::asin(self.k * s),
+            2.0 * self.k * self.w0 * c,
+        )
+    }
+
+    /// Bounds on the time from the start to amplitude `psi` (>= psi0), from psi's rate
+    /// w0 sqrt(1 - k^2 sin^2 psi), between w0 sqrt(1 - k^2) and w0: no elliptic integral.
+    pub fn elapsed_bounds(&self, psi: f64) -> (f64, f64) {
+        let d = (psi - self.psi0) / self.w0;
+        (d, d / (1.0 - self.k * self.k).sqrt())
+    }
+
+    /// The slowest rate of psi, w0 sqrt(1 - k^2) (rad/s): a tolerance in time times it is
+    /// one in psi.
+    pub fn slowest_rate(&self) -> f64 {
+        self.w0 * (1.0 - self.k * self.k).sqrt()
+    }
+
+    /// The time from the start to amplitude `psi` (>= psi0).
+    pub fn elapsed(&self, psi: f64) -> f64 {
+        (self.f(psi) - self.f0) / self.w0
+    }
+
+    /// F(psi, k) for any psi, by F(psi + n pi) = F(psi) + 2 n K.
+    fn f(&self, psi: f64) -> f64 {
+        let n = (psi / PI).round();
+        2.0 * n * self.big_k + elliptic_f(psi - n * PI, self.k)
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -146,6 +237,36 @@ mod tests {
                 );
             }
         }
+    }
+
+    /// The swing in psi retraces the closed form in time: at the time `elapsed(psi)` after
+    /// the start, `stuck_state` (Jacobi's functions) is at the swing's state for psi, in
+    /// both directions of motion, through the turning points and over more than a period.
+    #[test]
+    fn swing_in_amplitude_is_the_closed_form_in_time() {
+        let rig = Rig::paper(1.0);
+        for (theta, w) in [(0.0, 0.0), (0.3, 2.0), (2.2, -3.5), (1.5, 6.0), (-4.0, 1.0)] {
+            let swing = Swing::new(&rig, theta, w).unwrap();
+            let (th0, w0) = swing.state(swing.psi0());
+            assert!((th0 - theta).abs() < 1e-14 && (w0 - w).abs() < 1e-13);
+            assert_eq!(swing.elapsed(swing.psi0()), 0.0);
+            let mut last = 0.0;
+            for j in 1..=40 {
+                let psi = swing.psi0() + 0.19 * f64::from(j);
+                let t = swing.elapsed(psi);
+                assert!(t > last, "time grows with psi");
+                last = t;
+                let (th, om) = swing.state(psi);
+                let (th_t, om_t) = stuck_state(&rig, theta, w, t).unwrap();
+                assert!(
+                    (th - th_t).abs() < 1e-12 && (om - om_t).abs() < 1e-11,
+                    "({theta}, {w}) psi {psi}: ({th}, {om}) vs ({th_t}, {om_t})"
+                );
+            }
+        }
+        // Over the top and hanging at rest have no swing.
+        assert!(Swing::new(&rig, 0.0, 20.0).is_none());
+        assert!(Swing::new(&rig, FRAC_PI_2, 0.0).is_none());
     }
 
     #[test]

@@ -8,7 +8,7 @@ pub mod plot;
 pub mod regions;
 mod simulate;
 
-pub use simulate::{simulation_json, timeline, write_trajectory_csv};
+pub use simulate::{closed_form_note, simulation_json, timeline, write_trajectory_csv};
 
 /// A p-value as a report says it: `p = 0.226` from 0.001 up, `p = 3.0e-9` below, and
 /// `p < 1e-16` below what double precision resolves (never `p = 0.0e0`).

@@ -2,7 +2,7 @@
 
 use crate::model::{energy, markers, Rig};
 use crate::scene::Scene;
-use crate::sim::{Outcome, Solution};
+use crate::sim::{Outcome, Solution, Stats};
 use serde_json::{json, Value};
 use std::fmt::Write as _;
 use std::io::Write;
@@ -57,7 +57,7 @@ pub fn timeline(scene: &Scene, sol: &Solution<f64>) -> String {
     let st = sol.stats;
     let _ = writeln!(
         s,
-        "{}: rtol {:e}, atol {:e}; {} steps, {} rejected, {} rhs evaluations, {} event{}",
+        "{}: rtol {:e}, atol {:e}; {} steps, {} rejected, {} rhs evaluations, {} event{}{}",
         scene.options.method.name(),
         scene.options.rtol,
         scene.options.atol,
@@ -65,9 +65,19 @@ pub fn timeline(scene: &Scene, sol: &Solution<f64>) -> String {
         st.rejected,
         st.rhs_evals,
         st.events,
-        if st.events == 1 { "" } else { "s" }
+        if st.events == 1 { "" } else { "s" },
+        closed_form_note(&st)
     );
     s
+}
+
+/// ", N stick phases in closed form" when there were any, for the statistics line.
+pub fn closed_form_note(st: &Stats) -> String {
+    match st.closed_form {
+        0 => String::new(),
+        1 => ", 1 stick phase in closed form".into(),
+        n => format!(", {n} stick phases in closed form"),
+    }
 }
 
 fn state_json(y: &[f64; 4]) -> Value {

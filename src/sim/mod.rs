@@ -56,8 +56,12 @@ pub struct Options {
     /// fraction of m1 + m2 is ended by an impulsive stop (the convergence test
     /// `sudden_stop_converges_as_threshold_tightens` shows why 1e-9 is tight enough).
     pub stop_threshold: f64,
-    /// Skip slip monitoring in a stick phase whose energy level provably never reaches the
-    /// friction cone (`model::regions::stick_holds_forever`). Off only to measure what it saves.
+    /// The pendulum's closed forms for stick phases of the ideal rig: skip slip monitoring in
+    /// a stick phase whose energy level provably never reaches the friction cone
+    /// (`model::regions::stick_holds_forever`), and take a stick phase of an `f64` run that
+    /// samples nothing from its start on in closed form (`model::pendulum::Swing`: its slip
+    /// located on the swing, its end time from an elliptic integral). Off only to measure
+    /// what they save, or to test the integrator itself.
     pub prove_stick: bool,
 }
 
@@ -263,6 +267,9 @@ pub struct Stats {
     pub rhs_evals: usize,
     /// Events located.
     pub events: usize,
+    /// Stick phases taken in the pendulum's closed form (no steps; see
+    /// [`Options::prove_stick`]).
+    pub closed_form: usize,
 }
 
 /// One requested sample of the state.

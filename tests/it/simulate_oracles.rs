@@ -483,3 +483,74 @@ fn positions_only_samples_are_the_full_runs_positions() {
         assert!(b.samples.iter().filter(|p| p.state[3].is_nan()).count() > 300);
     }
 }
+
+/// Stick phases taken in the pendulum's closed form (f64 runs of the ideal rig that sample
+/// nothing) end where the integrator at a far tighter tolerance ends them. With the slides
+/// integrated at rtol 1e-12, the same events each within 1e-12 s and the final state within
+/// 5e-12 of the integrator's at 1e-14, on releases that stick and slip both ways, start at
+/// rest on a turning point, and stick to the end. The closed form is in use (fewer right-hand
+/// sides than the integrator at the same tolerance), and it stays out of runs with a sample
+/// still to come or a tilted rail: those are the integrator's, bit for bit.
+#[test]
+fn closed_form_stick_phases_match_the_tight_integrator() {
+    let cases = [
+        (Rig::paper(0.35), [0.0, 0.0, 0.0, 0.0], 2.0),
+        (unequal_rig(0.12), [0.0, FRAC_PI_2 - 0.9, 0.0, 0.0], 2.0),
+        (Rig::paper(0.5), [0.0, 0.3, 0.0, 1.0], 3.0),
+        (Rig::paper(0.2), [0.01, 0.4, -0.3, 5.0], 2.0),
+        // Ends 34 ms into its second stick phase.
+        (Rig::paper(0.35), [0.0, 0.0, 0.0, 0.0], 0.36),
+    ];
+    let closed = Options {
+        rtol: 1e-12,
+        atol: 1e-14,
+        ..Options::default()
+    };
+    let integrated = Options {
+        prove_stick: false,
+        ..closed
+    };
+    let tight = Options {
+        rtol: 1e-14,
+        atol: 1e-16,
+        ..integrated
+    };
+    for (rig, y0, t_end) in cases {
+        let none = Request::default();
+        let fast = simulate(&rig, &y0, t_end, &closed, &none).unwrap();
+        let reference = simulate(&rig, &y0, t_end, &tight, &none).unwrap();
+        let slow = simulate(&rig, &y0, t_end, &integrated, &none).unwrap();
+        assert!(fast.events.len() >= 2, "{:?}", fast.events);
+        assert!(
+            fast.stats.rhs_evals < slow.stats.rhs_evals,
+            "closed form unused: {:?} vs {:?}",
+            fast.stats,
+            slow.stats
+        );
+        assert_eq!(fast.final_mode, reference.final_mode);
+        assert_eq!(fast.events.len(), reference.events.len());
+        for (a, b) in fast.events.iter().zip(&reference.events) {
+            assert_eq!((a.kind, &a.to), (b.kind, &b.to));
+            assert!((a.t - b.t).abs() < 1e-12, "{} vs {}", a.t, b.t);
+        }
+        for i in 0..4 {
+            let (a, b) = (fast.final_state[i], reference.final_state[i]);
+            assert!((a - b).abs() < 5e-12, "{i}: {a} vs {b}");
+        }
+        // A sample still to come (here at the end): the integrator's run, unchanged.
+        let frames = Request {
+            sample_times: vec![t_end],
+            ..Request::default()
+        };
+        let sampled = simulate(&rig, &y0, t_end, &closed, &frames).unwrap();
+        let sampled_slow = simulate(&rig, &y0, t_end, &integrated, &frames).unwrap();
+        assert_eq!(sampled.final_state, sampled_slow.final_state);
+        assert_eq!(sampled.stats, sampled_slow.stats);
+        // A tilted rail is no conservative level pendulum: no closed form.
+        let mut tilted = rig;
+        tilted.rail_tilt = 0.01;
+        let a = simulate(&tilted, &y0, t_end, &closed, &none).unwrap();
+        let b = simulate(&tilted, &y0, t_end, &integrated, &none).unwrap();
+        assert_eq!((a.final_state, a.stats), (b.final_state, b.stats));
+    }
+}

@@ -4,7 +4,6 @@
 
 use super::guards::Guard;
 use super::locate::Located;
-use super::step::Step;
 use super::{Run, Segment};
 use crate::model::{
     choose_at_rest, re_state, sign, Direction, Mode, RestChoice, Rig, Scalar, Shorthands, State,
@@ -360,16 +359,18 @@ pub(super) fn decide_at_crossing(
 
 impl<T: Scalar + 'static, const N: usize> Run<'_, '_, T, N> {
     /// Switch mode at a located event: decide what follows, record the event and carry the
-    /// state across it. `Break` when the run ends there.
+    /// state across it. `y_after` is a state just past the event (the end of its step), whose
+    /// friction-free direction sign(c) decides a slip where c vanishes at the event itself.
+    /// `Break` when the run ends there.
     pub(super) fn switch_mode<M: Stepper<T, N>>(
         &mut self,
         seg: &Segment<'_, '_, T, M, N>,
-        step: &Step<T, N>,
+        y_after: &[f64],
         event: Located<T, N>,
     ) -> Result<ControlFlow<Solution<T>>, SimError> {
         let (mode, sigma) = (self.mode, self.sigma);
         let rig_re = &self.ctx.rig_re;
-        let c_hint = Shorthands::at(rig_re, &step.y1r[..4]).c;
+        let c_hint = Shorthands::at(rig_re, &y_after[..4]).c;
         let Decision {
             switch,
             state,

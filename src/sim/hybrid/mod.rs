@@ -17,6 +17,7 @@
 //! - `jump.rs`: crossing the event: the state's reset and the sensitivities' jump.
 //! - `samples.rs`: emitting samples, and the solution the run ends in.
 
+mod closed;
 mod decide;
 mod guards;
 mod jump;
@@ -112,6 +113,11 @@ where
     loop {
         // A mode, from its start to the event that ends it.
         let mut seg = run.begin_mode(&mut stepper);
+        match run.closed_stick(&mut seg)? {
+            Some(ControlFlow::Continue(())) => continue,
+            Some(ControlFlow::Break(solution)) => return Ok(solution),
+            None => {}
+        }
         loop {
             if run.t >= t_end {
                 return Ok(run.end(&seg));
@@ -132,7 +138,7 @@ where
                 Crossing::At { th, guard } => {
                     let event = run.locate_event(&mut seg, &step, th, guard);
                     run.emit_samples(&mut seg, &step, event.t);
-                    match run.switch_mode(&seg, &step, event)? {
+                    match run.switch_mode(&seg, &step.y1r, event)? {
                         ControlFlow::Continue(()) => break,
                         ControlFlow::Break(solution) => return Ok(solution),
                     }

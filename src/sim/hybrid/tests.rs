@@ -533,7 +533,13 @@ fn samples_are_emitted_once_each_in_time_order_across_events() {
 #[test]
 fn a_sample_at_an_event_time_is_emitted_once_in_the_mode_before_it() {
     let rig = Rig::paper(0.5);
-    let (t_end, opts) = (0.6, Options::default());
+    // Without samples the stick phases would be taken in closed form (events within the
+    // tolerance of the integrator's, not bit for bit): the integrator runs both here.
+    let opts = Options {
+        prove_stick: false,
+        ..Options::default()
+    };
+    let t_end = 0.6;
     let first = simulate(&rig, &[0.0; 4], t_end, &opts, &Request::default()).unwrap();
     let slip = &first.events[0];
     let times = vec![slip.t / 2.0, slip.t, slip.t, (slip.t + t_end) / 2.0];
