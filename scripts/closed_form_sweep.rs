@@ -1,6 +1,7 @@
 // The closed-form stick phases against the integrator at rtol 1e-13 over 3000 random rigs and
-// releases (physics.md, "Stick phases in closed form"). Run outside CI: copy into examples/
-// (gitignored) and `cargo run --release --example closed_form_sweep`.
+// releases, a third on tilted rails and some of those under Stribeck's law (physics.md, "Stick
+// phases in closed form"). Run outside CI: copy into examples/ (gitignored) and
+// `cargo run --release --example closed_form_sweep`.
 use appell::model::Rig;
 use appell::sim::{simulate, Options, Request};
 fn main() {
@@ -19,9 +20,16 @@ fn main() {
         let m2 = 0.05 + rnd() * 0.3;
         let l = 0.1 + rnd() * 0.4;
         let mu = 0.05 + rnd() * 0.9;
-        let Ok(rig) = Rig::new(m1, m2, l, 9.81, mu, Some(mu * (1.0 + 0.3 * rnd()))) else {
+        let Ok(mut rig) = Rig::new(m1, m2, l, 9.81, mu, Some(mu * (1.0 + 0.3 * rnd()))) else {
             continue;
         };
+        // A third on tilted rails, a third of those under Stribeck's law.
+        if rnd() < 0.33 {
+            rig = rig.with_rail_tilt(0.06 * (rnd() - 0.5));
+            if rnd() < 0.33 {
+                rig = rig.with_stribeck(0.05);
+            }
+        }
         let y0 = [
             0.0,
             -1.0 + 4.0 * rnd(),

@@ -126,8 +126,13 @@ pub fn stuck_state(rig: &Rig<f64>, theta: f64, theta_dot: f64, t: f64) -> Option
 /// time to reach a psi is Legendre's incomplete integral: t = (F(psi, k) - F(psi0, k)) / w0.
 /// A stick phase's guard is a function of the state alone, so its crossing is searched in
 /// psi with no elliptic function per evaluation, and only the crossing's time needs F.
+///
+/// On a tilted rail (tilt alpha) the stuck rig is the same pendulum about the vertical shifted
+/// by alpha: theta'' = (g/l) cos(theta + alpha). The swing works in theta + alpha and returns
+/// theta.
 #[derive(Debug, Clone, Copy)]
 pub struct Swing {
+    tilt: f64,
     w0: f64,
     k: f64,
     big_k: f64,
@@ -143,6 +148,8 @@ impl Swing {
     /// to it (k^2 >= 0.99) that the closed form loses accuracy, and at rest hanging (k = 0:
     /// nothing moves).
     pub fn new(rig: &Rig<f64>, theta: f64, theta_dot: f64) -> Option<Swing> {
+        let tilt = rig.rail_tilt;
+        let theta = theta + tilt;
         let w0 = (rig.gravity / rig.rod_length).sqrt();
         let turns = ((theta - FRAC_PI_2) / TAU).round();
         let offset = FRAC_PI_2 + TAU * turns;
@@ -157,6 +164,7 @@ impl Swing {
         // the turning points, where asin's slope is unbounded.
         let psi0 = half.atan2(v);
         let mut swing = Swing {
+            tilt,
             w0,
             k,
             big_k: elliptic_k(k),
@@ -177,7 +185,7 @@ impl Swing {
     pub fn state(&self, psi: f64) -> (f64, f64) {
         let (s, c) = psi.sine_cosine();
         (
-            self.offset + 2.0 * libm::asin(self.k * s),
+            self.offset - self.tilt + 2.0 * libm::asin(self.k * s),
             2.0 * self.k * self.w0 * c,
         )
     }
@@ -193,6 +201,12 @@ impl Swing {
     /// one in psi.
     pub fn slowest_rate(&self) -> f64 {
         self.w0 * (1.0 - self.k * self.k).sqrt()
+    }
+
+    /// (theta, theta') a time `t` after the start, from Jacobi's functions (`stuck_state`).
+    pub fn after(&self, rig: &Rig<f64>, theta: f64, theta_dot: f64, t: f64) -> Option<(f64, f64)> {
+        let (th, w) = stuck_state(rig, theta + self.tilt, theta_dot, t)?;
+        Some((th - self.tilt, w))
     }
 
     /// The time from the start to amplitude `psi` (>= psi0).
@@ -264,6 +278,17 @@ mod tests {
                 );
             }
         }
+        // On a tilted rail: the same swing about the shifted vertical.
+        let tilted = Rig::paper(1.0).with_rail_tilt(0.05);
+        let swing = Swing::new(&tilted, 0.3, 2.0).unwrap();
+        let (th0, _) = swing.state(swing.psi0());
+        assert!((th0 - 0.3).abs() < 1e-14);
+        let psi = swing.psi0() + 1.3;
+        let (th, om) = swing.state(psi);
+        let (th_t, om_t) = swing.after(&tilted, 0.3, 2.0, swing.elapsed(psi)).unwrap();
+        assert!((th - th_t).abs() < 1e-12 && (om - om_t).abs() < 1e-11);
+        let (th_l, _) = stuck_state(&rig, 0.35, 2.0, swing.elapsed(psi)).unwrap();
+        assert!((th + 0.05 - th_l).abs() < 1e-12, "{th} vs {th_l}");
         // Over the top and hanging at rest have no swing.
         assert!(Swing::new(&rig, 0.0, 20.0).is_none());
         assert!(Swing::new(&rig, FRAC_PI_2, 0.0).is_none());

@@ -58,8 +58,8 @@ pub struct Options {
     pub stop_threshold: f64,
     /// The pendulum's closed forms for stick phases of the ideal rig: skip slip monitoring in
     /// a stick phase whose energy level provably never reaches the friction cone
-    /// (`model::regions::stick_holds_forever`), and take a stick phase of an `f64` run that
-    /// samples nothing from its start on in closed form (`model::pendulum::Swing`: its slip
+    /// (`model::regions::stick_holds_forever`), and take a stick phase of an `f64` run with an
+    /// undamped pivot that samples nothing from its start on in closed form (`model::pendulum::Swing`: its slip
     /// located on the swing, its end time from an elliptic integral). Off only to measure
     /// what they save, or to test the integrator itself.
     pub prove_stick: bool,

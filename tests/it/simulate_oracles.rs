@@ -484,13 +484,14 @@ fn positions_only_samples_are_the_full_runs_positions() {
     }
 }
 
-/// Stick phases taken in the pendulum's closed form (f64 runs of the ideal rig that sample
-/// nothing) end where the integrator at a far tighter tolerance ends them. With the slides
-/// integrated at rtol 1e-12, the same events each within 1e-12 s and the final state within
-/// 5e-12 of the integrator's at 1e-14, on releases that stick and slip both ways, start at
-/// rest on a turning point, and stick to the end. The closed form is in use (fewer right-hand
-/// sides than the integrator at the same tolerance), and it stays out of runs with a sample
-/// still to come or a tilted rail: those are the integrator's, bit for bit.
+/// Stick phases taken in the pendulum's closed form (f64 runs with an undamped pivot that
+/// sample nothing) end where the integrator at a far tighter tolerance ends them. With the
+/// slides integrated at rtol 1e-12, the same events each within 1e-12 s and the final state
+/// within 5e-12 of the integrator's at 1e-14, on releases that stick and slip both ways, start
+/// at rest on a turning point, stick to the end, on tilted rails and under the Stribeck,
+/// direction and load laws. The closed form is in use (fewer right-hand sides than the
+/// integrator at the same tolerance), and it stays out of runs with a sample still to come or
+/// a damped pivot: those are the integrator's, bit for bit.
 #[test]
 fn closed_form_stick_phases_match_the_tight_integrator() {
     let cases = [
@@ -500,6 +501,28 @@ fn closed_form_stick_phases_match_the_tight_integrator() {
         (Rig::paper(0.2), [0.01, 0.4, -0.3, 5.0], 2.0),
         // Ends 34 ms into its second stick phase.
         (Rig::paper(0.35), [0.0, 0.0, 0.0, 0.0], 0.36),
+        // A tilted rail (the pendulum about the shifted vertical) and other friction laws,
+        // which enter only through the slip guard.
+        (
+            Rig::paper(0.35).with_rail_tilt(0.02),
+            [0.0, 0.0, 0.0, 0.0],
+            2.0,
+        ),
+        (
+            unequal_rig(0.2).with_stribeck(0.05).with_rail_tilt(-0.01),
+            [0.0, 0.3, 0.0, 1.0],
+            2.0,
+        ),
+        (
+            Rig::paper(0.3).with_direction_split(0.04, 0.05),
+            [0.0, 0.0, 0.0, 0.0],
+            2.0,
+        ),
+        (
+            Rig::paper(0.35).with_load_exponent(0.8),
+            [0.0, 0.0, 0.0, 0.0],
+            2.0,
+        ),
     ];
     let closed = Options {
         rtol: 1e-12,
@@ -546,11 +569,10 @@ fn closed_form_stick_phases_match_the_tight_integrator() {
         let sampled_slow = simulate(&rig, &y0, t_end, &integrated, &frames).unwrap();
         assert_eq!(sampled.final_state, sampled_slow.final_state);
         assert_eq!(sampled.stats, sampled_slow.stats);
-        // A tilted rail is no conservative level pendulum: no closed form.
-        let mut tilted = rig;
-        tilted.rail_tilt = 0.01;
-        let a = simulate(&tilted, &y0, t_end, &closed, &none).unwrap();
-        let b = simulate(&tilted, &y0, t_end, &integrated, &none).unwrap();
+        // A damped pivot makes the stuck rig no conservative pendulum: no closed form.
+        let damped = rig.with_pivot_damping(1e-4);
+        let a = simulate(&damped, &y0, t_end, &closed, &none).unwrap();
+        let b = simulate(&damped, &y0, t_end, &integrated, &none).unwrap();
         assert_eq!((a.final_state, a.stats), (b.final_state, b.stats));
     }
 }
@@ -564,7 +586,7 @@ fn uniform(state: &mut u64) -> f64 {
 }
 
 /// The closed form never misses or adds a slip the integrator finds: over random rigs and
-/// releases, and over releases whose friction is a hair (1e-7 to 1e-2 relative) below the
+/// releases (some on tilted rails, some under Stribeck's law), and over releases whose friction is a hair (1e-7 to 1e-2 relative) below the
 /// largest ratio their energy level needs, so that the stick margin only grazes zero, the
 /// closed-form runs (slides at rtol 1e-12) have the event sequence of the integrator at
 /// 1e-13, each event within 1e-9 s (a grazing slip's time is ill-conditioned). Run outside
@@ -608,11 +630,19 @@ fn closed_form_finds_the_integrators_slips_on_random_and_grazing_releases() {
                 .fold(0.0, f64::max);
             peak * (1.0 - 10f64.powf(-7.0 + 5.0 * u()))
         };
-        let Ok(rig) = Rig::new(m1, m2, l, 9.81, mu, None) else {
+        let Ok(mut rig) = Rig::new(m1, m2, l, 9.81, mu, None) else {
             continue;
         };
         if !(mu > 0.02 && mu < 1.5) {
             continue;
+        }
+        if case % 4 == 0 {
+            // A tilted rail, and every other time Stribeck's law.
+            rig = rig.with_rail_tilt(0.06 * (u() - 0.5));
+            if case % 8 == 0 {
+                rig.mu_static = 1.2 * mu;
+                rig = rig.with_stribeck(0.05);
+            }
         }
         let y0 = [0.0, theta, 0.0, w];
         let none = Request::default();

@@ -1,5 +1,5 @@
-//! A stick phase in the pendulum's closed form: while the slider is stuck on the ideal rig,
-//! the rig is the conservative pendulum of `model::pendulum`, whose state is an elementary
+//! A stick phase in the pendulum's closed form: while the slider is stuck on a rig with an
+//! undamped pivot, the rig is the conservative pendulum of `model::pendulum`, whose state is an elementary
 //! function of Jacobi's amplitude psi ([`Swing`]). The slip guard is watched and its crossing
 //! located in psi with the integrator's own guard logic (`GuardState::watch`, `find_root`);
 //! only the crossing's time needs an elliptic integral, and the phase costs a few dozen guard
@@ -9,7 +9,7 @@ use super::guards::{Guard, Interior, Watch};
 use super::locate::{find_root, Located};
 use super::step::re_vec;
 use super::{is_f64, Run, Segment};
-use crate::model::pendulum::{stuck_state, Swing};
+use crate::model::pendulum::Swing;
 use crate::model::{Mode, Scalar, THETA, THETA_DOT};
 use crate::sim::rk::Stepper;
 use crate::sim::{SimError, Solution};
@@ -49,9 +49,9 @@ impl Along<'_> {
 
 impl<'a, T: Scalar + 'static, const N: usize> Run<'a, '_, T, N> {
     /// Take the stick phase that has just begun in closed form, when it applies: an `f64` run
-    /// (no derivatives to carry) of the ideal rig (the conservative, level pendulum) that
-    /// samples nothing from here on, with the slip guard positive at the start, on a swing
-    /// below the top. Returns `None` otherwise (the integrator takes the phase), or what the
+    /// (no derivatives to carry) of a rig with an undamped pivot (a conservative pendulum,
+    /// level or tilted; any friction law) that samples nothing from here on, with the slip
+    /// guard positive at the start, on a swing below the top. Returns `None` otherwise (the integrator takes the phase), or what the
     /// phase ended in: the next mode (`Continue`) or the end of the run (`Break`).
     pub(super) fn closed_stick<M: Stepper<T, N>>(
         &mut self,
@@ -59,10 +59,12 @@ impl<'a, T: Scalar + 'static, const N: usize> Run<'a, '_, T, N> {
     ) -> Result<Option<ControlFlow<Solution<T>>>, SimError> {
         let ctx = self.ctx;
         let rig = &ctx.rig_re;
+        // An undamped pivot keeps the stuck rig conservative (on a tilted rail, the pendulum
+        // about the shifted vertical); the friction law enters only through the guard.
         if self.mode != Mode::Stick
             || !self.options.prove_stick
             || !is_f64::<T>()
-            || !rig.is_ideal()
+            || rig.pivot_damping != 0.0
             || self.out.next_sample < self.request.sample_times.len()
         {
             return Ok(None);
@@ -152,7 +154,7 @@ impl<'a, T: Scalar + 'static, const N: usize> Run<'a, '_, T, N> {
             return self.switch_mode(seg, &y1, event).map(Some);
         }
         // No slip before the end: the state there from Jacobi's functions.
-        let Some((theta, w)) = stuck_state(rig, y[THETA], y[THETA_DOT], span) else {
+        let Some((theta, w)) = swing.after(rig, y[THETA], y[THETA_DOT], span) else {
             return Ok(None);
         };
         self.out.stats.closed_form += 1;
