@@ -37,11 +37,17 @@ pub trait Scalar: DualNum<f64> + Copy + Send + Sync {
     /// sine here and was half of a simulation's time. Both are within one ulp.
     fn sine_cosine(self) -> (Self, Self);
 
-    /// sin, as [`Scalar::sine_cosine`].
-    fn sine(self) -> Self;
+    /// sin, as [`Scalar::sine_cosine`] (a dual number's derivative needs the cosine anyway).
+    #[inline]
+    fn sine(self) -> Self {
+        self.sine_cosine().0
+    }
 
     /// cos, as [`Scalar::sine_cosine`].
-    fn cosine(self) -> Self;
+    #[inline]
+    fn cosine(self) -> Self {
+        self.sine_cosine().1
+    }
 
     /// True for `f64` only. The simulator compiles a second copy of its stepper for plain
     /// rigs, with the real-rig tests gone from the right-hand side, for this type alone: the
@@ -84,16 +90,6 @@ impl Scalar for num_dual::Dual64 {
         let (s, c) = libm::sincos(self.re);
         (Self::new(s, c * self.eps), Self::new(c, -s * self.eps))
     }
-
-    #[inline]
-    fn sine(self) -> Self {
-        self.sine_cosine().0
-    }
-
-    #[inline]
-    fn cosine(self) -> Self {
-        self.sine_cosine().1
-    }
 }
 
 impl<const N: usize> Scalar for dual::Dual<N> {
@@ -106,16 +102,6 @@ impl<const N: usize> Scalar for dual::Dual<N> {
     fn sine_cosine(self) -> (Self, Self) {
         let (s, c) = libm::sincos(self.re);
         (Self::new(s, self.eps * c), Self::new(c, self.eps * -s))
-    }
-
-    #[inline]
-    fn sine(self) -> Self {
-        Self::new(libm::sin(self.re), self.eps * libm::cos(self.re))
-    }
-
-    #[inline]
-    fn cosine(self) -> Self {
-        Self::new(libm::cos(self.re), self.eps * -libm::sin(self.re))
     }
 }
 

@@ -91,32 +91,9 @@ pub fn elliptic_f(psi: f64, k: f64) -> f64 {
 
 /// The stuck pendulum from any librating state (theta, theta') after time `t`: the exact
 /// (theta, theta'), or `None` when it goes over the top (modulus k >= 1) or so close to it
-/// that the closed form loses accuracy. With phi = theta - pi/2 (the angle from hanging),
-/// sin(phi/2) = k sn(u0 + w0 t, k) and phi' = 2 k w0 cn(u0 + w0 t, k).
+/// that the closed form loses accuracy ([`Swing::after`]).
 pub fn stuck_state(rig: &Rig<f64>, theta: f64, theta_dot: f64, t: f64) -> Option<(f64, f64)> {
-    let w0 = (rig.gravity / rig.rod_length).sqrt();
-    // The swing is about the hanging position of the turn theta sits in.
-    let turns = ((theta - FRAC_PI_2) / (2.0 * PI)).round();
-    let phi0 = theta - FRAC_PI_2 - 2.0 * PI * turns;
-    let k2 = (theta_dot / (2.0 * w0)).powi(2) + (0.5 * phi0).sin().powi(2);
-    if k2.is_nan() || k2 >= 0.99 {
-        return None;
-    }
-    let k = k2.sqrt();
-    if k < 1e-12 {
-        return Some((theta, theta_dot));
-    }
-    let big_k = elliptic_k(k);
-    let psi = ((0.5 * phi0).sin() / k).clamp(-1.0, 1.0).asin();
-    let mut u0 = elliptic_f(psi, k);
-    if theta_dot < 0.0 {
-        // cn < 0: the other half of the swing, where sn takes the same values.
-        u0 = 2.0 * big_k - u0;
-    }
-    let u = (u0 + w0 * t).rem_euclid(4.0 * big_k);
-    let (sn, cn, _) = jacobi_sn_cn_dn(u, k);
-    let phi = 2.0 * (k * sn).clamp(-1.0, 1.0).asin();
-    Some((phi + FRAC_PI_2 + 2.0 * PI * turns, 2.0 * k * w0 * cn))
+    Swing::new(rig, theta, theta_dot).map(|swing| swing.after(t))
 }
 
 /// A stuck pendulum's swing on its energy level, parametrised by Jacobi's amplitude
@@ -145,8 +122,7 @@ pub struct Swing {
 
 impl Swing {
     /// The swing through (theta, theta'), or `None` over the top (modulus k >= 1) or so close
-    /// to it (k^2 >= 0.99) that the closed form loses accuracy, and at rest hanging (k = 0:
-    /// nothing moves).
+    /// to it (k^2 >= 0.99) that the closed form loses accuracy.
     pub fn new(rig: &Rig<f64>, theta: f64, theta_dot: f64) -> Option<Swing> {
         let tilt = rig.rail_tilt;
         let theta = theta + tilt;
@@ -156,7 +132,7 @@ impl Swing {
         let half = (0.5 * (theta - offset)).sin();
         let v = theta_dot / (2.0 * w0);
         let k2 = half * half + v * v;
-        if !(k2 < 0.99 && k2 > 1e-24) {
+        if k2.is_nan() || k2 >= 0.99 {
             return None;
         }
         let k = k2.sqrt();
@@ -184,9 +160,14 @@ impl Swing {
     /// (theta, theta') at amplitude `psi`.
     pub fn state(&self, psi: f64) -> (f64, f64) {
         let (s, c) = psi.sine_cosine();
+        self.state_sn_cn(s, c)
+    }
+
+    /// (theta, theta') where sin(psi) = `sn` and cos(psi) = `cn`.
+    fn state_sn_cn(&self, sn: f64, cn: f64) -> (f64, f64) {
         (
-            self.offset - self.tilt + 2.0 * libm::asin(self.k * s),
-            2.0 * self.k * self.w0 * c,
+            self.offset - self.tilt + 2.0 * libm::asin(self.k * sn),
+            2.0 * self.k * self.w0 * cn,
         )
     }
 
@@ -203,10 +184,12 @@ impl Swing {
         self.w0 * (1.0 - self.k * self.k).sqrt()
     }
 
-    /// (theta, theta') a time `t` after the start, from Jacobi's functions (`stuck_state`).
-    pub fn after(&self, rig: &Rig<f64>, theta: f64, theta_dot: f64, t: f64) -> Option<(f64, f64)> {
-        let (th, w) = stuck_state(rig, theta + self.tilt, theta_dot, t)?;
-        Some((th - self.tilt, w))
+    /// (theta, theta') a time `t` after the start, from Jacobi's functions: sin(psi) and
+    /// cos(psi) are sn and cn of u = F(psi0, k) + w0 t.
+    pub fn after(&self, t: f64) -> (f64, f64) {
+        let u = (self.f0 + self.w0 * t).rem_euclid(4.0 * self.big_k);
+        let (sn, cn, _) = jacobi_sn_cn_dn(u, self.k);
+        self.state_sn_cn(sn, cn)
     }
 
     /// The time from the start to amplitude `psi` (>= psi0).
@@ -253,9 +236,11 @@ mod tests {
         }
     }
 
-    /// The swing in psi retraces the closed form in time: at the time `elapsed(psi)` after
-    /// the start, `stuck_state` (Jacobi's functions) is at the swing's state for psi, in
+    /// The swing in psi retraces the closed form in time: at the time `elapsed(psi)` (Legendre's
+    /// F) after the start, `after` (Jacobi's functions) is at the swing's state for psi, in
     /// both directions of motion, through the turning points and over more than a period.
+    /// (`general_state_matches_release_from_rest` checks `after` against the release-from-rest
+    /// form.)
     #[test]
     fn swing_in_amplitude_is_the_closed_form_in_time() {
         let rig = Rig::paper(1.0);
@@ -271,7 +256,7 @@ mod tests {
                 assert!(t > last, "time grows with psi");
                 last = t;
                 let (th, om) = swing.state(psi);
-                let (th_t, om_t) = stuck_state(&rig, theta, w, t).unwrap();
+                let (th_t, om_t) = swing.after(t);
                 assert!(
                     (th - th_t).abs() < 1e-12 && (om - om_t).abs() < 1e-11,
                     "({theta}, {w}) psi {psi}: ({th}, {om}) vs ({th_t}, {om_t})"
@@ -285,13 +270,14 @@ mod tests {
         assert!((th0 - 0.3).abs() < 1e-14);
         let psi = swing.psi0() + 1.3;
         let (th, om) = swing.state(psi);
-        let (th_t, om_t) = swing.after(&tilted, 0.3, 2.0, swing.elapsed(psi)).unwrap();
+        let (th_t, om_t) = swing.after(swing.elapsed(psi));
         assert!((th - th_t).abs() < 1e-12 && (om - om_t).abs() < 1e-11);
         let (th_l, _) = stuck_state(&rig, 0.35, 2.0, swing.elapsed(psi)).unwrap();
         assert!((th + 0.05 - th_l).abs() < 1e-12, "{th} vs {th_l}");
-        // Over the top and hanging at rest have no swing.
+        // Over the top has no swing; hanging at rest stays there.
         assert!(Swing::new(&rig, 0.0, 20.0).is_none());
-        assert!(Swing::new(&rig, FRAC_PI_2, 0.0).is_none());
+        let still = Swing::new(&rig, FRAC_PI_2, 0.0).unwrap();
+        assert_eq!(still.after(1.7), (FRAC_PI_2, 0.0));
     }
 
     #[test]

@@ -56,12 +56,12 @@ pub struct Options {
     /// fraction of m1 + m2 is ended by an impulsive stop (the convergence test
     /// `sudden_stop_converges_as_threshold_tightens` shows why 1e-9 is tight enough).
     pub stop_threshold: f64,
-    /// The pendulum's closed forms for stick phases of the ideal rig: skip slip monitoring in
-    /// a stick phase whose energy level provably never reaches the friction cone
-    /// (`model::regions::stick_holds_forever`), and take a stick phase of an `f64` run with an
-    /// undamped pivot that samples nothing from its start on in closed form (`model::pendulum::Swing`: its slip
-    /// located on the swing, its end time from an elliptic integral). Off only to measure
-    /// what they save, or to test the integrator itself.
+    /// The pendulum's closed forms for stick phases: on the ideal rig, skip slip monitoring
+    /// in a stick phase whose energy level provably never reaches the friction cone
+    /// (`model::regions::stick_holds_forever`); on any rig with an undamped pivot, take a
+    /// stick phase of an `f64` run that samples nothing from its start on in closed form
+    /// (`model::pendulum::Swing`: its slip located on the swing, its end time from an
+    /// elliptic integral). Off only to measure what they save, or to test the integrator.
     pub prove_stick: bool,
 }
 

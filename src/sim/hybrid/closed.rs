@@ -1,9 +1,8 @@
 //! A stick phase in the pendulum's closed form: while the slider is stuck on a rig with an
-//! undamped pivot, the rig is the conservative pendulum of `model::pendulum`, whose state is an elementary
-//! function of Jacobi's amplitude psi ([`Swing`]). The slip guard is watched and its crossing
-//! located in psi with the integrator's own guard logic (`GuardState::watch`, `find_root`);
-//! only the crossing's time needs an elliptic integral, and the phase costs a few dozen guard
-//! evaluations instead of a few hundred right-hand sides.
+//! undamped pivot, the rig is the conservative pendulum of `model::pendulum`, whose state is
+//! an elementary function of Jacobi's amplitude psi ([`Swing`]). The slip guard is watched and
+//! its crossing located in psi with the integrator's own guard logic (`GuardState::watch`,
+//! `find_root`); only the crossing's time needs an elliptic integral.
 
 use super::guards::{Guard, Interior, Watch};
 use super::locate::{find_root, Located};
@@ -51,8 +50,9 @@ impl<'a, T: Scalar + 'static, const N: usize> Run<'a, '_, T, N> {
     /// Take the stick phase that has just begun in closed form, when it applies: an `f64` run
     /// (no derivatives to carry) of a rig with an undamped pivot (a conservative pendulum,
     /// level or tilted; any friction law) that samples nothing from here on, with the slip
-    /// guard positive at the start, on a swing below the top. Returns `None` otherwise (the integrator takes the phase), or what the
-    /// phase ended in: the next mode (`Continue`) or the end of the run (`Break`).
+    /// guard positive at the start, on a swing below the top. Returns `None` otherwise (the
+    /// integrator takes the phase), or what the phase ended in: the next mode (`Continue`)
+    /// or the end of the run (`Break`).
     pub(super) fn closed_stick<M: Stepper<T, N>>(
         &mut self,
         seg: &mut Segment<'a, '_, T, M, N>,
@@ -154,9 +154,7 @@ impl<'a, T: Scalar + 'static, const N: usize> Run<'a, '_, T, N> {
             return self.switch_mode(seg, &y1, event).map(Some);
         }
         // No slip before the end: the state there from Jacobi's functions.
-        let Some((theta, w)) = swing.after(rig, y[THETA], y[THETA_DOT], span) else {
-            return Ok(None);
-        };
+        let (theta, w) = swing.after(span);
         self.out.stats.closed_form += 1;
         self.y[THETA] = T::from(theta);
         self.y[THETA_DOT] = T::from(w);
