@@ -158,7 +158,7 @@ impl<'a, T: Scalar + 'static, const N: usize> Run<'a, '_, T, N> {
             self.h = self.t_end - t;
         }
         let (y1, err) = seg.try_step(&self.y, self.h, self.options);
-        if !(err.is_finite() && finite(&y1)) || err > 1.0 {
+        if !(err.is_finite() && finite(&y1) && finite(seg.stepper.f_end())) || err > 1.0 {
             self.out.stats.rejected += 1;
             if cfg!(debug_assertions) {
                 use std::io::Write as _;
