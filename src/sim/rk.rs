@@ -19,7 +19,9 @@ pub trait Stepper<T: Scalar, const N: usize> {
     /// Order of the error estimator; the step-size exponent is 1 / (order + 1).
     const ERROR_ORDER: i32;
 
-    /// Start at `y`: evaluate f there.
+    /// Start at `y`, as a fresh stepper (its evaluation count back to zero): evaluate f
+    /// there. Every other stage is written by a step before it is read, so nothing else is
+    /// cleared (a dual-number stepper is kilobytes, and a fit starts thousands of modes).
     fn reset<S: OdeSystem<T, N>>(&mut self, sys: &S, y: &[T; N]);
 
     /// Attempt a step of size `h` from `y`; returns the new state and the scaled error norm
@@ -150,7 +152,7 @@ impl<T: Scalar, const N: usize> Stepper<T, N> for Dp5<T, N> {
 
     fn reset<S: OdeSystem<T, N>>(&mut self, sys: &S, y: &[T; N]) {
         sys.rhs(y, &mut self.k[0]);
-        self.evals += 1;
+        self.evals = 1;
     }
 
     fn try_step<S: OdeSystem<T, N>>(
@@ -253,7 +255,7 @@ impl<T: Scalar, const N: usize> Stepper<T, N> for Dop853<T, N> {
 
     fn reset<S: OdeSystem<T, N>>(&mut self, sys: &S, y: &[T; N]) {
         sys.rhs(y, &mut self.k[0]);
-        self.evals += 1;
+        self.evals = 1;
     }
 
     fn try_step<S: OdeSystem<T, N>>(

@@ -84,7 +84,7 @@ impl<T: Scalar, M: Stepper<T, N>, const N: usize> Segment<'_, '_, T, M, N> {
 impl<'a, T: Scalar + 'static, const N: usize> Run<'a, '_, T, N> {
     /// Start integrating the current mode from the current state: a fresh stepper, the step
     /// size capped by the new dynamics, the guards' first values.
-    pub(super) fn begin_mode<'m, M: Stepper<T, N> + Default>(
+    pub(super) fn begin_mode<'m, M: Stepper<T, N>>(
         &mut self,
         stepper: &'m mut M,
     ) -> Segment<'a, 'm, T, M, N> {
@@ -93,7 +93,6 @@ impl<'a, T: Scalar + 'static, const N: usize> Run<'a, '_, T, N> {
         // The plain rig's own copy of the stepper, for f64 runs (see Scalar::SPECIALISE_PLAIN).
         let fast = T::SPECIALISE_PLAIN && sys.plain;
         let plain = fast.then(|| sys.as_plain());
-        *stepper = M::default();
         stepper.reset(&sys, &self.y);
         // A new mode has new dynamics: the step carried over from the old one is only an upper
         // bound (an overlong first step after a slip costs a rejected 12-stage step).
