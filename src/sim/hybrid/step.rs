@@ -157,7 +157,11 @@ impl<'a, T: Scalar + 'static, const N: usize> Run<'a, '_, T, N> {
             self.h = self.t_end - t;
         }
         let (y1, err) = seg.try_step(&self.y, self.h, self.options);
-        if !(err.is_finite() && finite(&y1) && finite(seg.stepper.f_end())) || err > 1.0 {
+        // A step whose end state or end rate is not finite has no usable error: it shrinks
+        // as one that produced none (the estimate does not see the rate at the end).
+        let finite_step = finite(&y1) && finite(seg.stepper.f_end());
+        let err = if finite_step { err } else { f64::NAN };
+        if !err.is_finite() || err > 1.0 {
             self.out.stats.rejected += 1;
             if cfg!(debug_assertions) {
                 use std::io::Write as _;

@@ -564,3 +564,23 @@ fn a_sample_at_an_event_time_is_emitted_once_in_the_mode_before_it() {
         .map(|e| e.to.clone());
     assert_eq!(mode_then, Some(Outcome::Mode(sol.samples[3].mode)));
 }
+
+// --- numerics that fail: errors with the time and state, never a hang ------------------------
+
+/// A state whose rate overflows (theta'^2 beyond f64) gives no finite step at any size: the
+/// run ends in `NonFinite` with the time and state, after the halving steps (each a quarter)
+/// reach what f64 time resolves, not at the step limit.
+#[test]
+fn an_overflowing_rate_is_a_non_finite_error_not_a_step_limit() {
+    use crate::sim::SimError;
+    let rig = Rig::paper(0.3);
+    let y0 = [0.0, 1.0, 1e155, 1e155];
+    let opts = Options::default();
+    match simulate(&rig, &y0, 1.0, &opts, &Request::default()) {
+        Err(SimError::NonFinite { t, state }) => {
+            assert_eq!(t, 0.0);
+            assert_eq!(state, y0);
+        }
+        other => panic!("expected NonFinite, got {other:?}"),
+    }
+}
