@@ -80,6 +80,8 @@ pub struct LevenbergMarquardt {
     last_decrease: f64,
     last_step: f64,
     stalled: bool,
+    /// The Gauss-Newton step's predicted decrease fell below the tolerances.
+    converged: bool,
 }
 
 impl Default for LevenbergMarquardt {
@@ -95,6 +97,7 @@ impl Default for LevenbergMarquardt {
             last_decrease: f64::INFINITY,
             last_step: f64::INFINITY,
             stalled: false,
+            converged: false,
         }
     }
 }
@@ -140,6 +143,17 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
             .ok_or_else(|| Error::msg("no gradient J'r"))?;
         let a = state.take_hessian().ok_or_else(|| Error::msg("no J'J"))?;
         let cost = state.get_cost();
+        // Converged already when even the full Gauss-Newton step is predicted to lower the
+        // cost by less than both tolerances (MINPACK's predicted-reduction test, taken before
+        // any trial run): a start at a minimum, as a final polish often is, ends here rather
+        // than spending trial simulations that cannot decrease the cost.
+        if let Some(chol) = a.clone().cholesky() {
+            let predicted = 0.5 * g.dot(&chol.solve(&g));
+            if predicted.is_finite() && predicted <= self.ftol * cost && predicted <= self.fatol {
+                self.converged = true;
+                return Ok((state.param(p).gradient(g).hessian(a).cost(cost), None));
+            }
+        }
         // Marquardt scaling: damp each parameter by its own curvature, floored so a parameter
         // the data do not constrain still gets a finite step.
         let max_diag = a.diagonal().max().max(1e-300);
@@ -210,6 +224,9 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
                 "no decreasing step".into(),
             ));
         }
+        if self.converged {
+            return TerminationStatus::Terminated(TerminationReason::SolverConverged);
+        }
         let small = self.last_rel_decrease < self.ftol && self.last_decrease < self.fatol;
         if small || self.last_step < self.xtol {
             return TerminationStatus::Terminated(TerminationReason::SolverConverged);
@@ -221,7 +238,7 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use argmin::core::Executor;
+    use argmin::core::{Executor, State as _};
 
     /// Fit y = a exp(b t) to exact data; the Jacobian is analytic.
     struct Exponential {
@@ -268,6 +285,49 @@ mod tests {
             (p[0] - 2.5).abs() < 1e-8 && (p[1] + 1.3).abs() < 1e-8,
             "{p}"
         );
+    }
+
+    /// The exponential problem counting its evaluations.
+    struct Counted(Exponential, std::cell::Cell<usize>);
+    impl LeastSquares for Counted {
+        fn normal_equations(&self, p: &DVector<f64>) -> Result<Normal, Error> {
+            self.1.set(self.1.get() + 1);
+            self.0.normal_equations(p)
+        }
+    }
+
+    /// A start at the minimum ends after the one evaluation at the start: the Gauss-Newton
+    /// step's predicted decrease is below the tolerances, and no trial run can lower the
+    /// cost. A start a little off still moves to the minimum.
+    #[test]
+    fn a_start_at_the_minimum_costs_no_trial_run() {
+        let run = |p0: Vec<f64>| {
+            let t: Vec<f64> = (0..30).map(|i| i as f64 * 0.1).collect();
+            // Noisy data: the minimum has a positive cost, as a real fit's does.
+            let y = t
+                .iter()
+                .enumerate()
+                .map(|(i, t)| 2.5 * (-1.3 * t).exp() + 0.01 * ((i * 7 % 5) as f64 - 2.0))
+                .collect();
+            let problem = Counted(Exponential { t, y }, std::cell::Cell::new(0));
+            let res = Executor::new(problem, LevenbergMarquardt::default())
+                .configure(|s| s.param(DVector::from_vec(p0)).max_iters(200))
+                .run()
+                .unwrap();
+            let reason = res
+                .state
+                .get_termination_reason()
+                .map(|r| r.text().to_owned());
+            let evals = res.problem.problem.as_ref().map(|p| p.1.get());
+            (res.state.best_param.unwrap(), evals, reason)
+        };
+        let (opt, _, _) = run(vec![0.5, 0.8]);
+        let (p, evals, reason) = run(opt.as_slice().to_vec());
+        assert_eq!(evals, Some(1), "{reason:?}");
+        assert_eq!(reason.as_deref(), Some("Solver converged"));
+        assert!((&p - &opt).norm() == 0.0);
+        let (q, evals, _) = run(vec![opt[0], opt[1] + 1e-3]);
+        assert!(evals.unwrap() > 1 && (&q - &opt).norm() < 1e-6, "{q} {opt}");
     }
 
     /// A degenerate problem (two parameters entering only as their sum) where J^T J is
