@@ -111,8 +111,8 @@ fn stage_argument<T: Scalar, const N: usize, const ST: usize>(
     for i in 0..N {
         out[i] += acc[i] * h;
     }
-    let last = row[ST - 1] * h;
     if row[ST - 1] != 0.0 {
+        let last = row[ST - 1] * h;
         for i in 0..N {
             out[i] += k[ST - 1][i] * last;
         }
@@ -240,8 +240,7 @@ impl<T: Scalar, const N: usize> Default for Dop853<T, N> {
 }
 
 impl<T: Scalar, const N: usize> Dop853<T, N> {
-    /// Stage `ST`: a const index, so the tableau row is a compile-time constant and the zero
-    /// couplings of DOP853 drop out of the unrolled sum.
+    /// Stage `ST`: f at its argument ([`stage_argument`]), written into `k[ST]`.
     #[inline(always)]
     fn stage<S: OdeSystem<T, N>, const ST: usize>(&mut self, sys: &S, y: &[T; N], h: f64) {
         let ys = stage_argument::<T, N, ST>(y, h, &DOP853_A[ST], &self.k);
