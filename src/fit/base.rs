@@ -6,13 +6,13 @@
 //! loss's reweighting ([`reweight`]).
 
 use super::problem::{Observations, Param, TrajectoryProblem};
-use super::solve::{run_lm, solve, solve_loose, Solved, STAGE_FTOL};
+use super::solve::{at_iteration_limit, loose, run_lm, solve, STAGE_FTOL};
 use super::{guess, uncertainty, FitError, FitSettings, Loss, StartOutcome, StaticMode};
 use crate::fit::lm::LevenbergMarquardt;
 use crate::model::{Rig, State};
 use nalgebra::DVector;
-use rayon::prelude::*;
-use std::sync::Arc;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::sync::{Arc, Mutex};
 
 /// What the base fit found, for the steps after it.
 pub(super) struct Base {
@@ -116,30 +116,59 @@ fn candidates(
     (out, free_model)
 }
 
-/// The starts (candidate, mu): the data's mu for every candidate, and for the first the rig's,
-/// a low one (a start above the truth can stall in a motion that never slides, where mu has no
-/// gradient) and the user's. The far starts go first: they take the most iterations.
+/// The starts (model, mu): the data's mu for every candidate, and probes of the first
+/// candidate at the rig's mu, a low one (a start above the truth can stall in a motion that
+/// never slides, where mu has no gradient) and the user's. The costliest go first (the
+/// candidate with the most parameters free, then the others, then the probes), so that the
+/// queue ([`queue`]) ends with the cheap ones.
 fn starts(
     rig: &Rig<f64>,
     mu0: f64,
     settings: &FitSettings,
-    n_candidates: usize,
-) -> Vec<(usize, f64)> {
-    let mut jobs: Vec<(usize, f64)> = Vec::new();
-    for mu in [rig.mu_kinetic, 0.4 * mu0]
+    candidates: &[TrajectoryProblem],
+) -> Vec<Job> {
+    let mut order: Vec<usize> = (0..candidates.len()).collect();
+    order.sort_by_key(|&i| std::cmp::Reverse(candidates[i].free.len()));
+    let mut jobs: Vec<Job> = order
+        .into_iter()
+        .map(|i| (Model::Candidate(i), mu0))
+        .collect();
+    let mut far: Vec<f64> = Vec::new();
+    for mu in [0.4 * mu0, rig.mu_kinetic]
         .into_iter()
         .chain(settings.extra_starts.iter().copied())
     {
         if (mu - mu0).abs() > 1e-3 * mu0.abs().max(1e-3)
-            && !jobs
+            && !far
                 .iter()
-                .any(|j| (j.1 - mu).abs() < 1e-3 * mu.abs().max(1e-3))
+                .any(|f| (f - mu).abs() < 1e-3 * mu.abs().max(1e-3))
         {
-            jobs.push((0, mu));
+            far.push(mu);
         }
     }
-    jobs.extend((0..n_candidates).map(|m| (m, mu0)));
+    jobs.extend(far.into_iter().map(|mu| (Model::Probe, mu)));
     jobs
+}
+
+/// `f` of every job, the jobs handed out in order to whichever thread is free (a queue), the
+/// results in the jobs' order. rayon's halving of a slice would pair the first two jobs on one
+/// thread and the last two on the other: with the costliest first, a queue balances better.
+fn queue<J: Sync, R: Send>(jobs: &[J], f: impl Fn(&J) -> R + Sync) -> Vec<R> {
+    let next = AtomicUsize::new(0);
+    let done = Mutex::new(Vec::with_capacity(jobs.len()));
+    rayon::scope(|s| {
+        for _ in 0..rayon::current_num_threads().min(jobs.len()) {
+            s.spawn(|_| loop {
+                let i = next.fetch_add(1, Ordering::Relaxed);
+                let Some(job) = jobs.get(i) else { break };
+                let r = f(job);
+                done.lock().unwrap_or_else(|e| e.into_inner()).push((i, r));
+            });
+        }
+    });
+    let mut done = done.into_inner().unwrap_or_else(|e| e.into_inner());
+    done.sort_by_key(|d| d.0);
+    done.into_iter().map(|d| d.1).collect()
 }
 
 /// Akaike's criterion chi2 + 2k of an optimum `p` with cost `c` (half the chi-square).
@@ -151,17 +180,45 @@ fn aic(p: &DVector<f64>, c: f64) -> f64 {
 struct Best {
     choice: usize,
     p: DVector<f64>,
+    /// Infinite when no candidate's start converged (a probe's basin is then refitted).
     cost: f64,
     outcomes: Vec<StartOutcome>,
     iterations: u64,
+    /// The probes' lowest-cost optimum and its cost ([`refit_probe`]).
+    probe: Option<(DVector<f64>, f64)>,
+    /// Why the best start's solve stopped.
+    reason: String,
 }
 
-/// Every start solved (in parallel), stopping at `ftol` when given; the best by AIC.
+/// A solve's optimum, cost, iterations and why it stopped, or why it failed.
+type Traced = Result<(DVector<f64>, f64, u64, String), String>;
+
+/// The model a start fits.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Model {
+    /// A candidate model (its index).
+    Candidate(usize),
+    /// The first candidate without the rig file's freed measurements: a start far from the
+    /// data's mu only probes for another basin, and converges there in fewer runs with fewer
+    /// parameters free (the same as the first candidate when the rig file frees none).
+    Probe,
+}
+
+/// A start: its model and mu.
+type Job = (Model, f64);
+
+/// Every start solved (in parallel), stopping at `ftol` when given; the best by AIC among
+/// the candidates' starts, and the probes' best ([`Best::probe`]) apart. With `flat_exit`
+/// (the data's mu, given when the recording's slider clearly moves), a start of another mu
+/// that leaves mu without a gradient (the model never slides there) is left where it is: it
+/// cannot learn mu, and a motion that never slides loses to one that does.
 fn best_start(
     candidates: &[TrajectoryProblem],
-    jobs: &[(usize, f64)],
+    probe: Option<&TrajectoryProblem>,
+    jobs: &[Job],
     settings: &FitSettings,
     ftol: Option<f64>,
+    flat_exit: Option<f64>,
 ) -> Result<Best, FitError> {
     let start_values = |m: &TrajectoryProblem, mu: f64| {
         let mut p0 = m.values();
@@ -171,49 +228,108 @@ fn best_start(
         }
         p0
     };
-    let solved: Vec<(usize, f64, Solved)> = jobs
-        .par_iter()
-        .with_max_len(1)
-        .map(|&(m, mu)| {
-            let c = &candidates[m];
-            (
-                m,
-                mu,
-                solve_loose(c, start_values(c, mu), settings.max_iters, ftol),
-            )
-        })
-        .collect();
+    let solved: Vec<(Model, f64, Traced)> = queue(jobs, |&(m, mu)| {
+        let c = match m {
+            Model::Candidate(i) => &candidates[i],
+            Model::Probe => probe.unwrap_or(&candidates[0]),
+        };
+        let mut lm = loose(ftol);
+        if flat_exit.is_some_and(|mu0| mu != mu0) {
+            lm.flat_exit = Some(0);
+        }
+        (
+            m,
+            mu,
+            run_lm(c, start_values(c, mu), settings.max_iters, lm),
+        )
+    });
     let mut outcomes = Vec::new();
     let mut last_err = String::new();
     let mut iterations = 0;
-    let mut best: Option<(usize, DVector<f64>, f64)> = None;
+    let mut best: Option<(usize, DVector<f64>, f64, String)> = None;
+    let mut probe_best: Option<(DVector<f64>, f64)> = None;
     for (m, mu, r) in solved {
         match r {
-            Ok((p, c, it)) => {
+            Ok((p, c, it, why)) => {
                 iterations += it;
                 outcomes.push(StartOutcome {
                     mu_start: mu,
                     mu_end: p[0],
                     cost: c,
                 });
+                let choice = match m {
+                    Model::Candidate(i) => i,
+                    Model::Probe if probe.is_none() => 0,
+                    Model::Probe => {
+                        if probe_best.as_ref().is_none_or(|(_, bc)| c < *bc) {
+                            probe_best = Some((p, c));
+                        }
+                        continue;
+                    }
+                };
                 if best
                     .as_ref()
-                    .is_none_or(|(_, bp, bc)| aic(&p, c) < aic(bp, *bc))
+                    .is_none_or(|(_, bp, bc, _)| aic(&p, c) < aic(bp, *bc))
                 {
-                    best = Some((m, p, c));
+                    best = Some((choice, p, c, why));
                 }
             }
             Err(e) => last_err = e,
         }
     }
-    let (choice, p, cost) = best.ok_or(FitError::NoStart(last_err))?;
+    let (choice, p, cost, reason) = match (best, &probe_best) {
+        (Some(b), _) => b,
+        // Only a probe converged: its basin is the one to refit.
+        (None, Some((p, _))) => (0, p.clone(), f64::INFINITY, String::new()),
+        (None, None) => return Err(FitError::NoStart(last_err)),
+    };
     Ok(Best {
         choice,
         p,
         cost,
         outcomes,
         iterations,
+        probe: probe_best,
+        reason,
     })
+}
+
+/// A probe's optimum (`p` on `probe`) clearly lower in cost than the best start's: its basin refitted
+/// on the first candidate, the rig file's measurements freed again, and kept when it wins by
+/// AIC. The measured model nests the probe's (its measurements at the file's values), so in
+/// the same basin its optimum is never higher: a probe below the best start found another
+/// basin.
+fn refit_probe(
+    candidate: &TrajectoryProblem,
+    probe: &TrajectoryProblem,
+    best: &mut Best,
+    settings: &FitSettings,
+    ftol: Option<f64>,
+) {
+    let Some((p, c)) = best.probe.take() else {
+        return;
+    };
+    // Lower by a chi-square of 2 at least: less is the candidates' stopping tolerance, or a
+    // basin no better than theirs (its outcome still counts where the starts are compared).
+    if c + 1.0 >= best.cost {
+        return;
+    }
+    let mut at = probe.clone();
+    at.set_values(&p);
+    let mut m = candidate.clone();
+    (m.rig, m.initial) = (at.rig, at.initial);
+    let Ok((q, c, it, why)) = run_lm(&m, m.values(), settings.max_iters, loose(ftol)) else {
+        return;
+    };
+    best.iterations += it;
+    best.outcomes.push(StartOutcome {
+        mu_start: p[0],
+        mu_end: q[0],
+        cost: c,
+    });
+    if !best.cost.is_finite() || aic(&q, c) < aic(&best.p, best.cost) {
+        (best.choice, best.p, best.cost, best.reason) = (0, q, c, why);
+    }
 }
 
 /// A release judged "from rest" whose fit leaves structured residuals (lag-1 autocorrelation
@@ -234,7 +350,7 @@ fn push_check(
     }
     let mut p0 = free_model.values();
     p0[0] = best.p[0];
-    let Ok((q, c, it)) = solve_loose(&free_model, p0, settings.max_iters, ftol) else {
+    let Ok((q, c, it, why)) = run_lm(&free_model, p0, settings.max_iters, loose(ftol)) else {
         return problem;
     };
     best.iterations += it;
@@ -244,8 +360,7 @@ fn push_check(
         cost: c,
     });
     if aic(&q, c) < aic(&best.p, best.cost) {
-        best.p = q;
-        best.cost = c;
+        (best.p, best.cost, best.reason) = (q, c, why);
         return free_model;
     }
     problem
@@ -351,15 +466,35 @@ pub(super) fn fit(
     } else {
         obs.clone()
     };
+    // The starts' data move: a start whose model never slides there is hopeless.
+    let moves = super::motion::slider_moves(&fit_obs, sigma[0]).is_some();
     let mut problem = TrajectoryProblem::new(fit_obs, *rig, g.y0, free, settings.options);
     problem.tie_static = settings.mu_static != StaticMode::Fixed;
     problem.sigma = sigma;
+    // A short recording's candidates take the rig file's priors and freed measurements now,
+    // so the measured-rig stage has nothing left to refit; its probes go without them.
+    let plain = problem.clone();
+    let freed = !long && super::stages::apply_measured(&mut problem, frame, settings);
     let (mut models, free_model) = candidates(&problem, &g);
-    let jobs = starts(rig, g.mu0, settings, models.len());
+    let probe = freed.then(|| candidates(&plain, &g).0.swap_remove(0));
+    let jobs = starts(rig, g.mu0, settings, &models);
     // A long recording's starts only pick the model and basin the doubling stages refine:
     // they stop where a stage before the last does.
     let ftol = long.then_some(STAGE_FTOL);
-    let mut best = best_start(&models, &jobs, settings, ftol)?;
+    let mut best = best_start(
+        &models,
+        probe.as_ref(),
+        &jobs,
+        settings,
+        ftol,
+        moves.then_some(g.mu0),
+    )?;
+    if let Some(probe) = &probe {
+        refit_probe(&models[0], probe, &mut best, settings, ftol);
+    }
+    if !best.cost.is_finite() {
+        return Err(FitError::NoStart("no start converged".into()));
+    }
     problem = models.swap_remove(best.choice);
     if g.at_rest {
         problem = push_check(problem, &mut best, free_model, settings, ftol);
@@ -367,8 +502,9 @@ pub(super) fn fit(
     let mut p = best.p.clone();
     let mut iterations = best.iterations;
     // The whole recording's fit, converged: nothing to polish unless the model or the
-    // weights change after it.
-    let mut settled = None;
+    // weights change after it. A short recording's best start was solved to the full
+    // tolerance on it already.
+    let mut settled = (!long && !at_iteration_limit(&best.reason)).then(|| best.reason.clone());
     if long {
         // The rig file's priors and freed measurements taken now, so that the doubling stages
         // fit them on the way: the measured-rig stage then has nothing left to refit over

@@ -76,12 +76,19 @@ pub struct LevenbergMarquardt {
     pub xtol: f64,
     /// Most trial steps per iteration before giving up.
     pub max_trials: usize,
+    /// Leave the start where it is when this parameter has no gradient there (its column of
+    /// the Jacobian is zero): a start of mu above the truth, where the model never slides,
+    /// cannot learn mu, and fitting the other parameters to a motion that never slides only
+    /// spends runs on a start that loses.
+    pub flat_exit: Option<usize>,
     last_rel_decrease: f64,
     last_decrease: f64,
     last_step: f64,
     stalled: bool,
     /// The Gauss-Newton step's predicted decrease fell below the tolerances.
     converged: bool,
+    /// The start left [`Self::flat_exit`]'s parameter without a gradient.
+    flat: bool,
 }
 
 impl Default for LevenbergMarquardt {
@@ -93,14 +100,19 @@ impl Default for LevenbergMarquardt {
             fatol: 1e-4,
             xtol: 1e-9,
             max_trials: 30,
+            flat_exit: None,
             last_rel_decrease: f64::INFINITY,
             last_decrease: f64::INFINITY,
             last_step: f64::INFINITY,
             stalled: false,
             converged: false,
+            flat: false,
         }
     }
 }
+
+/// The termination reason of a start left where it was ([`LevenbergMarquardt::flat_exit`]).
+pub const FLAT_START: &str = "the start leaves the parameter without a gradient";
 
 fn half_sq(r: &DVector<f64>) -> f64 {
     0.5 * r.norm_squared()
@@ -124,6 +136,7 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
             Ok(())
         })?;
         let n = problem.problem("jacobian_count", |o| o.normal_equations(&p))?;
+        self.flat = self.flat_exit.is_some_and(|i| n.jtj[(i, i)] == 0.0);
         Ok((
             state.param(p).gradient(n.jtr).hessian(n.jtj).cost(n.cost),
             None,
@@ -219,6 +232,9 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
     }
 
     fn terminate(&mut self, _state: &LmState) -> TerminationStatus {
+        if self.flat {
+            return TerminationStatus::Terminated(TerminationReason::SolverExit(FLAT_START.into()));
+        }
         if self.stalled {
             return TerminationStatus::Terminated(TerminationReason::SolverExit(
                 "no decreasing step".into(),
@@ -287,6 +303,55 @@ mod tests {
         );
     }
 
+    /// A finished run's best parameters and why it stopped.
+    fn ended(state: LmState) -> (DVector<f64>, Option<String>) {
+        let reason = state.get_termination_reason().map(|r| r.text().to_owned());
+        (state.best_param.unwrap(), reason)
+    }
+
+    /// y = b + a max(0, t - 5) on t < 3: a's column is zero everywhere the data are.
+    struct Hinge(Vec<f64>);
+    impl LeastSquares for Hinge {
+        fn normal_equations(&self, p: &DVector<f64>) -> Result<Normal, Error> {
+            let n = self.0.len();
+            let r = DVector::from_fn(n, |i, _| {
+                p[1] + p[0] * (self.0[i] - 5.0).max(0.0) - (1.0 + 0.1 * i as f64)
+            });
+            let j = DMatrix::from_fn(n, 2, |i, k| {
+                if k == 0 {
+                    (self.0[i] - 5.0).max(0.0)
+                } else {
+                    1.0
+                }
+            });
+            Ok(Normal::from_dense(&r, &j))
+        }
+    }
+
+    /// A start that leaves the watched parameter without a gradient ends at once, where it
+    /// started, with its own reason; without the watch, the other parameter is fitted.
+    #[test]
+    fn a_start_without_a_gradient_in_the_watched_parameter_is_left() {
+        let run = |flat_exit| {
+            let lm = LevenbergMarquardt {
+                flat_exit,
+                ..Default::default()
+            };
+            let t: Vec<f64> = (0..30).map(|i| i as f64 * 0.1).collect();
+            let res = Executor::new(Hinge(t), lm)
+                .configure(|s| s.param(DVector::from_vec(vec![0.3, 0.0])).max_iters(50))
+                .run()
+                .unwrap();
+            (res.state.get_iter(), ended(res.state))
+        };
+        let (iters, (p, reason)) = run(Some(0));
+        assert_eq!((p[0], p[1], iters), (0.3, 0.0, 0));
+        assert_eq!(reason.as_deref(), Some(FLAT_START));
+        let (_, (q, _)) = run(None);
+        // b fitted to the data's mean, 1 + 0.1 * 14.5; a untouched.
+        assert!((q[1] - 2.45).abs() < 1e-9 && q[0] == 0.3, "{q}");
+    }
+
     /// The exponential problem counting its evaluations.
     struct Counted(Exponential, std::cell::Cell<usize>);
     impl LeastSquares for Counted {
@@ -314,12 +379,9 @@ mod tests {
                 .configure(|s| s.param(DVector::from_vec(p0)).max_iters(200))
                 .run()
                 .unwrap();
-            let reason = res
-                .state
-                .get_termination_reason()
-                .map(|r| r.text().to_owned());
             let evals = res.problem.problem.as_ref().map(|p| p.1.get());
-            (res.state.best_param.unwrap(), evals, reason)
+            let (p, reason) = ended(res.state);
+            (p, evals, reason)
         };
         let (opt, _, _) = run(vec![0.5, 0.8]);
         let (p, evals, reason) = run(opt.as_slice().to_vec());

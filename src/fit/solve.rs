@@ -26,13 +26,19 @@ pub(super) fn solve_loose<P: lm::LeastSquares + Clone>(
     max_iters: u64,
     ftol: Option<f64>,
 ) -> Solved {
+    run_lm(problem, p0, max_iters, loose(ftol)).map(|(p, c, i, _)| (p, c, i))
+}
+
+/// Levenberg-Marquardt stopping at `ftol` when given (relative cost and step, no absolute
+/// tolerance), else at its defaults.
+pub(super) fn loose(ftol: Option<f64>) -> LevenbergMarquardt {
     let mut lm = LevenbergMarquardt::default();
     if let Some(tol) = ftol {
         // Only the next fit's start: no absolute tolerance.
         (lm.ftol, lm.fatol) = (tol, f64::INFINITY);
         lm.xtol = tol;
     }
-    run_lm(problem, p0, max_iters, lm).map(|(p, c, i, _)| (p, c, i))
+    lm
 }
 
 /// [`solve`] with the solver's termination reason.

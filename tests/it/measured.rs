@@ -52,7 +52,10 @@ fn manifest() -> serde_json::Value {
 /// Every rig-file case shipped (rod 2 mm long, a mass 3 % off, with and without a stated
 /// deviation, and the true rig): mu within 3 standard errors or flagged; the parts of its
 /// standard error add up in quadrature; the recording's marker distance puts the rod within
-/// a tenth of a millimetre of the truth, whatever the file said.
+/// a tenth of a millimetre of the truth, whatever the file said; and no nuisance taken: the
+/// recordings are point pendulums on a level rail, so what the file gets wrong belongs to its
+/// measured values (a viscous drag or camera scale taken for a 3 % mass error is the model
+/// absorbing the file's error elsewhere).
 #[test]
 fn rig_file_errors_are_corrected_or_carried() {
     let m = manifest();
@@ -87,14 +90,16 @@ fn rig_file_errors_are_corrected_or_carried() {
             let rod_ok =
                 c["flavour"] == "tight" || rod.is_some_and(|r| (r.value - 0.3).abs() < 1e-4);
             let line = format!(
-                "{}: mu {:.6} +- {:.2e} (z {z:.2}) parts {parts:?} rod {rod:?} flagged {}",
+                "{}: mu {:.6} +- {:.2e} (z {z:.2}) parts {parts:?} rod {rod:?} flagged {} nuisances {:?}",
                 c["id"],
                 mu.value,
                 mu.stderr,
-                flagged(&rep)
+                flagged(&rep),
+                rep.nuisances
             );
             eprintln!("{line}");
-            ((z.abs() >= 3.0 && !flagged(&rep)) || !rod_ok).then_some(line)
+            ((z.abs() >= 3.0 && !flagged(&rep)) || !rod_ok || !rep.nuisances.is_empty())
+                .then_some(line)
         })
         .collect();
     assert!(bad.is_empty(), "{bad:#?}");
