@@ -233,7 +233,10 @@ fn best_start(
             Model::Candidate(i) => &candidates[i],
             Model::Probe => probe.unwrap_or(&candidates[0]),
         };
-        let mut lm = loose(ftol);
+        // A probe apart from the candidates only looks for another basin: it stops where a
+        // stage before the last does (a probe refitted is solved to the end then).
+        let probing = m == Model::Probe && probe.is_some();
+        let mut lm = loose(if probing { Some(STAGE_FTOL) } else { ftol });
         if flat_exit.is_some_and(|mu0| mu != mu0) {
             lm.flat_exit = Some(0);
         }
