@@ -537,3 +537,82 @@ pub(super) fn fit(
         settled,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fit::lm::LeastSquares;
+
+    /// The paper scene's recording (the truth: mu = 0.35) as a probe's model (mu and the
+    /// initial state free) and a candidate's (the rod length and mass ratio too).
+    fn models() -> (TrajectoryProblem, TrajectoryProblem) {
+        let probe = crate::fit::test_support::paper_problem(5);
+        let mut candidate = probe.clone();
+        candidate.free.extend([Param::RodLength, Param::MassRatio]);
+        // A ruler's and a scale's deviations, as a rig file's defaults are.
+        let (l, r) = (
+            candidate.get(Param::RodLength),
+            candidate.get(Param::MassRatio),
+        );
+        candidate.priors = Arc::new(vec![
+            crate::fit::priors::Prior {
+                param: Param::RodLength,
+                centre: l,
+                sd: 1e-3,
+            },
+            crate::fit::priors::Prior {
+                param: Param::MassRatio,
+                centre: r,
+                sd: 0.03 * r,
+            },
+        ]);
+        (probe, candidate)
+    }
+
+    /// The queue gives every job's result in the jobs' order, whichever thread finished
+    /// first (the first job here takes longest).
+    #[test]
+    fn the_queue_keeps_the_jobs_order() {
+        let jobs = [30u64, 1, 5, 0, 2];
+        let out = queue(&jobs, |&ms| {
+            std::thread::sleep(std::time::Duration::from_millis(ms));
+            ms * 10
+        });
+        assert_eq!(out, vec![300, 10, 50, 0, 20]);
+        assert!(queue(&[] as &[u64], |&x| x).is_empty());
+    }
+
+    /// A probe ending clearly below the best candidate start (here a start left far off, at
+    /// mu = 0.05) is refitted on the candidate from the probe's optimum, with the
+    /// measurements free, and wins: the candidate's model nests the probe's, so its optimum
+    /// is no higher. A probe not clearly lower (less than a chi-square of 2) changes nothing.
+    #[test]
+    fn a_probe_below_the_candidates_is_refitted_and_wins() {
+        let (probe, candidate) = models();
+        let settings = FitSettings::default();
+        let (pp, pc, _) = solve(&probe, probe.values(), settings.max_iters).unwrap();
+        let mut far = candidate.values();
+        far[0] = 0.05;
+        let far_cost = candidate.normal_equations(&far).unwrap().cost;
+        let best = |cost: f64| Best {
+            choice: 1,
+            p: far.clone(),
+            cost,
+            outcomes: Vec::new(),
+            iterations: 0,
+            probe: Some((pp.clone(), pc)),
+            reason: "far".into(),
+        };
+        assert!(far_cost > pc + 1.0, "{far_cost} {pc}");
+        let mut b = best(far_cost);
+        refit_probe(&candidate, &probe, &mut b, &settings, None);
+        assert_eq!((b.choice, b.p.len(), b.outcomes.len()), (0, 6, 1));
+        assert!(b.cost <= pc + 1e-6, "{} above the probe's {pc}", b.cost);
+        assert!((b.p[0] - 0.35).abs() < 0.005, "mu {}", b.p[0]);
+        assert!(!at_iteration_limit(&b.reason) && b.reason != "far");
+        let mut tied = best(pc + 0.5);
+        refit_probe(&candidate, &probe, &mut tied, &settings, None);
+        assert_eq!((tied.choice, tied.outcomes.len()), (1, 0));
+        assert!(tied.p == far && tied.probe.is_none());
+    }
+}

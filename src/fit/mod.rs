@@ -49,6 +49,41 @@ pub mod solve;
 mod stages;
 mod uncertainty;
 
+/// What the fit's unit tests share.
+#[cfg(test)]
+pub(crate) mod test_support {
+    use super::problem::{Observations, Param, TrajectoryProblem};
+    use crate::data::synth::{synthesize, SynthOptions};
+    use crate::scene::Scene;
+    use std::sync::Arc;
+
+    /// The paper scene (`configs/paper_rest_horizontal.toml`, mu = 0.35) recorded for 1.5 s at
+    /// 200 frames/s with 0.5 mm of noise (`seed`), as a problem with mu and the initial state
+    /// free, weighted by that noise.
+    pub(crate) fn paper_problem(seed: u64) -> TrajectoryProblem {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
+            .join("configs/paper_rest_horizontal.toml");
+        let scene = Scene::from_toml(&std::fs::read_to_string(&path).unwrap(), &path).unwrap();
+        let syn = synthesize(
+            &scene,
+            &SynthOptions {
+                fps: 200.0,
+                duration: Some(1.5),
+                noise: 5e-4,
+                seed,
+                ..SynthOptions::default()
+            },
+        )
+        .unwrap();
+        let obs = Arc::new(Observations::from(&syn.recording));
+        let free = vec![Param::MuKinetic, Param::X, Param::Theta, Param::ThetaDot];
+        let options = super::FitSettings::default().options;
+        let mut problem = TrajectoryProblem::new(obs, scene.rig, scene.initial, free, options);
+        problem.sigma = [5e-4, 5e-4];
+        problem
+    }
+}
+
 pub use adequacy::{failed_tests, is_noise_free, FailedTest, RUNS_P, WINDOWS_P};
 pub use checks::{check_recording, RecordingCheck};
 pub use noise::NoiseEstimate;

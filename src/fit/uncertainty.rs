@@ -829,12 +829,8 @@ mod tests {
 #[cfg(test)]
 mod profile_tests {
     use super::profile_interval;
-    use crate::data::synth::{synthesize, SynthOptions};
-    use crate::fit::problem::{Observations, Param, TrajectoryProblem};
     use crate::fit::solve::solve;
     use crate::fit::FitSettings;
-    use crate::scene::Scene;
-    use std::sync::Arc;
 
     /// The profile's ends are where the chi-square, refitted with mu held there, rises by the
     /// target (3.84 x scale) to within 0.06 %: checked by refitting at each end, apart from
@@ -842,26 +838,8 @@ mod profile_tests {
     /// wide: its ends rose 0.1-1.4 % off.
     #[test]
     fn profile_ends_rise_by_the_target() {
-        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-            .join("configs/paper_rest_horizontal.toml");
-        let scene = Scene::from_toml(&std::fs::read_to_string(&path).unwrap(), &path).unwrap();
-        let syn = synthesize(
-            &scene,
-            &SynthOptions {
-                fps: 200.0,
-                duration: Some(1.5),
-                noise: 5e-4,
-                seed: 11,
-                ..SynthOptions::default()
-            },
-        )
-        .unwrap();
-        let obs = Arc::new(Observations::from(&syn.recording));
+        let problem = crate::fit::test_support::paper_problem(11);
         let settings = FitSettings::default();
-        let free = vec![Param::MuKinetic, Param::X, Param::Theta, Param::ThetaDot];
-        let mut problem =
-            TrajectoryProblem::new(obs, scene.rig, scene.initial, free, settings.options);
-        problem.sigma = [5e-4, 5e-4];
         let (p, cost, _) = solve(&problem, problem.values(), settings.max_iters).unwrap();
         let s_min = 2.0 * cost;
         let scale = 1.0;
