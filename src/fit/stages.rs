@@ -50,7 +50,9 @@ pub(super) struct Seen {
 /// every nuisance gets its range's prior, and with a measured rig the rod length and the mass
 /// ratio are freed with the measurement's priors and the base model refitted (the data
 /// correct what they can; mu's interval carries the rest). `--fit-rod-length` frees the rod
-/// without a prior.
+/// without a prior. The base fit has freed them already (a short recording's candidates from
+/// their first solve, a long one's doubling stages), so the refit is only a safety net for a
+/// base model that came without them.
 pub(super) fn measured_rig(f: &mut Fitting, frame: f64, settings: &FitSettings) {
     let freed = apply_measured(&mut f.problem, frame, settings);
     f.p = f.problem.values();
