@@ -68,12 +68,18 @@ fn guesses(
         }
     }
     // Second derivatives need a wider window than the initial slope: about 40 ms each side.
-    let mu_data = guess::mu_from_sliding(obs, rig, ((0.04 / dt).round() as usize).clamp(4, 200));
-    let mu_s_data = (settings.mu_static == StaticMode::Auto)
-        .then(|| {
-            guess::mu_static_from_onsets(obs, rig, ((0.01 / dt).round() as usize).clamp(3, 50))
-        })
-        .flatten();
+    // The two reads of the tracks are independent: side by side on the pool.
+    let (mu_data, mu_s_data) = rayon::join(
+        || guess::mu_from_sliding(obs, rig, ((0.04 / dt).round() as usize).clamp(4, 200)),
+        || {
+            (settings.mu_static == StaticMode::Auto)
+                .then(|| {
+                    let h = ((0.01 / dt).round() as usize).clamp(3, 50);
+                    guess::mu_static_from_onsets(obs, rig, h)
+                })
+                .flatten()
+        },
+    );
     let static_evidence =
         mu_s_data.map(|m| m > 1.25 * rig.mu_kinetic.min(mu_data.unwrap_or(f64::INFINITY)));
     Guesses {
