@@ -214,17 +214,17 @@ enum Model {
 type Job = (Model, f64);
 
 /// Every start solved (in parallel), stopping at `ftol` when given; the best by AIC among
-/// the candidates' starts, and the probes' best ([`Best::probe`]) apart. With `flat_exit`
-/// (the data's mu, given when the recording's slider clearly moves), a start of another mu
-/// that leaves mu without a gradient (the model never slides there) is left where it is: it
-/// cannot learn mu, and a motion that never slides loses to one that does.
+/// the candidates' starts, and the probes' best ([`Best::probe`]) apart. When the recording's
+/// slider clearly `moves`, a probe that leaves mu without a gradient (the model never slides
+/// there) is left where it is: it cannot learn mu, and a motion that never slides loses to
+/// one that does.
 fn best_start(
     candidates: &[TrajectoryProblem],
     probe: Option<&TrajectoryProblem>,
     jobs: &[Job],
     settings: &FitSettings,
     ftol: Option<f64>,
-    flat_exit: Option<f64>,
+    moves: bool,
 ) -> Result<Best, FitError> {
     let start_values = |m: &TrajectoryProblem, mu: f64| {
         let mut p0 = m.values();
@@ -243,7 +243,7 @@ fn best_start(
         // stage before the last does (a probe refitted is solved to the end then).
         let probing = m == Model::Probe && probe.is_some();
         let mut lm = loose(if probing { Some(STAGE_FTOL) } else { ftol });
-        if flat_exit.is_some_and(|mu0| mu != mu0) {
+        if moves && m == Model::Probe {
             lm.flat_exit = Some(0);
         }
         (
@@ -286,11 +286,11 @@ fn best_start(
             Err(e) => last_err = e,
         }
     }
-    let (choice, p, cost, reason) = match (best, &probe_best) {
-        (Some(b), _) => b,
-        // Only a probe converged: its basin is the one to refit.
-        (None, Some((p, _))) => (0, p.clone(), f64::INFINITY, String::new()),
-        (None, None) => return Err(FitError::NoStart(last_err)),
+    let (choice, p, cost, reason) = match best {
+        Some(b) => b,
+        // Only a probe converged: no candidate's optimum yet, the probe's refit decides.
+        None if probe_best.is_some() => (0, DVector::zeros(0), f64::INFINITY, String::new()),
+        None => return Err(FitError::NoStart(last_err)),
     };
     Ok(Best {
         choice,
@@ -327,18 +327,36 @@ fn refit_probe(
     at.set_values(&p);
     let mut m = candidate.clone();
     (m.rig, m.initial) = (at.rig, at.initial);
-    let Ok((q, c, it, why)) = run_lm(&m, m.values(), settings.max_iters, loose(ftol)) else {
-        return;
+    if compete(best, &m, m.values(), settings, ftol) {
+        best.choice = 0;
+    }
+}
+
+/// `model` solved from `p0`, its outcome recorded, and kept as the best when it wins by AIC
+/// (always, when no start has converged: the best's cost is then infinite). Returns whether
+/// it won.
+fn compete(
+    best: &mut Best,
+    model: &TrajectoryProblem,
+    p0: DVector<f64>,
+    settings: &FitSettings,
+    ftol: Option<f64>,
+) -> bool {
+    let mu_start = p0[0];
+    let Ok((q, c, it, why)) = run_lm(model, p0, settings.max_iters, loose(ftol)) else {
+        return false;
     };
     best.iterations += it;
     best.outcomes.push(StartOutcome {
-        mu_start: p[0],
+        mu_start,
         mu_end: q[0],
         cost: c,
     });
-    if !best.cost.is_finite() || aic(&q, c) < aic(&best.p, best.cost) {
-        (best.choice, best.p, best.cost, best.reason) = (0, q, c, why);
+    let wins = aic(&q, c) < aic(&best.p, best.cost);
+    if wins {
+        (best.p, best.cost, best.reason) = (q, c, why);
     }
+    wins
 }
 
 /// A release judged "from rest" whose fit leaves structured residuals (lag-1 autocorrelation
@@ -359,17 +377,7 @@ fn push_check(
     }
     let mut p0 = free_model.values();
     p0[0] = best.p[0];
-    let Ok((q, c, it, why)) = run_lm(&free_model, p0, settings.max_iters, loose(ftol)) else {
-        return problem;
-    };
-    best.iterations += it;
-    best.outcomes.push(StartOutcome {
-        mu_start: best.p[0],
-        mu_end: q[0],
-        cost: c,
-    });
-    if aic(&q, c) < aic(&best.p, best.cost) {
-        (best.p, best.cost, best.reason) = (q, c, why);
+    if compete(best, &free_model, p0, settings, ftol) {
         return free_model;
     }
     problem
@@ -490,14 +498,7 @@ pub(super) fn fit(
     // A long recording's starts only pick the model and basin the doubling stages refine:
     // they stop where a stage before the last does.
     let ftol = long.then_some(STAGE_FTOL);
-    let mut best = best_start(
-        &models,
-        probe.as_ref(),
-        &jobs,
-        settings,
-        ftol,
-        moves.then_some(g.mu0),
-    )?;
+    let mut best = best_start(&models, probe.as_ref(), &jobs, settings, ftol, moves)?;
     if let Some(probe) = &probe {
         refit_probe(&models[0], probe, &mut best, settings, ftol);
     }

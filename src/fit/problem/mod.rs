@@ -87,12 +87,16 @@ impl Iterator for Rows<'_> {
     fn next(&mut self) -> Option<RowInfo> {
         loop {
             let &i = self.obs_index.get(self.frame)?;
-            let track = if self.marker == 0 {
-                &self.obs.slider
-            } else {
-                &self.obs.bob
+            let position = match self.marker {
+                0 => self.obs.slider[i],
+                1 => self.obs.bob[i],
+                // Both markers done: the next frame.
+                _ => {
+                    (self.frame, self.marker) = (self.frame + 1, 0);
+                    continue;
+                }
             };
-            match (self.marker < 2).then(|| track[i]).flatten() {
+            match position {
                 Some(p) => {
                     let row = RowInfo {
                         frame: self.frame,
@@ -106,9 +110,8 @@ impl Iterator for Rows<'_> {
                     }
                     return Some(row);
                 }
-                // A marker missing in this frame has no rows; after the bob, the next frame.
-                None if self.marker < 1 => self.marker += 1,
-                None => (self.frame, self.marker, self.coord) = (self.frame + 1, 0, 0),
+                // A marker missing in this frame has no rows.
+                None => self.marker += 1,
             }
         }
     }
