@@ -275,15 +275,6 @@ impl Candidate for JointProblem {
     fn score_drops(&self, p: &DVector<f64>, candidates: &[Nuisance]) -> Vec<(Nuisance, f64)> {
         let mut at = self.clone();
         at.set_values(p);
-        let labels = at.labels();
-        select::score_drops_by(&at, candidates, |nu| {
-            let aug = at.with_nuisance(nu, at.mu_static());
-            let new = aug.labels();
-            let cols = labels
-                .iter()
-                .filter_map(|l| new.iter().position(|n| n == l))
-                .collect();
-            (aug, cols)
-        })
+        select::score_drops_by(&at, candidates, |nu| at.with_nuisance(nu, at.mu_static()))
     }
 }

@@ -230,10 +230,24 @@ impl TrajectoryProblem {
     /// The prior on `q` when it acts: a rigid pendulum's equivalent mass ratio (its length
     /// free) is not the masses' ratio, so the masses' prior leaves it.
     pub fn prior_on(&self, q: Param) -> Option<&Prior> {
-        if q == Param::MassRatio && self.free.contains(&Param::PendulumLength) {
+        self.prior_within(q, &self.free)
+    }
+
+    /// The prior on `q` in this model with `free` as its free parameters ([`Self::prior_on`]):
+    /// the score test weighs each candidate's model without building it.
+    pub fn prior_within(&self, q: Param, free: &[Param]) -> Option<&Prior> {
+        if q == Param::MassRatio && free.contains(&Param::PendulumLength) {
             return None;
         }
         self.priors.iter().find(|pr| pr.param == q)
+    }
+
+    /// How the rod length's column changes when [`Param::PendulumLength`] joins the free
+    /// parameters: without it, the rod length moves the dynamics' length in proportion
+    /// (`rod_length = ratio * marker_length`, [`Self::apply`]); with it, the rod length
+    /// only places the bob's marker. Returns that ratio, d(rod_length)/d(marker_length).
+    pub fn length_ratio(&self) -> f64 {
+        self.rig.rod_length / self.rig.marker_length
     }
 
     /// Each free parameter with a prior at `p`: its index, standardised distance from the
@@ -392,7 +406,7 @@ impl TrajectoryProblem {
         let mut cam: Camera<T> = self.camera.lift();
         let pendulum_free = self.free.contains(&Param::PendulumLength);
         // A rod length moves a rigid pendulum's equivalent length with it, in proportion.
-        let length_ratio = self.rig.rod_length / self.rig.marker_length;
+        let length_ratio = self.length_ratio();
         let total_mass = T::from(self.rig.slider_mass + self.rig.bob_mass);
         for (&param, &v) in self.free.iter().zip(p) {
             match param {
