@@ -202,6 +202,9 @@ impl TrajectoryProblem {
                 extra.len()
             )));
         }
+        if extra.is_empty() {
+            return self.normal_equations(p);
+        }
         self.counters.jacobians.fetch_add(1, Ordering::Relaxed);
         by_width!(p.len(), N => self.normal_observed_n::<N>(p, extra)).map_err(to_err)
     }
@@ -221,6 +224,9 @@ impl TrajectoryProblem {
         let values = at_p.values();
         let (rig_m, _, cam_m) = at_p.apply(&seed::<M>(&values));
         let mut ss = 0.0;
+        // Slots 0..N the motion's (k of them seeded), N..N + M the camera's (m of them): the
+        // loops below run over the constant N + M, so they unroll; the unseeded slots only
+        // add zeros to entries nobody reads.
         let mut jtj = [[0.0; W]; W];
         let mut jtr = [0.0; W];
         // A lag among the extra parameters differentiates along the motion: velocities.
@@ -239,19 +245,18 @@ impl TrajectoryProblem {
             |row, _, marker, coord, d, cam| {
                 let scale = self.row_weight(row) / self.sigma[marker];
                 let r = d.re * scale;
-                let e = d.eps;
-                let c = cam[2 * marker + coord].eps;
                 let mut g = [0.0; W];
-                g[..k]
+                for (g, e) in g[..N].iter_mut().zip(d.eps.iter()) {
+                    *g = e * scale;
+                }
+                for (g, c) in g[N..N + M]
                     .iter_mut()
-                    .zip(e.iter())
-                    .for_each(|(g, e)| *g = e * scale);
-                g[k..k + m]
-                    .iter_mut()
-                    .zip(c.iter())
-                    .for_each(|(g, c)| *g = c * scale);
+                    .zip(cam[2 * marker + coord].eps.iter())
+                {
+                    *g = c * scale;
+                }
                 ss += r * r;
-                for a in 0..k + m {
+                for a in 0..N + M {
                     jtr[a] += g[a] * r;
                     for b in 0..=a {
                         jtj[a][b] += g[a] * g[b];
@@ -259,6 +264,9 @@ impl TrajectoryProblem {
                 }
             },
         )?;
+        // The augmented equations' column i in the slots: the free parameters', then the
+        // extra camera parameters'.
+        let slot = |i: usize| if i < k { i } else { N + i - k };
         // The priors: the free parameters' at p, and the extra camera parameters' at their
         // values (a score test's candidate pays its prior's curvature).
         for (a, r, sd) in self.prior_rows(p.as_slice()) {
@@ -269,16 +277,20 @@ impl TrajectoryProblem {
         for (j, &q) in extra.iter().enumerate() {
             if let Some(pr) = self.prior_on(q) {
                 let r = (values[j] - pr.centre) / pr.sd;
+                let a = slot(k + j);
                 ss += r * r;
-                jtr[k + j] += r / pr.sd;
-                jtj[k + j][k + j] += 1.0 / (pr.sd * pr.sd);
+                jtr[a] += r / pr.sd;
+                jtj[a][a] += 1.0 / (pr.sd * pr.sd);
             }
         }
         let kk = k + m;
         Ok(Normal {
             cost: 0.5 * ss,
-            jtj: DMatrix::from_fn(kk, kk, |a, b| jtj[a.max(b)][a.min(b)]),
-            jtr: DVector::from_fn(kk, |a, _| jtr[a]),
+            jtj: DMatrix::from_fn(kk, kk, |a, b| {
+                let (a, b) = (slot(a), slot(b));
+                jtj[a.max(b)][a.min(b)]
+            }),
+            jtr: DVector::from_fn(kk, |a, _| jtr[slot(a)]),
             meat: None,
         })
     }
