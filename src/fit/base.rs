@@ -58,7 +58,8 @@ fn guesses(
     let n = obs.times.len();
     let dt = (obs.times[n - 1] / (n - 1) as f64).max(1e-6);
     let window = ((0.012 / dt).round() as usize).clamp(5, 40);
-    let (y0, x_dot_se) = guess::initial_state(obs, window).unwrap_or(([0.0; 4], f64::INFINITY));
+    let tracks = guess::Tracks::new(obs);
+    let (y0, x_dot_se) = guess::initial_state(&tracks, window).unwrap_or(([0.0; 4], f64::INFINITY));
     if let Some(l) = guess::rod_length(obs) {
         if (l - rig.marker_length).abs() > 0.05 * rig.marker_length {
             warnings.push(format!(
@@ -70,12 +71,12 @@ fn guesses(
     // Second derivatives need a wider window than the initial slope: about 40 ms each side.
     // The two reads of the tracks are independent: side by side on the pool.
     let (mu_data, mu_s_data) = rayon::join(
-        || guess::mu_from_sliding(obs, rig, ((0.04 / dt).round() as usize).clamp(4, 200)),
+        || guess::mu_from_sliding(&tracks, rig, ((0.04 / dt).round() as usize).clamp(4, 200)),
         || {
             (settings.mu_static == StaticMode::Auto)
                 .then(|| {
                     let h = ((0.01 / dt).round() as usize).clamp(3, 50);
-                    guess::mu_static_from_onsets(obs, rig, h)
+                    guess::mu_static_from_onsets(&tracks, rig, h)
                 })
                 .flatten()
         },

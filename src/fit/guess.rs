@@ -44,44 +44,52 @@ pub fn angle(slider: [f64; 2], bob: [f64; 2]) -> f64 {
     (-(bob[1] - slider[1])).atan2(bob[0] - slider[0])
 }
 
-/// Per-frame angle, unwrapped to be continuous, for frames with both markers.
-fn angles(obs: &Observations) -> (Vec<f64>, Vec<f64>) {
-    let mut t = Vec::new();
-    let mut th: Vec<f64> = Vec::new();
-    for ((ti, s), b) in obs.times.iter().zip(&obs.slider).zip(&obs.bob) {
-        if let (Some(s), Some(b)) = (s, b) {
-            let mut a = angle(*s, *b);
-            if let Some(prev) = th.last() {
-                a += (2.0 * std::f64::consts::PI)
-                    * ((prev - a) / (2.0 * std::f64::consts::PI)).round();
-            }
-            t.push(*ti);
-            th.push(a);
-        }
-    }
-    (t, th)
+/// The frames with both markers: their times, the slider's x and the rod angle (unwrapped to
+/// be continuous), read off the recording once for every guess. A million frames make 24 MB
+/// of these; each guess reading its own copy, side by side, took the fit's peak memory from
+/// 131 to 168 MB.
+pub struct Tracks {
+    t: Vec<f64>,
+    x: Vec<f64>,
+    theta: Vec<f64>,
+    /// The recording's first frame time.
+    t0: Option<f64>,
 }
 
-/// Slider x at the frames with both markers: the same frames as [`angles`], so a gap in
-/// either marker never misaligns the two series.
-fn slider_x(obs: &Observations) -> (Vec<f64>, Vec<f64>) {
-    obs.times
-        .iter()
-        .zip(&obs.slider)
-        .zip(&obs.bob)
-        .filter_map(|((t, s), b)| b.and(s.map(|s| (*t, s[0]))))
-        .unzip()
+impl Tracks {
+    /// The tracks of `obs`.
+    pub fn new(obs: &Observations) -> Tracks {
+        let n = obs.times.len();
+        let mut tracks = Tracks {
+            t: Vec::with_capacity(n),
+            x: Vec::with_capacity(n),
+            theta: Vec::with_capacity(n),
+            t0: obs.times.first().copied(),
+        };
+        for ((ti, s), b) in obs.times.iter().zip(&obs.slider).zip(&obs.bob) {
+            if let (Some(s), Some(b)) = (s, b) {
+                let mut a = angle(*s, *b);
+                if let Some(prev) = tracks.theta.last() {
+                    a += (2.0 * std::f64::consts::PI)
+                        * ((prev - a) / (2.0 * std::f64::consts::PI)).round();
+                }
+                tracks.t.push(*ti);
+                tracks.x.push(s[0]);
+                tracks.theta.push(a);
+            }
+        }
+        tracks
+    }
 }
 
 /// Initial state (x, theta, x', theta') from a quadratic fit over the first `window` frames,
 /// with the standard error of x' (to tell a release from rest).
-pub fn initial_state(obs: &Observations, window: usize) -> Option<([f64; 4], f64)> {
-    let t0 = *obs.times.first()?;
-    let (ts, xs) = slider_x(obs);
-    let (ta, th) = angles(obs);
-    let n = window.max(3);
-    let (x, x_dot_se) = quadratic_fit(&ts[..ts.len().min(n)], &xs[..xs.len().min(n)], t0)?;
-    let a = quadratic_at(&ta[..ta.len().min(n)], &th[..th.len().min(n)], t0)?;
+pub fn initial_state(tracks: &Tracks, window: usize) -> Option<([f64; 4], f64)> {
+    let t0 = tracks.t0?;
+    let (ts, xs, th) = (&tracks.t, &tracks.x, &tracks.theta);
+    let n = window.max(3).min(ts.len());
+    let (x, x_dot_se) = quadratic_fit(&ts[..n], &xs[..n], t0)?;
+    let a = quadratic_at(&ts[..n], &th[..n], t0)?;
     Some(([x[0], a[0], x[1], a[1]], x_dot_se))
 }
 
@@ -110,10 +118,9 @@ pub fn rod_length(obs: &Observations) -> Option<f64> {
 /// mu_kinetic from the sliding equation solved for mu at frames where the slider clearly
 /// moves: x'' (D + mu s sigma a) = c - mu s sigma b, with x', x'', theta, theta' from local
 /// quadratic fits; the median over the frames. `None` when the slider never clearly slides.
-pub fn mu_from_sliding(obs: &Observations, rig: &Rig<f64>, half_window: usize) -> Option<f64> {
-    let (ts, xs) = slider_x(obs);
-    let (ta, th) = angles(obs);
-    if ts.len() < 2 * half_window + 1 || ta.len() != ts.len() {
+pub fn mu_from_sliding(tracks: &Tracks, rig: &Rig<f64>, half_window: usize) -> Option<f64> {
+    let (ts, xs, th) = (&tracks.t, &tracks.x, &tracks.theta);
+    if ts.len() < 2 * half_window + 1 {
         return None;
     }
     let h = half_window;
@@ -125,7 +132,7 @@ pub fn mu_from_sliding(obs: &Observations, rig: &Rig<f64>, half_window: usize) -
             continue;
         };
         speeds.push(x[1].abs());
-        let Some(a) = quadratic_at(&ta[i - h..=i + h], &th[i - h..=i + h], ts[i]) else {
+        let Some(a) = quadratic_at(&ts[i - h..=i + h], &th[i - h..=i + h], ts[i]) else {
             continue;
         };
         est.push((x, a));
@@ -158,15 +165,10 @@ pub fn mu_from_sliding(obs: &Observations, rig: &Rig<f64>, half_window: usize) -
 /// at rest ends, static friction was just exhausted, so mu_static ~ |c| / |b| there (the
 /// needed ratio of the pendulum model, from the smoothed angle and rate at the last stuck
 /// frame). The median over onsets; `None` when the data show no onset after a stuck stretch.
-pub fn mu_static_from_onsets(
-    obs: &Observations,
-    rig: &Rig<f64>,
-    half_window: usize,
-) -> Option<f64> {
-    let (ts, xs) = slider_x(obs);
-    let (ta, th) = angles(obs);
+pub fn mu_static_from_onsets(tracks: &Tracks, rig: &Rig<f64>, half_window: usize) -> Option<f64> {
+    let (ts, xs, th) = (&tracks.t, &tracks.x, &tracks.theta);
     let h = half_window;
-    if ts.len() < 2 * h + 1 || ta.len() != ts.len() {
+    if ts.len() < 2 * h + 1 {
         return None;
     }
     // Rates every few frames are enough to find the stuck stretches; the onset time itself is
@@ -198,8 +200,8 @@ pub fn mu_static_from_onsets(
                 .min_by(|a, b| a.1.total_cmp(&b.1))
                 .map(|(j, _)| j);
             if let Some(j) = onset {
-                let (a0, a1) = (j.saturating_sub(h), (j + h).min(ta.len() - 1));
-                if let Some(a) = quadratic_at(&ta[a0..=a1], &th[a0..=a1], ts[j]) {
+                let (a0, a1) = (j.saturating_sub(h), (j + h).min(ts.len() - 1));
+                if let Some(a) = quadratic_at(&ts[a0..=a1], &th[a0..=a1], ts[j]) {
                     let sh = Shorthands::new(rig, a[0], a[1]);
                     ratios.push(sh.c.abs() / sh.b.abs());
                 }
