@@ -555,7 +555,24 @@ pub fn fit(
     let settled = base.settled.clone().filter(|_| late.dropped == [0, 0]);
     let stop_reason = stages::polish(&mut f, settled, settings);
     let mut est = stages::estimates(&mut f, data.noise_dof, slides, settings)?;
-    let verdict = stages::adequacy(&mut f, &mut est, &models, &motion.sol.events, settings);
+    // The windows and mu_static's one-sided profile only read the fit: side by side (the
+    // profile's search is sequential).
+    let (windows, upper) = rayon::join(
+        || stages::windows(&f.problem, est.mu_index, &motion.sol.events, settings),
+        || {
+            stages::upper_limit(
+                &f,
+                &est,
+                static_state,
+                slides,
+                &motion,
+                &base,
+                &data.obs,
+                settings,
+            )
+        },
+    );
+    let verdict = stages::adequacy(&mut f, &mut est, &models, windows, settings);
     let mu_static = stages::mu_static(
         &mut f,
         &mut est,
@@ -565,6 +582,7 @@ pub fn fit(
         &base,
         &data.obs,
         settings,
+        upper,
     );
     stages::starts_agree(&mut f, &base, &est);
     let identifiable = slides;

@@ -16,7 +16,7 @@ use super::priors;
 use super::problem::{idx, Observations, Param, TrajectoryProblem, MAX_FREE};
 use super::select::{self, ModelRow, Nuisance, SelectOptions};
 use super::solve::{solve, solve_traced};
-use super::uncertainty::{self, Assessment, WindowFit};
+use super::uncertainty::{self, Assessment, WindowCut, WindowFit};
 use super::{
     Adequacy, Estimate, FitError, FitReport, FitSettings, MuParts, RigValue, StaticMode,
     StaticResult, Work,
@@ -425,6 +425,23 @@ pub(super) struct Verdict {
     pub rms_residual_m: f64,
 }
 
+/// mu_kinetic fitted in each window of the recording (cut by the motion), when asked for and
+/// mu_kinetic is identifiable; reads the fit only ([`adequacy`] judges them).
+pub(super) fn windows(
+    problem: &TrajectoryProblem,
+    mu_index: Option<usize>,
+    events: &[crate::sim::Event],
+    settings: &FitSettings,
+) -> (Vec<WindowFit>, Option<WindowCut>) {
+    if !(settings.windows && mu_index.is_some()) {
+        return (Vec::new(), None);
+    }
+    let (bounds, cut) = uncertainty::motion_bounds(&problem.observations().times, events);
+    let windows = uncertainty::windows(problem, &bounds, settings);
+    let cut = (!windows.is_empty()).then_some(cut);
+    (windows, cut)
+}
+
 /// Adequacy. mu_kinetic on each window cut by the motion (a slide each), the runs
 /// test, the chi-square and the block ratio; when any fails, mu's interval widens by the
 /// windows' spread and by mu's shift along the selection's path, and by the spread of close
@@ -434,19 +451,11 @@ pub(super) fn adequacy(
     f: &mut Fitting,
     est: &mut Estimates,
     models: &[ModelRow],
-    events: &[crate::sim::Event],
+    (windows, window_cut): (Vec<WindowFit>, Option<WindowCut>),
     settings: &FitSettings,
 ) -> Verdict {
     let (problem, a) = (&f.problem, &est.a);
     let mu_index = est.mu_index;
-    let (windows, window_cut) = if settings.windows && mu_index.is_some() {
-        let (bounds, cut) = uncertainty::motion_bounds(&problem.observations().times, events);
-        let windows = uncertainty::windows(problem, &bounds, settings);
-        let cut = (!windows.is_empty()).then_some(cut);
-        (windows, cut)
-    } else {
-        (Vec::new(), None)
-    };
     let windows_p = uncertainty::window_consistency(&windows);
     let block_ratio = mu_index.map_or(1.0, |i| a.se_block[i] / a.se[i]);
     let runs_p = a.residuals.runs_p;
@@ -547,10 +556,48 @@ pub(super) fn adequacy(
     }
 }
 
+/// Which of mu_static's cases the fit is in ([`mu_static`]).
+enum StaticCase {
+    /// Free above mu_kinetic, at this index.
+    Free(usize),
+    /// The slider never slides.
+    Stuck,
+    /// At its bound mu_static = mu_kinetic, or onsets that show none above it: the upper
+    /// limit the data allow.
+    AtBound,
+    /// Nothing said about it.
+    Unknown,
+}
+
+fn static_case(
+    f: &Fitting,
+    state: StaticState,
+    slides: bool,
+    motion: &Motion,
+    base: &Base,
+) -> StaticCase {
+    let slip_after_stick = motion
+        .sol
+        .events
+        .iter()
+        .any(|e| e.kind == EventKind::Slip && e.t > 0.0);
+    if let Some(i) = idx(&f.problem, Param::MuStatic).filter(|_| state.free) {
+        return StaticCase::Free(i);
+    }
+    if !slides {
+        return StaticCase::Stuck;
+    }
+    if state.at_bound || (slip_after_stick && base.static_evidence == Some(false)) {
+        return StaticCase::AtBound;
+    }
+    StaticCase::Unknown
+}
+
 /// mu_static. Free above mu_kinetic: its profile interval, starting no lower than
 /// mu_kinetic's. At its bound (or with onsets that show none above mu_kinetic): mu_kinetic and
-/// the upper limit the data allow (one-sided profile). Stuck throughout: the lower bound the
-/// motion needs. Otherwise not identifiable.
+/// the upper limit the data allow (one-sided profile; `upper`, when computed already by
+/// [`upper_limit`]). Stuck throughout: the lower bound the motion needs. Otherwise not
+/// identifiable.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn mu_static(
     f: &mut Fitting,
@@ -561,90 +608,110 @@ pub(super) fn mu_static(
     base: &Base,
     obs: &Observations,
     settings: &FitSettings,
+    upper: Option<UpperLimit>,
 ) -> StaticResult {
-    let slip_after_stick = motion
-        .sol
-        .events
-        .iter()
-        .any(|e| e.kind == EventKind::Slip && e.t > 0.0);
     let mu_kinetic = est.mu_index.map(|i| est.params[i].1);
-    if let Some(i) = idx(&f.problem, Param::MuStatic).filter(|_| state.free) {
-        // A mu_static the fitted motion does not feel (no slip after a stick, or one the
-        // other parameters take over) has no standard error: that is no measurement.
-        let se = est.params[i].1.stderr;
-        if !(se.is_finite() && se > 0.0) {
-            f.warnings.push(format!(
-                "mu_static ended at {:.5} but the fitted motion does not depend on it (standard error {se:.1e}): it is not measured",
-                est.params[i].1.value
-            ));
-            return StaticResult::NotIdentifiable;
-        }
-        // Under a misfit the profile is bent by the misfit (as mu_kinetic's): +- 1.96 stderr.
-        if settings.profile && !select::misfits(&f.problem, est.a.chi2) {
-            let a = &est.a;
-            match uncertainty::profile_interval(
-                &f.problem,
-                &f.p,
-                i,
-                a.se[i],
-                est.scale,
-                settings,
-                f.p[0],
-                Some((&a.cov, a.chi2)),
-            ) {
-                Some(ci) => {
-                    est.params[i].1.ci95 = ci;
-                    est.params[i].1.interval = "profile";
-                }
-                None => f
-                    .warnings
-                    .push("the profile interval for mu_static did not close".into()),
+    match static_case(f, state, slides, motion, base) {
+        StaticCase::Free(i) => {
+            // A mu_static the fitted motion does not feel (no slip after a stick, or one the
+            // other parameters take over) has no standard error: that is no measurement.
+            let se = est.params[i].1.stderr;
+            if !(se.is_finite() && se > 0.0) {
+                f.warnings.push(format!(
+                    "mu_static ended at {:.5} but the fitted motion does not depend on it (standard error {se:.1e}): it is not measured",
+                    est.params[i].1.value
+                ));
+                return StaticResult::NotIdentifiable;
             }
+            // Under a misfit the profile is bent by the misfit (as mu_kinetic's): +- 1.96 stderr.
+            if settings.profile && !select::misfits(&f.problem, est.a.chi2) {
+                let a = &est.a;
+                match uncertainty::profile_interval(
+                    &f.problem,
+                    &f.p,
+                    i,
+                    a.se[i],
+                    est.scale,
+                    settings,
+                    f.p[0],
+                    Some((&a.cov, a.chi2)),
+                ) {
+                    Some(ci) => {
+                        est.params[i].1.ci95 = ci;
+                        est.params[i].1.interval = "profile";
+                    }
+                    None => f
+                        .warnings
+                        .push("the profile interval for mu_static did not close".into()),
+                }
+            }
+            // mu_static >= mu_kinetic: its interval starts no lower than mu_kinetic's.
+            let mu_k_low = mu_kinetic.map_or(0.0, |e| e.ci95[0]);
+            est.params[i].1 = within_bounds(Param::MuStatic, est.params[i].1, mu_k_low);
+            StaticResult::Estimated(est.params[i].1)
         }
-        // mu_static >= mu_kinetic: its interval starts no lower than mu_kinetic's.
-        let mu_k_low = mu_kinetic.map_or(0.0, |e| e.ci95[0]);
-        est.params[i].1 = within_bounds(Param::MuStatic, est.params[i].1, mu_k_low);
-        return StaticResult::Estimated(est.params[i].1);
+        StaticCase::Stuck => StaticResult::LowerBound(motion.needed_ratio),
+        StaticCase::AtBound => {
+            let upper = upper.unwrap_or_else(|| upper_profile(f, est, obs, settings));
+            static_upper_limit(f, upper)
+        }
+        StaticCase::Unknown => {
+            if !motion.sticks {
+                f.warnings.push(
+                    "the slider never sticks: the recording says nothing about mu_static".into(),
+                );
+            }
+            StaticResult::NotIdentifiable
+        }
     }
-    if !slides {
-        return StaticResult::LowerBound(motion.needed_ratio);
-    }
-    if state.at_bound || (slip_after_stick && base.static_evidence == Some(false)) {
-        return static_upper_limit(f, est, obs, settings);
-    }
-    if !motion.sticks {
-        f.warnings
-            .push("the slider never sticks: the recording says nothing about mu_static".into());
-    }
-    StaticResult::NotIdentifiable
 }
 
-/// mu_static at its bound mu_static = mu_kinetic: the upper limit the data allow, from the
-/// one-sided profile (on a long recording's first frames, refitted there).
-fn static_upper_limit(
-    f: &mut Fitting,
+/// mu_static's one-sided profile at its bound, or why there is none.
+pub(super) enum UpperLimit {
+    /// The model misfits: its profile says what the misfit allows, not the data.
+    Misfit,
+    /// Profiles are off.
+    Off,
+    /// The upper end (`None`: the profile did not close), the iterations it took and whether
+    /// it comes from the recording's first frames.
+    Profiled(Option<f64>, u64, bool),
+}
+
+/// mu_static's upper limit when the fit is at its bound ([`mu_static`]'s case), computed
+/// apart from the report's stages: it only reads the fit, so it runs beside the windows.
+#[allow(clippy::too_many_arguments)]
+pub(super) fn upper_limit(
+    f: &Fitting,
+    est: &Estimates,
+    state: StaticState,
+    slides: bool,
+    motion: &Motion,
+    base: &Base,
+    obs: &Observations,
+    settings: &FitSettings,
+) -> Option<UpperLimit> {
+    matches!(
+        static_case(f, state, slides, motion, base),
+        StaticCase::AtBound
+    )
+    .then(|| upper_profile(f, est, obs, settings))
+}
+
+/// The one-sided profile of mu_static above mu_kinetic (on a long recording's first frames,
+/// refitted there).
+fn upper_profile(
+    f: &Fitting,
     est: &Estimates,
     obs: &Observations,
     settings: &FitSettings,
-) -> StaticResult {
-    let mu = f.p[0];
-    let scale = est.scale;
+) -> UpperLimit {
     if select::misfits(&f.problem, est.a.chi2) {
-        // The one-sided profile of a misfitting model says what the misfit allows, not the
-        // data: no limit is given.
-        f.warnings.push(
-            "mu_static fits at its bound mu_static = mu_kinetic (no upper limit: the model misfits the recording)"
-                .into(),
-        );
-        return StaticResult::NotIdentifiable;
+        return UpperLimit::Misfit;
     }
     if !settings.profile {
-        f.warnings.push(
-            "mu_static fits at its bound mu_static = mu_kinetic (no upper limit computed: profiles are off)"
-                .into(),
-        );
-        return StaticResult::NotIdentifiable;
+        return UpperLimit::Off;
     }
+    let mut iterations = 0;
     let mut free_static = f.problem.clone();
     free_static.free.push(Param::MuStatic);
     free_static.tie_static = false;
@@ -656,7 +723,7 @@ fn static_upper_limit(
     if prefix_limit {
         free_static = free_static.on(Arc::new(obs.prefix(settings.long_prefix)));
         if let Ok((opt, _, it)) = solve(&free_static, q.clone(), settings.max_iters) {
-            f.iterations += it;
+            iterations += it;
             q = opt;
             free_static.set_values(&q);
         }
@@ -666,14 +733,36 @@ fn static_upper_limit(
         &q,
         q.len() - 1,
         f64::NAN,
-        scale,
+        est.scale,
         settings,
         q[0],
         None,
     )
     .map(|ci| ci[1]);
+    UpperLimit::Profiled(upper, iterations, prefix_limit)
+}
+
+/// mu_static at its bound mu_static = mu_kinetic: the upper limit the data allow, from the
+/// one-sided profile `upper`.
+fn static_upper_limit(f: &mut Fitting, upper: UpperLimit) -> StaticResult {
+    let mu = f.p[0];
     match upper {
-        Some(u) => {
+        UpperLimit::Misfit => {
+            f.warnings.push(
+                "mu_static fits at its bound mu_static = mu_kinetic (no upper limit: the model misfits the recording)"
+                    .into(),
+            );
+            StaticResult::NotIdentifiable
+        }
+        UpperLimit::Off => {
+            f.warnings.push(
+                "mu_static fits at its bound mu_static = mu_kinetic (no upper limit computed: profiles are off)"
+                    .into(),
+            );
+            StaticResult::NotIdentifiable
+        }
+        UpperLimit::Profiled(Some(u), iterations, prefix_limit) => {
+            f.iterations += iterations;
             // No warning: Coulomb's law with one coefficient is what the data say, and the
             // report's mu_static row gives the limit.
             StaticResult::Estimated(Estimate {
@@ -687,7 +776,8 @@ fn static_upper_limit(
                 },
             })
         }
-        None => {
+        UpperLimit::Profiled(None, iterations, _) => {
+            f.iterations += iterations;
             f.warnings.push(
                 "mu_static fits at its bound mu_static = mu_kinetic (its upper limit's profile did not close)"
                     .into(),
