@@ -85,7 +85,7 @@ impl TrajectoryProblem {
         let mut current = usize::MAX;
         let flush = |g: &mut [f64; N], meat: &mut [[f64; N]; N]| {
             for a in 0..k {
-                for b in 0..=a {
+                for b in 0..a + 1 {
                     meat[a][b] += g[a] * g[b];
                 }
             }
@@ -105,7 +105,7 @@ impl TrajectoryProblem {
             // only ever add zeros to entries nobody reads.
             for a in 0..N {
                 jtr[a] += e[a] * r;
-                for b in 0..=a {
+                for b in 0..a + 1 {
                     jtj[a][b] += e[a] * e[b];
                 }
             }
@@ -258,7 +258,7 @@ impl TrajectoryProblem {
                 ss += r * r;
                 for a in 0..N + M {
                     jtr[a] += g[a] * r;
-                    for b in 0..=a {
+                    for b in 0..a + 1 {
                         jtj[a][b] += g[a] * g[b];
                     }
                 }
