@@ -554,11 +554,16 @@ pub fn fit(
     };
     let settled = base.settled.clone().filter(|_| late.dropped == [0, 0]);
     let stop_reason = stages::polish(&mut f, settled, settings);
-    let mut est = stages::estimates(&mut f, data.noise_dof, slides, settings)?;
-    // The windows and mu_static's one-sided profile only read the fit: side by side (the
-    // profile's search is sequential).
-    let (windows, upper) = rayon::join(
-        || stages::windows(&f.problem, est.mu_index, &motion.sol.events, settings),
+    let mut est = stages::estimates(&f, data.noise_dof, slides)?;
+    // mu_kinetic's profile, the windows and mu_static's one-sided profile only read the fit
+    // and its covariances: side by side (each profile's search is sequential).
+    let ((profile, windows), upper) = rayon::join(
+        || {
+            rayon::join(
+                || stages::mu_profile(&f, &est, settings),
+                || stages::windows(&f.problem, est.mu_index, &motion.sol.events, settings),
+            )
+        },
         || {
             stages::upper_limit(
                 &f,
@@ -572,6 +577,7 @@ pub fn fit(
             )
         },
     );
+    stages::mu_profile_taken(&mut f, &mut est, profile);
     let verdict = stages::adequacy(&mut f, &mut est, &models, windows, settings);
     let mu_static = stages::mu_static(
         &mut f,

@@ -299,13 +299,12 @@ pub(super) struct Estimates {
     pub rig_fraction: f64,
 }
 
-/// Standard errors (Jacobian, block covariance) and mu_kinetic's profile interval,
-/// widened by the block excess; under a misfit the interval is +- 1.96 stderr instead.
+/// Standard errors (Jacobian, block covariance) and Wald intervals; mu_kinetic's profile
+/// interval comes after ([`mu_profile`]).
 pub(super) fn estimates(
-    f: &mut Fitting,
+    f: &Fitting,
     noise_dof: f64,
     identifiable: bool,
-    settings: &FitSettings,
 ) -> Result<Estimates, FitError> {
     let (problem, p) = (&f.problem, &f.p);
     let a = uncertainty::assess(problem, p, noise_dof).map_err(FitError::NoStart)?;
@@ -314,7 +313,7 @@ pub(super) fn estimates(
     let se: Vec<f64> = (0..k).map(|i| a.se[i].max(a.se_block[i])).collect();
     let correlation =
         DMatrix::from_fn(k, k, |i, j| a.cov[(i, j)] / (a.se[i] * a.se[j]).max(1e-300));
-    let mut params: Vec<(Param, Estimate)> = problem
+    let params: Vec<(Param, Estimate)> = problem
         .free
         .iter()
         .enumerate()
@@ -332,42 +331,6 @@ pub(super) fn estimates(
         })
         .collect();
     let mu_index = idx(problem, Param::MuKinetic).filter(|_| identifiable);
-    // A model that misfits bends the profile by its misfit, not by the data's information:
-    // there the interval is +- 1.96 stderr (the errors scaled by the reduced chi-square and the
-    // block covariance), which the adequacy stage widens further; the profile's fits, a
-    // second or more on a misfitting recording, are not run.
-    let misfit = select::misfits(problem, a.chi2);
-    if let (true, Some(i), false) = (settings.profile, mu_index, misfit) {
-        let profile = uncertainty::profile_interval(
-            problem,
-            p,
-            i,
-            a.se[i],
-            scale,
-            settings,
-            0.0,
-            Some((&a.cov, a.chi2)),
-        );
-        match profile {
-            Some(ci) => {
-                // The profile knows the curvature, the block covariance the correlated
-                // residuals: widen the profile's half-widths by the block's excess.
-                let ratio = (se[i] / a.se[i]).max(1.0);
-                let v = p[i];
-                let e = &mut params[i].1;
-                e.ci95 = [v - (v - ci[0]) * ratio, v + (ci[1] - v) * ratio];
-                e.interval = if ratio > 1.0001 {
-                    "profile+block"
-                } else {
-                    "profile"
-                };
-            }
-            None => f.warnings.push(
-                "the profile interval for mu_kinetic did not close; the interval shown is value +- 1.96 stderr"
-                    .into(),
-            ),
-        }
-    }
     let rig_fraction = mu_index.map_or(0.0, |i| rig_fraction(problem, &a.cov, i));
     Ok(Estimates {
         a,
@@ -378,6 +341,64 @@ pub(super) fn estimates(
         mu_index,
         rig_fraction,
     })
+}
+
+/// mu_kinetic's profile interval at the fit ([`estimates`]' covariances), when asked for: `None`
+/// when it is not computed. A model that misfits bends the profile by its misfit, not by the
+/// data's information: there the interval stays +- 1.96 stderr (the errors scaled by the
+/// reduced chi-square and the block covariance), which the adequacy stage widens further; the
+/// profile's fits, a second or more on a misfitting recording, are not run. It only reads the
+/// fit, so it runs beside the windows and mu_static's profile ([`mu_profile_taken`] applies it).
+pub(super) fn mu_profile(
+    f: &Fitting,
+    est: &Estimates,
+    settings: &FitSettings,
+) -> Option<Option<[f64; 2]>> {
+    let (problem, p, a) = (&f.problem, &f.p, &est.a);
+    let i = est.mu_index?;
+    if !settings.profile || select::misfits(problem, a.chi2) {
+        return None;
+    }
+    Some(uncertainty::profile_interval(
+        problem,
+        p,
+        i,
+        a.se[i],
+        est.scale,
+        settings,
+        0.0,
+        Some((&a.cov, a.chi2)),
+    ))
+}
+
+/// mu_kinetic's interval from its profile ([`mu_profile`]), when computed.
+pub(super) fn mu_profile_taken(
+    f: &mut Fitting,
+    est: &mut Estimates,
+    profile: Option<Option<[f64; 2]>>,
+) {
+    let (Some(profile), Some(i)) = (profile, est.mu_index) else {
+        return;
+    };
+    match profile {
+        Some(ci) => {
+            // The profile knows the curvature, the block covariance the correlated
+            // residuals: widen the profile's half-widths by the block's excess.
+            let ratio = (est.se[i] / est.a.se[i]).max(1.0);
+            let v = f.p[i];
+            let e = &mut est.params[i].1;
+            e.ci95 = [v - (v - ci[0]) * ratio, v + (ci[1] - v) * ratio];
+            e.interval = if ratio > 1.0001 {
+                "profile+block"
+            } else {
+                "profile"
+            };
+        }
+        None => f.warnings.push(
+            "the profile interval for mu_kinetic did not close; the interval shown is value +- 1.96 stderr"
+                .into(),
+        ),
+    }
 }
 
 /// The share of parameter `i`'s variance carried by the rig's measured values (the free
