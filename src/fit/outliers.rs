@@ -32,11 +32,12 @@ pub fn drop_from_tracks(obs: &mut Observations, sigma: [f64; 2]) -> [usize; 2] {
                 .enumerate()
                 .all(|(k, t)| (t - obs.times[0] - k as f64 * dt).abs() <= 1e-6 * dt)
     };
-    for (m, count) in dropped.iter_mut().enumerate() {
+    // The two markers' tracks are read apart: side by side.
+    let bad_in = |m: usize| {
         let track = if m == 0 { &obs.slider } else { &obs.bob };
         // Below a micrometre the quadratic's own error on fast motion would count.
         let limit = THRESHOLD * sigma[m].max(1e-6);
-        let bad: Vec<usize> = (0..n)
+        (0..n)
             .filter(|&i| {
                 let Some(here) = track[i] else {
                     return false;
@@ -67,7 +68,10 @@ pub fn drop_from_tracks(obs: &mut Observations, sigma: [f64; 2]) -> [usize; 2] {
                         && median_predict(near, k).is_some_and(|v| (here[k] - v).abs() > limit)
                 })
             })
-            .collect();
+            .collect::<Vec<usize>>()
+    };
+    let bad = rayon::join(|| bad_in(0), || bad_in(1));
+    for (m, bad) in [bad.0, bad.1].into_iter().enumerate() {
         let track = if m == 0 {
             &mut obs.slider
         } else {
@@ -75,7 +79,7 @@ pub fn drop_from_tracks(obs: &mut Observations, sigma: [f64; 2]) -> [usize; 2] {
         };
         for i in bad {
             track[i] = None;
-            *count += 1;
+            dropped[m] += 1;
         }
     }
     dropped
