@@ -555,6 +555,7 @@ pub fn fit(
     let settled = base.settled.clone().filter(|_| late.dropped == [0, 0]);
     let stop_reason = stages::polish(&mut f, settled, settings);
     let mut est = stages::estimates(&f, data.noise_dof, slides)?;
+    let case = stages::static_case(&f, static_state, slides, &motion, &base);
     // mu_kinetic's profile, the windows and mu_static's one-sided profile only read the fit
     // and its covariances: side by side (each profile's search is sequential).
     let ((profile, windows), upper) = rayon::join(
@@ -564,32 +565,11 @@ pub fn fit(
                 || stages::windows(&f.problem, est.mu_index, &motion.sol.events, settings),
             )
         },
-        || {
-            stages::upper_limit(
-                &f,
-                &est,
-                static_state,
-                slides,
-                &motion,
-                &base,
-                &data.obs,
-                settings,
-            )
-        },
+        || stages::upper_limit(&case, &f, &est, &data.obs, settings),
     );
     stages::mu_profile_taken(&mut f, &mut est, profile);
     let verdict = stages::adequacy(&mut f, &mut est, &models, windows, settings);
-    let mu_static = stages::mu_static(
-        &mut f,
-        &mut est,
-        static_state,
-        slides,
-        &motion,
-        &base,
-        &data.obs,
-        settings,
-        upper,
-    );
+    let mu_static = stages::mu_static(&mut f, &mut est, case, &motion, &data.obs, settings, upper);
     stages::starts_agree(&mut f, &base, &est);
     let identifiable = slides;
     let not_identifiable = (!slides && seen.raw_moves.is_none())

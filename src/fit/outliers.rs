@@ -33,8 +33,7 @@ pub fn drop_from_tracks(obs: &mut Observations, sigma: [f64; 2]) -> [usize; 2] {
                 .all(|(k, t)| (t - obs.times[0] - k as f64 * dt).abs() <= 1e-6 * dt)
     };
     // The two markers' tracks are read apart: side by side.
-    let bad_in = |m: usize| {
-        let track = if m == 0 { &obs.slider } else { &obs.bob };
+    let bad_in = |track: &[Option<[f64; 2]>], m: usize| {
         // Below a micrometre the quadratic's own error on fast motion would count.
         let limit = THRESHOLD * sigma[m].max(1e-6);
         (0..n)
@@ -70,13 +69,11 @@ pub fn drop_from_tracks(obs: &mut Observations, sigma: [f64; 2]) -> [usize; 2] {
             })
             .collect::<Vec<usize>>()
     };
-    let bad = rayon::join(|| bad_in(0), || bad_in(1));
-    for (m, bad) in [bad.0, bad.1].into_iter().enumerate() {
-        let track = if m == 0 {
-            &mut obs.slider
-        } else {
-            &mut obs.bob
-        };
+    let (slider, bob) = rayon::join(|| bad_in(&obs.slider, 0), || bad_in(&obs.bob, 1));
+    for (m, (track, bad)) in [(&mut obs.slider, slider), (&mut obs.bob, bob)]
+        .into_iter()
+        .enumerate()
+    {
         for i in bad {
             track[i] = None;
             dropped[m] += 1;

@@ -578,7 +578,7 @@ pub(super) fn adequacy(
 }
 
 /// Which of mu_static's cases the fit is in ([`mu_static`]).
-enum StaticCase {
+pub(super) enum StaticCase {
     /// Free above mu_kinetic, at this index.
     Free(usize),
     /// The slider never slides.
@@ -590,7 +590,8 @@ enum StaticCase {
     Unknown,
 }
 
-fn static_case(
+/// mu_static's case after the selection, decided once for [`upper_limit`] and [`mu_static`].
+pub(super) fn static_case(
     f: &Fitting,
     state: StaticState,
     slides: bool,
@@ -619,20 +620,17 @@ fn static_case(
 /// the upper limit the data allow (one-sided profile; `upper`, when computed already by
 /// [`upper_limit`]). Stuck throughout: the lower bound the motion needs. Otherwise not
 /// identifiable.
-#[allow(clippy::too_many_arguments)]
 pub(super) fn mu_static(
     f: &mut Fitting,
     est: &mut Estimates,
-    state: StaticState,
-    slides: bool,
+    case: StaticCase,
     motion: &Motion,
-    base: &Base,
     obs: &Observations,
     settings: &FitSettings,
     upper: Option<UpperLimit>,
 ) -> StaticResult {
     let mu_kinetic = est.mu_index.map(|i| est.params[i].1);
-    match static_case(f, state, slides, motion, base) {
+    match case {
         StaticCase::Free(i) => {
             // A mu_static the fitted motion does not feel (no slip after a stick, or one the
             // other parameters take over) has no standard error: that is no measurement.
@@ -698,24 +696,16 @@ pub(super) enum UpperLimit {
     Profiled(Option<f64>, u64, bool),
 }
 
-/// mu_static's upper limit when the fit is at its bound ([`mu_static`]'s case), computed
-/// apart from the report's stages: it only reads the fit, so it runs beside the windows.
-#[allow(clippy::too_many_arguments)]
+/// mu_static's upper limit when the fit is at its bound (`case`), computed apart from the
+/// report's stages: it only reads the fit, so it runs beside the windows.
 pub(super) fn upper_limit(
+    case: &StaticCase,
     f: &Fitting,
     est: &Estimates,
-    state: StaticState,
-    slides: bool,
-    motion: &Motion,
-    base: &Base,
     obs: &Observations,
     settings: &FitSettings,
 ) -> Option<UpperLimit> {
-    matches!(
-        static_case(f, state, slides, motion, base),
-        StaticCase::AtBound
-    )
-    .then(|| upper_profile(f, est, obs, settings))
+    matches!(case, StaticCase::AtBound).then(|| upper_profile(f, est, obs, settings))
 }
 
 /// The one-sided profile of mu_static above mu_kinetic (on a long recording's first frames,

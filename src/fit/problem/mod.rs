@@ -242,10 +242,8 @@ impl TrajectoryProblem {
         self.priors.iter().find(|pr| pr.param == q)
     }
 
-    /// How the rod length's column changes when [`Param::PendulumLength`] joins the free
-    /// parameters: without it, the rod length moves the dynamics' length in proportion
-    /// (`rod_length = ratio * marker_length`, [`Self::apply`]); with it, the rod length
-    /// only places the bob's marker. Returns that ratio, d(rod_length)/d(marker_length).
+    /// d(rod_length)/d(marker_length): how far the dynamics' length moves with the rod length
+    /// while [`Param::PendulumLength`] is not free ([`Self::apply`]).
     pub fn length_ratio(&self) -> f64 {
         self.rig.rod_length / self.rig.marker_length
     }

@@ -28,7 +28,7 @@ pub fn score_drops_by<M: Candidate>(
             let aug = augmented(nu);
             let q = aug.values();
             let drop = aug.normal_equations(&q).ok().and_then(|nq| {
-                let step = nq.jtj.clone().cholesky()?.solve(&nq.jtr);
+                let step = nq.jtj.cholesky()?.solve(&nq.jtr);
                 Some(nq.jtr.dot(&step))
             });
             (nu, drop.filter(|d| d.is_finite()).unwrap_or(0.0))
@@ -205,13 +205,15 @@ impl<'a> Augmented<'a> {
     fn gn_drop(&self, cols: &[usize], free: &[Param]) -> Option<f64> {
         let mut h = self.jtj.select_rows(cols).select_columns(cols);
         let mut g = self.jtr.select_rows(cols);
-        for (a, &q) in self.names.iter().enumerate() {
+        for (a, &q) in self
+            .names
+            .iter()
+            .enumerate()
+            .filter(|(_, q)| free.contains(q))
+        {
             let Some(pr) = self.problem.prior_within(q, free) else {
                 continue;
             };
-            if !free.contains(&q) {
-                continue;
-            }
             // The prior's row in the base coordinates, over the model's columns.
             let row =
                 DVector::from_iterator(cols.len(), cols.iter().map(|&j| self.t[(a, j)] / pr.sd));
@@ -219,7 +221,7 @@ impl<'a> Augmented<'a> {
             h += &row * row.transpose();
             g += &row * r;
         }
-        let step = h.clone().cholesky()?.solve(&g);
+        let step = h.cholesky()?.solve(&g);
         Some(g.dot(&step))
     }
 }
