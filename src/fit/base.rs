@@ -6,7 +6,7 @@
 //! loss's reweighting ([`reweight`]).
 
 use super::problem::{Observations, Param, TrajectoryProblem};
-use super::solve::{at_iteration_limit, loose, run_lm, solve, STAGE_FTOL};
+use super::solve::{at_iteration_limit, loose, run_lm, run_lm_damped, solve, STAGE_FTOL};
 use super::{guess, uncertainty, FitError, FitSettings, Loss, StartOutcome, StaticMode};
 use crate::fit::lm::LevenbergMarquardt;
 use crate::model::{Rig, State};
@@ -399,6 +399,7 @@ fn carry_over(
     let mut len = prefix;
     let mut iterations = 0;
     let mut reason = String::new();
+    let mut damping = None;
     while len < n {
         // Doubling, without a last stage much shorter than the one before it.
         len = if 3 * len >= n { n } else { 2 * len };
@@ -407,14 +408,21 @@ fn carry_over(
         if len < n {
             (lm.ftol, lm.fatol, lm.xtol) = (STAGE_FTOL, f64::INFINITY, STAGE_FTOL);
         }
-        let (q, _, it, why) = run_lm(&stage, p, settings.max_iters, lm).map_err(|e| {
-            FitError::NoStart(format!(
-                "carrying the fit of the first {} frames over {len}: {e}",
-                problem.frame_times().len()
-            ))
-        })?;
+        // Each stage fits nearly the problem the last one did: it starts from that one's
+        // damping, never above the default (a stage that stalled ends heavily damped).
+        if let Some(d) = damping {
+            lm = lm.with_damping(f64::min(d, LevenbergMarquardt::default().damping()));
+        }
+        let ((q, _, it, why), d) =
+            run_lm_damped(&stage, p, settings.max_iters, lm).map_err(|e| {
+                FitError::NoStart(format!(
+                    "carrying the fit of the first {} frames over {len}: {e}",
+                    problem.frame_times().len()
+                ))
+            })?;
         iterations += it;
         reason = why;
+        damping = Some(d);
         p = q;
         problem = stage;
     }

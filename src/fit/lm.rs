@@ -111,6 +111,23 @@ impl Default for LevenbergMarquardt {
     }
 }
 
+impl LevenbergMarquardt {
+    /// The damping the solver holds now (after a run: where it ended).
+    pub fn damping(&self) -> f64 {
+        self.lambda
+    }
+
+    /// Start from damping `lambda` instead of the default 1e-3: a fit that continues another
+    /// of nearly the same problem (a long recording's next stage) starts from where that one's
+    /// damping ended. From 1e-3, Nielsen's update lowers it threefold per accepted step, and
+    /// along a narrow valley (mu against the mass ratio) each of those steps is cut short:
+    /// a million frames' last stage took nine passes to cross what one undamped step does.
+    pub fn with_damping(mut self, lambda: f64) -> Self {
+        self.lambda = lambda;
+        self
+    }
+}
+
 /// The termination reason of a start left where it was ([`LevenbergMarquardt::flat_exit`]).
 pub const FLAT_START: &str = "the start leaves the parameter without a gradient";
 
@@ -413,5 +430,69 @@ mod tests {
             .unwrap();
         let p = res.state.best_param.unwrap();
         assert!((p[0] + p[1] - 3.0).abs() < 1e-8, "{p}");
+    }
+
+    /// A straight line fitted far from the origin, y = a + b t on t in [1000, 1001]: the
+    /// columns are nearly parallel (the valley mu and the mass ratio make in a long
+    /// recording). From near the optimum the default damping crawls along the valley, a
+    /// threefold cut per step; started undamped ([`LevenbergMarquardt::with_damping`]), one
+    /// step reaches the exact least-squares line (one or two more confirm it). Both end there.
+    struct Valley {
+        t: Vec<f64>,
+        y: Vec<f64>,
+    }
+    impl LeastSquares for Valley {
+        fn normal_equations(&self, p: &DVector<f64>) -> Result<Normal, Error> {
+            let n = self.t.len();
+            let r = DVector::from_fn(n, |i, _| p[0] + p[1] * self.t[i] - self.y[i]);
+            let j = DMatrix::from_fn(n, 2, |i, k| if k == 0 { 1.0 } else { self.t[i] });
+            Ok(Normal::from_dense(&r, &j))
+        }
+    }
+
+    #[test]
+    fn a_warm_damping_crosses_a_narrow_valley_at_once() {
+        let t: Vec<f64> = (0..21).map(|i| 1000.0 + 0.05 * i as f64).collect();
+        // A line with a wiggle, so the optimum leaves residuals.
+        let y: Vec<f64> = t
+            .iter()
+            .enumerate()
+            .map(|(i, &t)| 2.0 - 0.5 * (t - 1000.0) + 0.01 * (-1f64).powi(i as i32))
+            .collect();
+        // The least-squares line in closed form.
+        let n = t.len() as f64;
+        let (tm, ym) = (t.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
+        let sxy: f64 = t.iter().zip(&y).map(|(t, y)| (t - tm) * (y - ym)).sum();
+        let sxx: f64 = t.iter().map(|t| (t - tm).powi(2)).sum();
+        let b = sxy / sxx;
+        let opt = [ym - b * tm, b];
+        // Off the optimum along the valley's floor (a and b move together).
+        let start = DVector::from_vec(vec![opt[0] + 0.05 * 1000.0, opt[1] - 0.05]);
+        let run = |lm: LevenbergMarquardt| {
+            let res = Executor::new(
+                Valley {
+                    t: t.clone(),
+                    y: y.clone(),
+                },
+                lm,
+            )
+            .configure(|s| s.param(start.clone()).max_iters(200))
+            .run()
+            .unwrap();
+            (res.state.best_param.clone().unwrap(), res.state.get_iter())
+        };
+        let (cold, cold_iters) = run(LevenbergMarquardt::default());
+        let (warm, warm_iters) = run(LevenbergMarquardt::default().with_damping(1e-12));
+        for p in [&cold, &warm] {
+            assert!(
+                (p[1] - opt[1]).abs() < 1e-6 * opt[1].abs(),
+                "{p} against {opt:?}"
+            );
+        }
+        assert!(warm_iters <= 3, "{warm_iters} iterations");
+        assert!(
+            cold_iters > warm_iters + 2,
+            "{cold_iters} against {warm_iters}"
+        );
     }
 }

@@ -63,6 +63,17 @@ pub(super) fn run_lm<P: lm::LeastSquares + Clone>(
     max_iters: u64,
     lm: LevenbergMarquardt,
 ) -> Result<(DVector<f64>, f64, u64, String), String> {
+    run_lm_damped(problem, p0, max_iters, lm).map(|(solved, _)| solved)
+}
+
+/// [`run_lm`] with the damping the solver ended at ([`LevenbergMarquardt::damping`]).
+#[allow(clippy::type_complexity)]
+pub(super) fn run_lm_damped<P: lm::LeastSquares + Clone>(
+    problem: &P,
+    p0: DVector<f64>,
+    max_iters: u64,
+    lm: LevenbergMarquardt,
+) -> Result<((DVector<f64>, f64, u64, String), f64), String> {
     let res = Executor::new(problem.clone(), lm)
         .configure(|s| s.param(p0).max_iters(max_iters))
         .run()
@@ -74,5 +85,5 @@ pub(super) fn run_lm<P: lm::LeastSquares + Clone>(
         .get_termination_reason()
         .map_or_else(|| "not terminated".to_owned(), |r| r.to_string());
     let p = res.state.best_param.ok_or("no parameters")?;
-    Ok((p, cost, iters, reason))
+    Ok(((p, cost, iters, reason), res.solver.damping()))
 }
