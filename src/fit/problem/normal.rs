@@ -256,9 +256,17 @@ impl TrajectoryProblem {
                     *g = c * scale;
                 }
                 ss += r * r;
-                for a in 0..N + M {
+                // A row the motion does not move (the slider's height) has only camera
+                // columns: its products with the motion's are zeros, skipped (the sums are
+                // the same to the bit: a sum started at +0 never becomes -0).
+                let from = if g[..N].iter().all(|&x| x == 0.0) {
+                    N
+                } else {
+                    0
+                };
+                for a in from..N + M {
                     jtr[a] += g[a] * r;
-                    for b in 0..a + 1 {
+                    for b in from..a + 1 {
                         jtj[a][b] += g[a] * g[b];
                     }
                 }
