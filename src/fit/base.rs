@@ -399,7 +399,7 @@ fn carry_over(
     let mut len = prefix;
     let mut iterations = 0;
     let mut reason = String::new();
-    let mut damping = None;
+    let mut damping: Option<f64> = None;
     while len < n {
         // Doubling, without a last stage much shorter than the one before it.
         len = if 3 * len >= n { n } else { 2 * len };
@@ -409,9 +409,13 @@ fn carry_over(
             (lm.ftol, lm.fatol, lm.xtol) = (STAGE_FTOL, f64::INFINITY, STAGE_FTOL);
         }
         // Each stage fits nearly the problem the last one did: it starts from that one's
-        // damping, never above the default (a stage that stalled ends heavily damped).
+        // damping, never above the default (a stage that stalled ends heavily damped) nor
+        // below 1e-9, which leaves any step a fit can take undamped (a curvature that small
+        // relative to the diagonal is a parameter the data do not fix) and, should the
+        // next stage's first step fail, is undone in a few trials (each doubles the factor).
         if let Some(d) = damping {
-            lm = lm.with_damping(f64::min(d, LevenbergMarquardt::default().damping()));
+            let cold = LevenbergMarquardt::default().damping();
+            lm = lm.with_damping(d.clamp(1e-9, cold));
         }
         let ((q, _, it, why), d) =
             run_lm_damped(&stage, p, settings.max_iters, lm).map_err(|e| {
