@@ -6,7 +6,7 @@
 //! loss's reweighting ([`reweight`]).
 
 use super::problem::{Observations, Param, TrajectoryProblem};
-use super::solve::{at_iteration_limit, loose, run_lm, run_lm_damped, solve, STAGE_FTOL};
+use super::solve::{at_iteration_limit, loose, run_lm, run_lm_damped, solve, Traced, STAGE_FTOL};
 use super::{guess, uncertainty, FitError, FitSettings, Loss, StartOutcome, StaticMode};
 use crate::fit::lm::LevenbergMarquardt;
 use crate::model::{Rig, State};
@@ -196,9 +196,6 @@ struct Best {
     /// Why the best start's solve stopped.
     reason: String,
 }
-
-/// A solve's optimum, cost, iterations and why it stopped, or why it failed.
-type Traced = Result<(DVector<f64>, f64, u64, String), String>;
 
 /// The model a start fits.
 #[derive(Debug, Clone, Copy, PartialEq)]

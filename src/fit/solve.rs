@@ -13,6 +13,12 @@ pub(crate) const STAGE_FTOL: f64 = 1e-6;
 /// The optimum, its cost (1/2 chi-square) and the iterations, or why the solver failed.
 pub(super) type Solved = Result<(DVector<f64>, f64, u64), String>;
 
+/// The optimum, its cost, the iterations and why the solver stopped.
+pub(super) type Stopped = (DVector<f64>, f64, u64, String);
+
+/// A solve's [`Stopped`], or why the solver failed.
+pub(super) type Traced = Result<Stopped, String>;
+
 /// Run Levenberg-Marquardt from `p0` on `problem`.
 pub(super) fn solve(problem: &TrajectoryProblem, p0: DVector<f64>, max_iters: u64) -> Solved {
     solve_traced(problem, p0, max_iters).map(|(p, c, i, _)| (p, c, i))
@@ -46,7 +52,7 @@ pub(super) fn solve_traced(
     problem: &TrajectoryProblem,
     p0: DVector<f64>,
     max_iters: u64,
-) -> Result<(DVector<f64>, f64, u64, String), String> {
+) -> Traced {
     run_lm(problem, p0, max_iters, LevenbergMarquardt::default())
 }
 
@@ -62,18 +68,17 @@ pub(super) fn run_lm<P: lm::LeastSquares + Clone>(
     p0: DVector<f64>,
     max_iters: u64,
     lm: LevenbergMarquardt,
-) -> Result<(DVector<f64>, f64, u64, String), String> {
+) -> Traced {
     run_lm_damped(problem, p0, max_iters, lm).map(|(solved, _)| solved)
 }
 
 /// [`run_lm`] with the damping the solver ended at ([`LevenbergMarquardt::damping`]).
-#[allow(clippy::type_complexity)]
 pub(super) fn run_lm_damped<P: lm::LeastSquares + Clone>(
     problem: &P,
     p0: DVector<f64>,
     max_iters: u64,
     lm: LevenbergMarquardt,
-) -> Result<((DVector<f64>, f64, u64, String), f64), String> {
+) -> Result<(Stopped, f64), String> {
     let res = Executor::new(problem.clone(), lm)
         .configure(|s| s.param(p0).max_iters(max_iters))
         .run()
