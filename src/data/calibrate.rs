@@ -163,11 +163,21 @@ pub fn fit_rail(rec: &Recording) -> Result<(f64, [f64; 2], f64), String> {
 /// spreads of the first line (a few mis-tracked positions do not tilt it). `None` with fewer
 /// than 10 positions.
 pub fn off_line_spread(track: &[Option<[f64; 2]>]) -> Option<f64> {
-    let pts: Vec<[f64; 2]> = track.iter().flatten().copied().collect();
+    let mut pts: Vec<[f64; 2]> = Vec::with_capacity(track.len());
+    pts.extend(track.iter().flatten());
     if pts.len() < 10 {
         return None;
     }
-    let centre = [0, 1].map(|k| median(&mut pts.iter().map(|p| p[k]).collect::<Vec<_>>()));
+    // One scratch vector for every median (a million frames' track would otherwise page in
+    // six more of its size); the distances across the line are taken again from the points
+    // where they are needed, the same numbers.
+    let mut scratch: Vec<f64> = Vec::with_capacity(pts.len());
+    let mut median_of = |values: &mut dyn Iterator<Item = f64>| {
+        scratch.clear();
+        scratch.extend(values);
+        median(&mut scratch)
+    };
+    let centre = [0, 1].map(|k| median_of(&mut pts.iter().map(|p| p[k])));
     let mut keep = vec![true; pts.len()];
     let mut spread = 0.0;
     for _ in 0..2 {
@@ -180,15 +190,11 @@ pub fn off_line_spread(track: &[Option<[f64; 2]>]) -> Option<f64> {
         }
         let angle = 0.5 * (2.0 * sxy).atan2(sxx - syy);
         let (s, c) = angle.sin_cos();
-        let across: Vec<f64> = pts
-            .iter()
-            .map(|p| -s * (p[0] - centre[0]) + c * (p[1] - centre[1]))
-            .collect();
-        let mid = median(&mut across.clone());
-        let mut dev: Vec<f64> = across.iter().map(|d| (d - mid).abs()).collect();
-        spread = 1.4826 * median(&mut dev);
-        for (k, d) in keep.iter_mut().zip(&across) {
-            *k = (d - mid).abs() <= 5.0 * spread;
+        let across = |p: &[f64; 2]| -s * (p[0] - centre[0]) + c * (p[1] - centre[1]);
+        let mid = median_of(&mut pts.iter().map(across));
+        spread = 1.4826 * median_of(&mut pts.iter().map(|p| (across(p) - mid).abs()));
+        for (k, p) in keep.iter_mut().zip(&pts) {
+            *k = (across(p) - mid).abs() <= 5.0 * spread;
         }
     }
     Some(spread)

@@ -30,47 +30,54 @@ pub struct NoiseEstimate {
 /// Noise of each marker (slider, bob) from its third differences; `None` for a marker with
 /// fewer than 20 runs of four consecutive frames.
 pub fn from_tracks(obs: &Observations) -> [Option<NoiseEstimate>; 2] {
-    [0, 1].map(|m| {
-        let track = if m == 0 { &obs.slider } else { &obs.bob };
-        let mut d3 = Vec::new();
-        for w in track.windows(4) {
-            if let [Some(a), Some(b), Some(c), Some(d)] = w {
-                for k in 0..2 {
-                    d3.push(d[k] - 3.0 * c[k] + 3.0 * b[k] - a[k]);
-                }
-            }
-        }
-        estimate(&d3)
-    })
+    [0, 1].map(|m| estimate(if m == 0 { &obs.slider } else { &obs.bob }))
 }
 
-/// Trimmed mean of squares of third differences, starting from their median absolute value
-/// (robust to mis-tracked frames) and keeping those within [`TRIM`] deviations.
-fn estimate(d3: &[f64]) -> Option<NoiseEstimate> {
-    if d3.len() < 40 {
+/// A track's third differences, both coordinates of each run of four consecutive frames, in
+/// frame order.
+fn third_differences(track: &[Option<[f64; 2]>]) -> impl Iterator<Item = f64> + '_ {
+    track
+        .windows(4)
+        .flat_map(|w| match w {
+            [Some(a), Some(b), Some(c), Some(d)] => {
+                [0, 1].map(|k| Some(d[k] - 3.0 * c[k] + 3.0 * b[k] - a[k]))
+            }
+            _ => [None, None],
+        })
+        .flatten()
+}
+
+/// Trimmed mean of squares of a track's third differences, starting from their median
+/// absolute value (robust to mis-tracked frames) and keeping those within [`TRIM`]
+/// deviations. One vector of absolute values is held (the median needs it), sized once: the
+/// trimmed sum takes the differences again, in the same order, rather than a copy (a million
+/// frames' track would otherwise hold and page in three 16 MB vectors).
+fn estimate(track: &[Option<[f64; 2]>]) -> Option<NoiseEstimate> {
+    let mut abs = Vec::with_capacity(2 * track.len().saturating_sub(3));
+    abs.extend(third_differences(track).map(f64::abs));
+    let n = abs.len();
+    if n < 40 {
         return None;
     }
-    let mut abs: Vec<f64> = d3.iter().map(|v| v.abs()).collect();
     // The median by selection, not a sort: linear in a million frames.
-    let mid = abs.len() / 2;
+    let mid = n / 2;
     let robust = *abs.select_nth_unstable_by(mid, f64::total_cmp).1 / 0.674_489_750_196_081_7;
+    drop(abs);
     if !(robust.is_finite() && robust > 0.0) {
         // Noiseless (or quantised to zero steps) data: no noise level to speak of.
         return Some(NoiseEstimate {
             sigma: 0.0,
-            dof: d3.len() as f64 / OVERLAP,
+            dof: n as f64 / OVERLAP,
             source: "data",
         });
     }
-    let kept: Vec<f64> = d3
-        .iter()
-        .copied()
+    let (sum, kept) = third_differences(track)
         .filter(|v| v.abs() <= TRIM * robust)
-        .collect();
-    let var = kept.iter().map(|v| v * v).sum::<f64>() / kept.len() as f64;
+        .fold((0.0, 0usize), |(s, k), v| (s + v * v, k + 1));
+    let var = sum / kept as f64;
     Some(NoiseEstimate {
         sigma: (var / THIRD_DIFF_VAR).sqrt(),
-        dof: kept.len() as f64 / OVERLAP,
+        dof: kept as f64 / OVERLAP,
         source: "data",
     })
 }
