@@ -188,8 +188,15 @@ impl<'a> Bytes<'a> {
     }
 
     /// Digits from `i`: where they end and how many are significant (from the first nonzero
-    /// one on, counting those already seen, `significant`).
-    fn count_digits(&self, mut i: usize, mut significant: usize) -> (usize, usize) {
+    /// one on, counting those already seen, `significant`), with the mantissa `m` they extend
+    /// (its first 19 significant digits, wrapping beyond: a number with more is not taken
+    /// here).
+    fn count_digits(
+        &self,
+        mut i: usize,
+        mut significant: usize,
+        mut m: u64,
+    ) -> (usize, usize, u64) {
         while let Some(&c) = self.d.get(i) {
             if !c.is_ascii_digit() {
                 break;
@@ -197,35 +204,40 @@ impl<'a> Bytes<'a> {
             if significant > 0 || c != b'0' {
                 significant += 1;
             }
+            m = m.wrapping_mul(10).wrapping_add(u64::from(c - b'0'));
             i += 1;
         }
-        (i, significant)
+        (i, significant, m)
     }
 
     /// `null`, or a JSON number with a fraction or an exponent (how serde_json writes every
     /// f64) of at most 19 significant digits and a finite value: exact input to both std's and
-    /// serde_json's correctly rounded parsers, so the same f64.
+    /// serde_json's correctly rounded parsers, so the same f64. Most marker positions have few
+    /// digits and are computed here in one rounding ([`exact_decimal`]); the rest go to std.
     fn float(&mut self) -> Option<Option<f64>> {
         if self.lit(b"null").is_some() {
             return Some(None);
         }
         let start = self.at;
-        let int_start = start + usize::from(self.d.get(start) == Some(&b'-'));
-        let (mut i, mut significant) = self.count_digits(int_start, 0);
+        let negative = self.d.get(start) == Some(&b'-');
+        let int_start = start + usize::from(negative);
+        let (mut i, mut significant, mut m) = self.count_digits(int_start, 0, 0);
         if i == int_start || (i - int_start > 1 && self.d[int_start] == b'0') {
             return None;
         }
-        let mut fraction = false;
+        let mut fraction = 0;
         if self.d.get(i) == Some(&b'.') {
-            let (end, sig) = self.count_digits(i + 1, significant);
+            let (end, sig, mantissa) = self.count_digits(i + 1, significant, m);
             if end == i + 1 {
                 return None;
             }
-            (i, significant, fraction) = (end, sig, true);
+            fraction = end - i - 1;
+            (i, significant, m) = (end, sig, mantissa);
         }
-        let mut exponent = false;
+        let mut exponent = None;
         if matches!(self.d.get(i), Some(b'e' | b'E')) {
             i += 1;
+            let minus = self.d.get(i) == Some(&b'-');
             if matches!(self.d.get(i), Some(b'+' | b'-')) {
                 i += 1;
             }
@@ -233,19 +245,47 @@ impl<'a> Bytes<'a> {
             if n == 0 || n > 4 {
                 return None;
             }
+            let e = self.d[i..i + n]
+                .iter()
+                .fold(0i64, |e, &c| e * 10 + i64::from(c - b'0'));
             i += n;
-            exponent = true;
+            exponent = Some(if minus { -e } else { e });
         }
-        if !(fraction || exponent) || significant > 19 {
+        if (fraction == 0 && exponent.is_none()) || significant > 19 {
             return None;
         }
-        let v: f64 = std::str::from_utf8(&self.d[start..i]).ok()?.parse().ok()?;
+        // At most 19 significant digits (m fits in u64) and 4 of exponent; the fraction's
+        // digits are bounded by the message's length.
+        let exp10 = exponent.unwrap_or(0) - fraction as i64;
+        let v = match exact_decimal(m, exp10) {
+            Some(v) if negative => -v,
+            Some(v) => v,
+            None => std::str::from_utf8(&self.d[start..i]).ok()?.parse().ok()?,
+        };
         if !v.is_finite() {
             return None;
         }
         self.at = i;
         Some(Some(v))
     }
+}
+
+/// `m` times 10^`exp10` when one IEEE operation gives it correctly rounded (Clinger's fast
+/// path): `m` at most 2^53 and 10^|exp10| at most 10^22 are both exact doubles, so their
+/// product or quotient is rounded once, which is the correctly rounded value std's and
+/// serde_json's parsers return too. `None` outside that range.
+fn exact_decimal(m: u64, exp10: i64) -> Option<f64> {
+    /// 10^0 to 10^22, each exact in f64.
+    const POW10: [f64; 23] = [
+        1e0, 1e1, 1e2, 1e3, 1e4, 1e5, 1e6, 1e7, 1e8, 1e9, 1e10, 1e11, 1e12, 1e13, 1e14, 1e15, 1e16,
+        1e17, 1e18, 1e19, 1e20, 1e21, 1e22,
+    ];
+    if m > 1 << 53 {
+        return None;
+    }
+    let p = *POW10.get(usize::try_from(exp10.unsigned_abs()).ok()?)?;
+    let m = m as f64;
+    Some(if exp10 < 0 { m / p } else { m * p })
 }
 
 /// Read a frame in the exact layout of [`CanonicalFrame`], or `None` for any other message
@@ -481,6 +521,82 @@ mod tests {
         bad[name + 2] = 0xff;
         assert!(canonical_frame(&bad).is_none());
         assert_eq!(by_decode(&bad), by_serde(&bad));
+    }
+
+    /// The value serde_json (`float_roundtrip`, correctly rounded) reads for `text`, and the
+    /// canonical layout's, bit for bit; `None` when the layout leaves the frame to serde.
+    fn both_ways(text: &str) -> Option<(u64, u64)> {
+        let m = frame("1", "0", text, "0.5");
+        let fast = canonical_frame(m.as_bytes())?.markers[0].1?;
+        let serde: JMsg = serde_json::from_slice(m.as_bytes()).unwrap();
+        Some((
+            fast.to_bits(),
+            serde.markers.unwrap()[0].x.unwrap().to_bits(),
+        ))
+    }
+
+    #[test]
+    fn short_decimals_are_exact_on_both_sides_of_the_fast_paths_edges() {
+        // Clinger's fast path takes a mantissa up to 2^53 and a power of ten up to 10^22; one
+        // step past either edge goes to std's parser. Both give serde's bits.
+        for text in [
+            "9007199254740992.0",
+            "9007199254740993.0",
+            "-9007199254740992e-22",
+            "9007199254740992e-23",
+            "9007199254740993e22",
+            "1e22",
+            "1e23",
+            "1e-22",
+            "1e-23",
+            "123456789e-22",
+            "4.5e-23",
+            "0.0",
+            "-0.0",
+            "0e5",
+            "-0e-5",
+            "0.000",
+            "0.00000000000000000000000000012345",
+            "1234567890123456789e-10",
+            "0.1",
+            "0.30000000000000004",
+            "2.2250738585072014e-308",
+            "5e-324",
+            "1.7976931348623157e308",
+            "-6.09e-05",
+            "0.2350487",
+        ] {
+            let (fast, serde) = both_ways(text).unwrap_or_else(|| panic!("{text}: not taken"));
+            assert_eq!(fast, serde, "{text}");
+        }
+        // More than 19 significant digits: left to serde.
+        assert!(both_ways("1.0000000000000000000").is_none());
+        // Random short decimals over the whole fast path and past it.
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        for _ in 0..200_000 {
+            let digits = rng.random_range(1..=17u32);
+            let m = rng.random_range(0..10u64.pow(digits));
+            let e = rng.random_range(-26..=26i32);
+            let point = rng.random_range(0..=digits as usize);
+            let s = format!("{m:0width$}", width = digits as usize);
+            let (int, frac) = s.split_at(s.len() - point);
+            let int = if int.is_empty() {
+                "0"
+            } else {
+                int.trim_start_matches('0')
+            };
+            let int = if int.is_empty() { "0" } else { int };
+            let sign = if rng.random::<bool>() { "-" } else { "" };
+            for text in [
+                format!("{sign}{m}e{e}"),
+                format!("{sign}{int}.{frac}0"),
+                format!("{sign}{int}.{frac}0E{e:+}"),
+            ] {
+                if let Some((fast, serde)) = both_ways(&text) {
+                    assert_eq!(fast, serde, "{text}");
+                }
+            }
+        }
     }
 
     #[test]
