@@ -244,6 +244,8 @@ fn hinge_sse(t: &[f64], x: &[f64], t_star: f64) -> f64 {
     let Some(c) = a.lu().solve(&b) else {
         return f64::INFINITY;
     };
+    // A coefficient that is not finite makes the zeros' products NaN in the full terms: take
+    // those, so that the sum stays the one the full terms give.
     if !c.iter().all(|v| v.is_finite()) {
         return t
             .iter()
