@@ -54,6 +54,12 @@ pub trait LeastSquares {
     fn normal_equations(&self, p: &DVector<f64>) -> Result<Normal, Error>;
     /// Map `p` into the feasible set (bounds such as mu >= 0); the identity by default.
     fn project(&self, _p: &mut DVector<f64>) {}
+    /// The cost 1/2 r'r at `p` alone, the same number [`Self::normal_equations`] gives, when
+    /// it comes cheaper than they do; `None` (the default) when it does not, and the solver
+    /// then asks for both at once.
+    fn cost(&self, _p: &DVector<f64>) -> Option<Result<f64, Error>> {
+        None
+    }
 }
 
 /// argmin's iteration state for this solver: the gradient slot holds J'r and the Hessian
@@ -89,6 +95,8 @@ pub struct LevenbergMarquardt {
     converged: bool,
     /// The start left [`Self::flat_exit`]'s parameter without a gradient.
     flat: bool,
+    /// The last iteration rejected a trial before it kept one.
+    retried: bool,
 }
 
 impl Default for LevenbergMarquardt {
@@ -107,6 +115,7 @@ impl Default for LevenbergMarquardt {
             stalled: false,
             converged: false,
             flat: false,
+            retried: false,
         }
     }
 }
@@ -188,6 +197,14 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
         // the data do not constrain still gets a finite step.
         let max_diag = a.diagonal().max().max(1e-300);
         let diag = a.diagonal().map(|d| d.max(1e-12 * max_diag));
+        // A trial after a rejected one (in this iteration or the last) is tried on its cost
+        // first, and the normal equations are computed only where the step is kept: there a
+        // trial is about as likely to be rejected as kept (a misfitting recording's fits reject
+        // a third of their trials), and the cost alone takes a fraction of the run in dual
+        // numbers. The first trial of an iteration after one that kept its first gets both at
+        // once: near an optimum almost every such trial is kept. Every decision is the one
+        // taken on the normal equations' own cost, so the path is the same.
+        let mut rejected = false;
         for _ in 0..self.max_trials {
             let mut m = a.clone();
             for i in 0..m.nrows() {
@@ -210,6 +227,17 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
                 break;
             }
             let predicted = -(actual_step.dot(&g) + 0.5 * actual_step.dot(&(&a * &actual_step)));
+            if rejected || self.retried {
+                let alone = problem.problem("cost_count", |o| Ok(o.cost(&trial)))?;
+                // The test below, on the cost alone (a failed or non-finite run is rejected).
+                let kept = |c: f64| predicted > 0.0 && c < cost;
+                if alone.is_some_and(|c| !c.is_ok_and(kept)) {
+                    self.lambda *= self.nu;
+                    self.nu *= 2.0;
+                    rejected = true;
+                    continue;
+                }
+            }
             // Cost and normal equations together: near the optimum almost every trial is
             // accepted, and the dual-number run gives both for about the price of one.
             let trial_n =
@@ -217,6 +245,7 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
             let Some(trial_n) = trial_n.filter(Normal::is_finite) else {
                 self.lambda *= self.nu;
                 self.nu *= 2.0;
+                rejected = true;
                 continue;
             };
             let trial_cost = trial_n.cost;
@@ -226,6 +255,7 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
                 -1.0
             };
             if rho > 0.0 && trial_cost <= cost {
+                self.retried = rejected;
                 self.lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
                 self.nu = 2.0;
                 self.last_rel_decrease = (cost - trial_cost) / cost.max(f64::MIN_POSITIVE);
@@ -242,6 +272,7 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
             }
             self.lambda *= self.nu;
             self.nu *= 2.0;
+            rejected = true;
         }
         // No trial step decreased the cost: the current point is a minimum to working accuracy.
         self.stalled = true;
@@ -407,6 +438,78 @@ mod tests {
         assert!((&p - &opt).norm() == 0.0);
         let (q, evals, _) = run(vec![opt[0], opt[1] + 1e-3]);
         assert!(evals.unwrap() > 1 && (&q - &opt).norm() < 1e-6, "{q} {opt}");
+    }
+
+    /// The exponential problem with its cost alone on offer (`costed`), counting the runs of
+    /// either kind.
+    struct Costed {
+        inner: Exponential,
+        costed: bool,
+        normals: std::cell::Cell<usize>,
+        costs: std::cell::Cell<usize>,
+    }
+    impl LeastSquares for Costed {
+        fn normal_equations(&self, p: &DVector<f64>) -> Result<Normal, Error> {
+            self.normals.set(self.normals.get() + 1);
+            self.inner.normal_equations(p)
+        }
+        fn cost(&self, p: &DVector<f64>) -> Option<Result<f64, Error>> {
+            self.costed.then(|| {
+                self.costs.set(self.costs.get() + 1);
+                self.inner.normal_equations(p).map(|n| n.cost)
+            })
+        }
+    }
+
+    /// With the cost on offer, a trial after a rejected one is tried on its cost first: the
+    /// solver takes the same path to the same optimum, bit for bit, and computes the normal
+    /// equations once less for every such trial it rejects.
+    #[test]
+    fn a_trial_tried_on_its_cost_first_keeps_the_path() {
+        let run = |costed: bool| {
+            let t: Vec<f64> = (0..30).map(|i| i as f64 * 0.1).collect();
+            let y = t.iter().map(|t| 2.5 * (-1.3 * t).exp()).collect();
+            let problem = Costed {
+                inner: Exponential { t, y },
+                costed,
+                normals: std::cell::Cell::new(0),
+                costs: std::cell::Cell::new(0),
+            };
+            // Far enough that trials are rejected on the way.
+            let res = Executor::new(problem, LevenbergMarquardt::default())
+                .configure(|s| s.param(DVector::from_vec(vec![0.1, 3.0])).max_iters(200))
+                .run()
+                .unwrap();
+            let counts = res
+                .problem
+                .problem
+                .as_ref()
+                .map(|c| (c.normals.get(), c.costs.get()))
+                .unwrap();
+            (res.state.get_iter(), ended(res.state), counts)
+        };
+        let (iters, (p, reason), (normals, _)) = run(false);
+        let (iters_c, (p_c, reason_c), (normals_c, costs_c)) = run(true);
+        // Trials were rejected: more runs than the start and one per iteration.
+        assert!(
+            normals > iters as usize + 1,
+            "{normals} runs, {iters} iterations"
+        );
+        assert_eq!((iters_c, reason_c), (iters, reason));
+        assert!(p
+            .iter()
+            .zip(p_c.iter())
+            .all(|(a, b)| a.to_bits() == b.to_bits()));
+        assert!(
+            (p[0] - 2.5).abs() < 1e-8 && (p[1] + 1.3).abs() < 1e-8,
+            "{p}"
+        );
+        // Each cost tried first either ends a rejected trial (a run saved) or is followed by
+        // the normal equations of the trial kept.
+        assert!(
+            costs_c > 0 && normals_c < normals,
+            "{normals_c} against {normals}"
+        );
     }
 
     /// A degenerate problem (two parameters entering only as their sum) where J^T J is

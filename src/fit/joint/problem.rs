@@ -176,6 +176,18 @@ impl LeastSquares for JointProblem {
         self.normal_equations_blocked(p, None)
     }
 
+    /// The releases' costs alone ([`TrajectoryProblem::half_chi2`]), added in the order
+    /// [`Self::assemble`] adds theirs: the same number.
+    fn cost(&self, p: &DVector<f64>) -> Option<Result<f64, Error>> {
+        let offsets = self.offsets();
+        let costs: Result<Vec<f64>, Error> = (0..self.parts.len())
+            .into_par_iter()
+            .with_max_len(1)
+            .map(|k| self.parts[k].half_chi2(&self.sub(p, &self.index(k, offsets[k]))))
+            .collect();
+        Some(costs.map(|c| c.into_iter().fold(0.0, |sum, c| sum + c)))
+    }
+
     fn project(&self, p: &mut DVector<f64>) {
         // Each release's bounds on its own slice; the shared entries come out the same from
         // every release (their bounds depend on shared values only).

@@ -68,6 +68,22 @@ fn seed<const N: usize>(p: &DVector<f64>) -> Vec<Dual<N>> {
 }
 
 impl TrajectoryProblem {
+    /// Half the chi-square at `p` from one run in f64, summed as [`Self::normal_n`] sums its
+    /// cost (the data's rows in order, then the priors), so that it is the same number.
+    pub fn half_chi2(&self, p: &DVector<f64>) -> Result<f64, Error> {
+        self.counters.residuals.fetch_add(1, Ordering::Relaxed);
+        let mut ss = 0.0;
+        self.for_each_residual(&seed::<0>(p), |row, _, marker, d| {
+            let r = (d * (self.row_weight(row) / self.sigma[marker])).re;
+            ss += r * r;
+        })
+        .map_err(to_err)?;
+        for (_, r, _) in self.prior_rows(p.as_slice()) {
+            ss += r * r;
+        }
+        Ok(0.5 * ss)
+    }
+
     /// The normal equations at `p` with dual numbers of width `N` >= `p.len()` (slots beyond
     /// carry no seed), and the block sums over `block` frames when asked for.
     fn normal_n<const N: usize>(
@@ -309,6 +325,11 @@ impl LeastSquares for TrajectoryProblem {
         self.normal_equations_blocked(p, None)
     }
 
+    /// One run in f64: a quarter of a run in dual numbers of width 6, less at the wider ones.
+    fn cost(&self, p: &DVector<f64>) -> Option<Result<f64, Error>> {
+        Some(self.half_chi2(p))
+    }
+
     fn project(&self, p: &mut DVector<f64>) {
         let idx = |q: Param| self.free.iter().position(|&f| f == q);
         if let Some(i) = idx(Param::MuKinetic) {
@@ -355,5 +376,47 @@ impl LeastSquares for TrajectoryProblem {
         clamp(p, Param::RailTilt, -0.3, 0.3);
         clamp(p, Param::ScaleError, -0.5, 0.5);
         clamp(p, Param::Lag, -0.05, 0.05);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::fit::priors::Prior;
+    use std::sync::Arc;
+
+    /// The cost alone (one run without derivatives) is the normal equations' cost bit for bit,
+    /// the priors' terms included: the solver decides on it alone where it tries a cost first,
+    /// and takes the same path only if it is the same number.
+    #[test]
+    fn the_cost_alone_is_the_normal_equations_cost_bit_for_bit() {
+        let mut problem = crate::fit::test_support::paper_problem(11);
+        problem.free.extend([Param::RodLength, Param::MassRatio]);
+        let (l, r) = (problem.get(Param::RodLength), problem.get(Param::MassRatio));
+        problem.priors = Arc::new(vec![
+            Prior {
+                param: Param::RodLength,
+                centre: 1.001 * l,
+                sd: 1e-3,
+            },
+            Prior {
+                param: Param::MassRatio,
+                centre: r,
+                sd: 0.03 * r,
+            },
+        ]);
+        let p0 = problem.values();
+        for i in 0..20 {
+            let p = DVector::from_fn(p0.len(), |j, _| {
+                p0[j] * (1.0 + 2e-3 * (((i * 7 + j * 3) % 11) as f64 - 5.0) / 5.0)
+            });
+            let alone = problem.cost(&p).expect("a cost alone").unwrap();
+            let both = problem.normal_equations(&p).unwrap().cost;
+            assert_eq!(
+                alone.to_bits(),
+                both.to_bits(),
+                "at {p}: {alone} against {both}"
+            );
+        }
     }
 }
