@@ -109,6 +109,25 @@ impl JointProblem {
         DVector::from_iterator(idx.len(), idx.iter().map(|&i| p[i]))
     }
 
+    /// `f(k, part, q)` of every release `k` at its part `q` of the joint vector `p`, the
+    /// releases in parallel, in release order with each one's indices in `p`.
+    fn per_part<R: Send>(
+        &self,
+        p: &DVector<f64>,
+        f: impl Fn(usize, &TrajectoryProblem, &DVector<f64>) -> Result<R, Error> + Sync,
+    ) -> Result<Vec<(Vec<usize>, R)>, Error> {
+        let offsets = self.offsets();
+        (0..self.parts.len())
+            .into_par_iter()
+            .with_max_len(1)
+            .map(|k| {
+                let idx = self.index(k, offsets[k]);
+                let r = f(k, &self.parts[k], &self.sub(p, &idx))?;
+                Ok((idx, r))
+            })
+            .collect()
+    }
+
     /// Each release's normal equations at `p` (in parallel), with their block sums when
     /// `block` gives each release's frames per block.
     fn part_normals(
@@ -116,17 +135,9 @@ impl JointProblem {
         p: &DVector<f64>,
         block: Option<&[usize]>,
     ) -> Result<Vec<(Vec<usize>, Normal)>, Error> {
-        let offsets = self.offsets();
-        (0..self.parts.len())
-            .into_par_iter()
-            .with_max_len(1)
-            .map(|k| {
-                let idx = self.index(k, offsets[k]);
-                let q = self.sub(p, &idx);
-                let n = self.parts[k].normal_equations_blocked(&q, block.map(|b| b[k]))?;
-                Ok((idx, n))
-            })
-            .collect()
+        self.per_part(p, |k, part, q| {
+            part.normal_equations_blocked(q, block.map(|b| b[k]))
+        })
     }
 
     /// The releases' normal equations summed into the joint ones.
@@ -179,13 +190,8 @@ impl LeastSquares for JointProblem {
     /// The releases' costs alone ([`TrajectoryProblem::half_chi2`]), added in the order
     /// [`Self::assemble`] adds theirs: the same number.
     fn cost(&self, p: &DVector<f64>) -> Option<Result<f64, Error>> {
-        let offsets = self.offsets();
-        let costs: Result<Vec<f64>, Error> = (0..self.parts.len())
-            .into_par_iter()
-            .with_max_len(1)
-            .map(|k| self.parts[k].half_chi2(&self.sub(p, &self.index(k, offsets[k]))))
-            .collect();
-        Some(costs.map(|c| c.into_iter().fold(0.0, |sum, c| sum + c)))
+        let costs = self.per_part(p, |_, part, q| part.half_chi2(q));
+        Some(costs.map(|c| c.into_iter().fold(0.0, |sum, (_, c)| sum + c)))
     }
 
     fn project(&self, p: &mut DVector<f64>) {
@@ -288,5 +294,34 @@ impl Candidate for JointProblem {
         let mut at = self.clone();
         at.set_values(p);
         select::score_drops_by(&at, candidates, |nu| at.with_nuisance(nu, at.mu_static()))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The joint cost alone is the joint normal equations' cost bit for bit: the releases'
+    /// costs added in the order their normal equations are (the solver's cost-first trials
+    /// take the joint path only if it is the same number).
+    #[test]
+    fn the_joint_cost_alone_is_the_normal_equations_cost_bit_for_bit() {
+        let parts: Vec<TrajectoryProblem> = [11, 12, 13]
+            .map(crate::fit::test_support::paper_problem)
+            .into();
+        let joint = JointProblem::new(parts, false);
+        let p0 = joint.values();
+        assert!(
+            p0.len() > joint.parts[0].free.len(),
+            "releases share mu only"
+        );
+        for i in 0..10 {
+            let p = DVector::from_fn(p0.len(), |j, _| {
+                p0[j] * (1.0 + 2e-3 * (((i * 5 + j * 3) % 7) as f64 - 3.0) / 3.0)
+            });
+            let alone = joint.cost(&p).expect("a cost alone").unwrap();
+            let both = joint.normal_equations(&p).unwrap().cost;
+            assert_eq!(alone.to_bits(), both.to_bits(), "{alone} against {both}");
+        }
     }
 }
