@@ -138,6 +138,12 @@ fn refuse_input<P: AsRef<std::path::Path>>(
 /// Parse arguments, run the command, print errors with their causes.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
+    // The main thread is one of the pool's threads: it runs its share of each parallel step
+    // instead of sleeping while two others do (this machine's two cores, one thread fewer to
+    // start and to wake). Only the first pool built wins; an error leaves rayon's default.
+    let _ = rayon::ThreadPoolBuilder::new()
+        .use_current_thread()
+        .build_global();
     appell::output::remove_temporaries_on_signal();
     let result = match cli.command {
         Command::Inspect(args) => inspect::run(args),

@@ -173,13 +173,9 @@ impl Reading<'_> {
             // The receiver is gone only when reading stopped before this chunk.
             let _ = tx.send(prepared);
         };
-        // On a pool thread (a directory's recordings are read in parallel) the chunk is
-        // prepared here: waiting there for the pool could leave no thread to prepare it.
-        if rayon::current_thread_index().is_some() {
-            prepare();
-        } else {
-            rayon::spawn(prepare);
-        }
+        // On a pool thread too (the command line's main thread is one; a directory's
+        // recordings are read in parallel): the wait for it runs the pool's pending jobs.
+        rayon::spawn(prepare);
         self.deferred.push_back(Deferred {
             ready,
             start,
@@ -209,10 +205,8 @@ impl Reading<'_> {
     /// Read a prepared chunk's records in order. Damage is reported at the bytes read when
     /// the chunk was (the reader has read on since), unless a place in the file is known.
     fn finish_chunk(&mut self, d: Deferred) -> Result<(Step, Option<u64>), DataError> {
-        let prepared = d
-            .ready
-            .recv()
-            .unwrap_or_else(|_| Prepared::Damage(format!("chunk at byte {}: unreadable", d.start)));
+        let prepared = wait_for(&d.ready)
+            .unwrap_or_else(|| Prepared::Damage(format!("chunk at byte {}: unreadable", d.start)));
         let (step, at) = match prepared {
             Prepared::Damage(why) => (Step::Damage(why), None),
             Prepared::Unsupported(c) => {
@@ -341,6 +335,25 @@ enum Prepared {
     OverBudget(u64),
     /// Its records.
     Records(ChunkRecords),
+}
+
+/// What `ready` brings (None when its sender is gone). A pool thread runs the pool's pending
+/// jobs while it waits, since the chunk may be one of them (in a pool of one thread it always
+/// is); once the pool has none left, the chunk is being prepared on another thread and the
+/// wait blocks.
+fn wait_for(ready: &std::sync::mpsc::Receiver<Prepared>) -> Option<Prepared> {
+    use std::sync::mpsc::TryRecvError;
+    loop {
+        match ready.try_recv() {
+            Ok(prepared) => return Some(prepared),
+            Err(TryRecvError::Disconnected) => return None,
+            Err(TryRecvError::Empty) => {
+                if rayon::yield_now() != Some(rayon::Yield::Executed) {
+                    return ready.recv().ok();
+                }
+            }
+        }
+    }
 }
 
 /// A chunk's records, decompressed (or copied, when stored uncompressed), as far as they
@@ -521,13 +534,40 @@ mod tests {
             read_from(bytes, Path::new("t.mcap"), &ReadOptions::default(), None).unwrap()
         };
         let outside = read(&bytes);
-        // A pool of one thread, busy reading: its chunks cannot be handed to it.
-        let pool = rayon::ThreadPoolBuilder::new()
-            .num_threads(1)
-            .build()
-            .unwrap();
-        let inside = pool.install(|| read(&bytes));
-        for parsed in [&outside, &inside] {
+        // `f` on a thread of its own: a deadlock fails the test instead of hanging it.
+        fn finishes<R: Send + 'static>(what: &str, f: impl FnOnce() -> R + Send + 'static) -> R {
+            let (tx, rx) = std::sync::mpsc::channel();
+            std::thread::spawn(move || tx.send(f()));
+            rx.recv_timeout(std::time::Duration::from_secs(120))
+                .unwrap_or_else(|_| panic!("{what} does not finish"))
+        }
+        let pool = |n: usize| {
+            rayon::ThreadPoolBuilder::new()
+                .num_threads(n)
+                .build()
+                .unwrap()
+        };
+        // A pool of one thread, busy reading: its chunks cannot be handed to another.
+        let own = bytes.clone();
+        let inside = finishes("a pool of one", move || pool(1).install(|| read(&own)));
+        // Each of a pool's two threads reading a recording of its own (a directory): each
+        // waits for chunks that only the two of them can prepare.
+        let own = bytes.clone();
+        let (first, second) = finishes("two pool threads reading side by side", move || {
+            pool(2).install(|| rayon::join(|| read(&own), || read(&own)))
+        });
+        // The command line's pool: the calling thread is its thread 0 and reads outside any
+        // parallel step; the other thread prepares the chunks it hands out.
+        let own = bytes.clone();
+        let main = finishes("the pool's own thread 0", move || {
+            let _pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(2)
+                .use_current_thread()
+                .build()
+                .unwrap();
+            read(&own)
+        });
+        for parsed in [&outside, &inside, &first, &second, &main] {
             assert_eq!(parsed.series.len(), 2);
             for s in &parsed.series {
                 assert_eq!(s.times.len(), rec.times.len());
