@@ -28,6 +28,7 @@
 #![warn(missing_docs)]
 
 pub mod bench;
+pub mod cpu;
 pub mod data;
 pub mod fit;
 pub mod model;

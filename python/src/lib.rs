@@ -800,6 +800,14 @@ fn version() -> &'static str {
 
 #[pymodule]
 fn _appell(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // A wheel built for another machine's CPU: an ImportError that says so, not a crash.
+    if let Some(feature) = appell::cpu::missing_feature() {
+        return Err(pyo3::exceptions::PyImportError::new_err(format!(
+            "{}{feature}{}",
+            appell::cpu::REFUSAL_START,
+            appell::cpu::REFUSAL_END
+        )));
+    }
     m.add_function(wrap_pyfunction!(read_recording_py, m)?)?;
     m.add_function(wrap_pyfunction!(inspect_py, m)?)?;
     m.add_function(wrap_pyfunction!(fit_py, m)?)?;
