@@ -57,11 +57,25 @@ fn same_file(a: &Path, b: &Path) -> bool {
     canonical(a) == canonical(b)
 }
 
-/// Install, once, a handler that removes the temporary files and directories being written
-/// when the process receives SIGINT, SIGTERM or SIGHUP, then exits with code 130. Without it
-/// an interrupted `synth` of a large recording would leave its hidden temporary file behind,
-/// and `bench --read` its directory of recordings.
+/// Ask for a handler that removes the temporary files and directories being written when the
+/// process receives SIGINT, SIGTERM or SIGHUP, then exits with code 130. Without it an
+/// interrupted `synth` of a large recording would leave its hidden temporary file behind, and
+/// `bench --read` its directory of recordings. The handler (a thread of its own) is installed
+/// once, just before the first temporary is created: a run that writes none, such as a fit
+/// printing its report, starts no thread for it. A library user's process that never asks
+/// keeps its own signal handling.
 pub fn remove_temporaries_on_signal() {
+    HANDLER_WANTED.store(true, std::sync::atomic::Ordering::Relaxed);
+}
+
+/// Whether [`remove_temporaries_on_signal`] was asked for.
+static HANDLER_WANTED: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Install the signal handler, once, if it was asked for: called before a temporary is created.
+fn install_handler_if_wanted() {
+    if !HANDLER_WANTED.load(std::sync::atomic::Ordering::Relaxed) {
+        return;
+    }
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
         // An error here means another handler is installed (a library user's): keep theirs.
@@ -156,6 +170,7 @@ pub fn write_atomic(
     prefix.push(".");
     // Created with O_EXCL under a fresh random name (retried if taken), then registered for
     // the signal handler: a name that existed is never ours to remove.
+    install_handler_if_wanted();
     let tmp = tempfile::Builder::new()
         .prefix(&prefix)
         .suffix(".tmp")
@@ -229,6 +244,7 @@ pub struct TempDir {
 impl TempDir {
     /// A new directory named `PREFIX` and random characters.
     pub fn new(prefix: &str) -> std::io::Result<TempDir> {
+        install_handler_if_wanted();
         let dir = tempfile::Builder::new().prefix(prefix).tempdir()?;
         let path = dir.path().to_owned();
         register(&path, true);
