@@ -121,6 +121,13 @@ impl Default for LevenbergMarquardt {
 }
 
 impl LevenbergMarquardt {
+    /// After a trial that failed or was rejected: Nielsen's damping increase, faster with each
+    /// failure in a row (reset to doubling when a step is kept).
+    fn raise_damping(&mut self) {
+        self.lambda *= self.nu;
+        self.nu *= 2.0;
+    }
+
     /// The damping the solver holds now (after a run: where it ended).
     pub fn damping(&self) -> f64 {
         self.lambda
@@ -211,8 +218,7 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
                 m[(i, i)] += self.lambda * diag[i];
             }
             let Some(chol) = m.cholesky() else {
-                self.lambda *= self.nu;
-                self.nu *= 2.0;
+                self.raise_damping();
                 continue;
             };
             let step = -chol.solve(&g);
@@ -232,8 +238,7 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
                 // The test below, on the cost alone (a failed or non-finite run is rejected).
                 let kept = |c: f64| predicted > 0.0 && c < cost;
                 if alone.is_some_and(|c| !c.is_ok_and(kept)) {
-                    self.lambda *= self.nu;
-                    self.nu *= 2.0;
+                    self.raise_damping();
                     rejected = true;
                     continue;
                 }
@@ -243,8 +248,7 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
             let trial_n =
                 problem.problem("jacobian_count", |o| Ok(o.normal_equations(&trial).ok()))?;
             let Some(trial_n) = trial_n.filter(Normal::is_finite) else {
-                self.lambda *= self.nu;
-                self.nu *= 2.0;
+                self.raise_damping();
                 rejected = true;
                 continue;
             };
@@ -270,8 +274,7 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
                     None,
                 ));
             }
-            self.lambda *= self.nu;
-            self.nu *= 2.0;
+            self.raise_damping();
             rejected = true;
         }
         // No trial step decreased the cost: the current point is a minimum to working accuracy.
