@@ -170,6 +170,8 @@ pub fn run(args: Args) -> Result<(), Failure> {
         for (file, r) in results {
             match r {
                 Ok((_, rep)) => {
+                    // A failed result is reported, and is no answer: it counts toward exit 1.
+                    failed += usize::from(rep.failed.is_some());
                     let mut v = fit_json(&rep);
                     v["recording"] = serde_json::json!(file.display().to_string());
                     provenance(&mut v, std::slice::from_ref(&file), &args.rig);
@@ -199,7 +201,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         }
         if failed > 0 {
             return Err(Failure::Run(anyhow!(
-                "{failed} recording(s) could not be fitted"
+                "{failed} recording(s) could not be fitted or their fit failed"
             )));
         }
         return Ok(());
@@ -235,6 +237,10 @@ pub fn run(args: Args) -> Result<(), Failure> {
             )],
         };
         written(p, render(p, &figure), args.json)?;
+    }
+    // A failed result is reported in full, and is no answer: exit 1 with the reason.
+    if let Some(why) = &rep.failed {
+        return Err(Failure::Run(anyhow!("{why}")));
     }
     Ok(())
 }

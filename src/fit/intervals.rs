@@ -91,15 +91,23 @@ pub(super) fn within_bounds(q: Param, mut e: Estimate, mu_k_low: f64) -> Estimat
 
 /// The fit failed although it ran when mu_kinetic sits at its bound 0 (within two standard
 /// errors of it, and below 1e-3) while Stribeck's law or viscous rail friction carries the
-/// friction: no Coulomb coefficient was measured, whatever its interval says. Said as such.
+/// friction (mu_static at 1e-3 or more, or viscous friction worth 1e-3 of the static load at
+/// 0.1 m/s): no Coulomb coefficient was measured, whatever its interval says. Said as such.
 pub(super) fn pinned_friction(
     problem: &TrajectoryProblem,
     mu: Option<&Estimate>,
 ) -> Option<String> {
     let mu = mu?;
-    let carried = if problem.free.contains(&Param::StribeckVelocity) {
+    // Only a term that does carry friction: on a frictionless rail the law's terms sit at 0
+    // with mu_kinetic, and mu_kinetic = 0 is then the measurement (a tenth of a per mille of
+    // the static load, at a slide's 0.1 m/s for viscous friction).
+    let rig = &problem.rig;
+    let load = (rig.slider_mass + rig.bob_mass) * rig.gravity;
+    let carried = if problem.free.contains(&Param::StribeckVelocity) && rig.mu_static >= 1e-3 {
         "Stribeck's law (mu_static and the Stribeck speed)"
-    } else if problem.free.contains(&Param::ViscousFriction) {
+    } else if problem.free.contains(&Param::ViscousFriction)
+        && rig.viscous_friction * 0.1 >= 1e-3 * load
+    {
         "viscous rail friction"
     } else {
         return None;
@@ -186,11 +194,18 @@ mod tests {
             Param::MuStatic,
             Param::StribeckVelocity,
         ]);
-        let viscous = problem(vec![Param::MuKinetic, Param::ViscousFriction]);
+        let mut viscous = problem(vec![Param::MuKinetic, Param::ViscousFriction]);
         let coulomb = problem(vec![Param::MuKinetic, Param::X]);
         let pinned = estimate(0.0, 0.26);
         assert!(pinned_friction(&stribeck, Some(&pinned)).is_some());
+        // A frictionless rail: viscous friction at 0 with mu_kinetic carries nothing, and
+        // mu_kinetic = 0 is the measurement; at 0.1 N s/m it carries the friction.
+        assert!(pinned_friction(&viscous, Some(&pinned)).is_none());
+        viscous.rig.viscous_friction = 0.1;
         assert!(pinned_friction(&viscous, Some(&pinned)).is_some());
+        let mut frictionless = stribeck.clone();
+        frictionless.rig.mu_static = 2e-4;
+        assert!(pinned_friction(&frictionless, Some(&pinned)).is_none());
         assert!(pinned_friction(&coulomb, Some(&pinned)).is_none());
         assert!(pinned_friction(&stribeck, Some(&estimate(0.25, 0.01))).is_none());
         // Clear of zero by many standard errors: a small but measured coefficient.

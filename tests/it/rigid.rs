@@ -582,6 +582,52 @@ fn mu_pinned_at_zero_by_stribeck_is_reported_as_a_failed_fit() {
     assert!(limited.starts_with("The fit failed"), "{limited}");
 }
 
+/// The same failure from the command line is no answer: exit 1 with the reason, mu_kinetic
+/// null in the JSON (the report still printed in full), alone and in a directory of
+/// recordings.
+#[test]
+fn a_failed_fit_exits_1_with_mu_null() {
+    let rig = repo("tests/data/rigid/rigid_heavy_lab.toml");
+    let rec = repo("tests/data/rigid/rigid_heavy.csv");
+    let run = |input: &Path| {
+        Command::new(env!("CARGO_BIN_EXE_appell"))
+            .args([
+                "fit",
+                "--json",
+                "--plain",
+                "--no-profile",
+                "--with",
+                "stribeck",
+                "--rig",
+            ])
+            .arg(&rig)
+            .arg(input)
+            .output()
+            .unwrap()
+    };
+    let out = run(&rec);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(err.contains("The fit failed"), "{err}");
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(
+        v["failed"].is_string() && v["mu_kinetic"].is_null(),
+        "{}",
+        v["mu_kinetic"]
+    );
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::copy(&rec, dir.path().join("rigid_heavy.csv")).unwrap();
+    let out = run(dir.path());
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    let line = String::from_utf8_lossy(&out.stdout);
+    let v: serde_json::Value = serde_json::from_str(line.trim()).unwrap();
+    assert!(
+        v["failed"].is_string() && v["mu_kinetic"].is_null(),
+        "{line}"
+    );
+}
+
 /// With a tilted rail and pivot damping the rigid body's energy (PHYSICS.md, "Rigid pendulum":
 /// E = 1/2 (m1 + m_p) x'^2 - m_p d x' w sin + 1/2 J w^2 - (m1 + m_p) g_x x - m_p g_x d cos
 /// - m_p g_y d sin) changes by the friction work plus the damping work.
