@@ -500,6 +500,15 @@ pub(super) fn fit(
     let mut problem = TrajectoryProblem::new(fit_obs, *rig, g.y0, free, settings.options);
     problem.tie_static = settings.mu_static != StaticMode::Fixed;
     problem.sigma = sigma;
+    // Frame times are a measurement too: their scatter about a uniform grid weighs each row.
+    let sigma_t = super::noise::frame_time_noise(&obs.times);
+    problem.set_time_noise(sigma_t);
+    if problem.time_noise > 0.0 {
+        warnings.push(format!(
+            "the frame times scatter by {:.3} ms about their frame rate's uniform grid (timestamps rounded or jittered): a marker moving at v is off by v times that, and each position is weighted for it",
+            1e3 * sigma_t
+        ));
+    }
     // A short recording's candidates take the rig file's priors and freed measurements now,
     // so the measured-rig stage has nothing left to refit; its probes go without them.
     let plain = problem.clone();

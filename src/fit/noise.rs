@@ -33,6 +33,67 @@ pub fn from_tracks(obs: &Observations) -> [Option<NoiseEstimate>; 2] {
     [0, 1].map(|m| estimate(if m == 0 { &obs.slider } else { &obs.bob }))
 }
 
+/// Frame times scattering less than this share of a frame about their uniform grid are
+/// exact for the fit (a CSV's microsecond digits); more than a quarter frame is a variable
+/// frame rate, whose times are the camera's own, not a clock's error.
+const TIME_NOISE_RANGE: [f64; 2] = [1e-3, 0.25];
+
+/// The frame times' noise (s): the RMS deviation of `times` from the uniform grid that fits
+/// them best (least squares on the frame numbers the median step gives, so a dropped frame is
+/// a gap, not an error). A phone writes its timestamps rounded to the millisecond (at 240
+/// frames/s they scatter 0.29 ms about the grid) or jittered by its clock; a marker moving at
+/// v is then off by v times it. 0 when the scatter is below a thousandth of a frame, or above
+/// a quarter of one (a variable frame rate: the times are then the frames' own).
+pub fn frame_time_noise(times: &[f64]) -> f64 {
+    let n = times.len();
+    if n < 10 {
+        return 0.0;
+    }
+    let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+    let mid = steps.len() / 2;
+    let median = *steps.select_nth_unstable_by(mid, f64::total_cmp).1;
+    // The mean of the steps near the median, not the median: 240 frames/s written in whole
+    // milliseconds steps by 4, 4, 4, 5, 4, 4, 5 ms, whose median is 4 and mean 4.167 (a
+    // dropped frame's double step is left out).
+    let near: Vec<f64> = steps
+        .iter()
+        .copied()
+        .filter(|d| *d > 0.5 * median && *d < 1.5 * median)
+        .collect();
+    let step = near.iter().sum::<f64>() / near.len().max(1) as f64;
+    if !(step.is_finite() && step > 0.0) {
+        return 0.0;
+    }
+    let k: Vec<f64> = times
+        .iter()
+        .map(|t| ((t - times[0]) / step).round())
+        .collect();
+    let (mk, mt) = (
+        k.iter().sum::<f64>() / n as f64,
+        times.iter().sum::<f64>() / n as f64,
+    );
+    let (mut skk, mut skt) = (0.0, 0.0);
+    for (ki, ti) in k.iter().zip(times) {
+        skk += (ki - mk) * (ki - mk);
+        skt += (ki - mk) * (ti - mt);
+    }
+    if skk <= 0.0 {
+        return 0.0;
+    }
+    let slope = skt / skk;
+    let ss: f64 = k
+        .iter()
+        .zip(times)
+        .map(|(ki, ti)| (ti - mt - slope * (ki - mk)).powi(2))
+        .sum();
+    let rms = (ss / (n - 2) as f64).sqrt();
+    if rms < TIME_NOISE_RANGE[0] * step || rms > TIME_NOISE_RANGE[1] * step {
+        0.0
+    } else {
+        rms
+    }
+}
+
 /// A track's third differences, both coordinates of each run of four consecutive frames, in
 /// frame order.
 fn third_differences(track: &[Option<[f64; 2]>]) -> impl Iterator<Item = f64> + '_ {
@@ -133,5 +194,31 @@ mod tests {
                 est.sigma
             );
         }
+    }
+}
+
+#[cfg(test)]
+mod time_tests {
+    use super::frame_time_noise;
+
+    /// Times rounded to the millisecond at 240 frames/s scatter by 1 ms / sqrt(12) about their
+    /// grid (uniform rounding errors); exact times, and times with a dropped frame, have none;
+    /// a frame rate that changes by half has its own times.
+    #[test]
+    fn rounded_times_have_the_rounding_noise_and_exact_ones_none() {
+        let exact: Vec<f64> = (0..480).map(|k| k as f64 / 240.0).collect();
+        assert_eq!(frame_time_noise(&exact), 0.0);
+        let gap: Vec<f64> = exact.iter().copied().filter(|t| *t != 0.5).collect();
+        assert_eq!(frame_time_noise(&gap), 0.0);
+        let rounded: Vec<f64> = exact
+            .iter()
+            .map(|t| (t * 1000.0).round() / 1000.0)
+            .collect();
+        let s = frame_time_noise(&rounded);
+        let uniform = 1e-3 / 12f64.sqrt();
+        assert!((s / uniform - 1.0).abs() < 0.1, "{s} against {uniform}");
+        let mut variable = exact[..240].to_vec();
+        variable.extend((0..240).map(|k| 1.0 + k as f64 / 160.0));
+        assert_eq!(frame_time_noise(&variable), 0.0);
     }
 }

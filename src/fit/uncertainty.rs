@@ -411,6 +411,7 @@ pub fn windows(
             m.camera = problem.camera;
             m.tie_static = problem.tie_static && !problem.free.contains(&Param::MuStatic);
             m.sigma = problem.sigma;
+            m.set_time_noise(problem.time_noise);
             // Only a stretch where the whole fit slides says anything about mu_kinetic, and a
             // slide of a few frames fixes it poorly and non-linearly (its linear standard error
             // is then too small): 30 sliding frames of the whole fit's motion at least (a
@@ -493,13 +494,10 @@ pub fn window_spread(windows: &[WindowFit], mu: f64) -> f64 {
     }
 }
 
-/// Whether the windows' values agree within their errors: the p-value of
-/// sum ((mu_i - mean) / se_i)^2 against chi-square with (windows - 1) degrees of freedom, the
-/// mean weighted by 1 / se^2. `None` with fewer than two windows.
-pub fn window_consistency(windows: &[WindowFit]) -> Option<f64> {
-    if windows.len() < 2 {
-        return None;
-    }
+/// The windows' weighted squared deviations from their weighted mean, sum ((mu_i - mean) /
+/// se_i)^2 with the mean weighted by 1 / se^2 (chi-square with windows - 1 degrees of freedom
+/// when they agree).
+fn window_chi2(windows: &[WindowFit]) -> f64 {
     let w: Vec<f64> = windows.iter().map(|x| 1.0 / x.stderr.powi(2)).collect();
     let sw: f64 = w.iter().sum();
     let mean = windows
@@ -508,11 +506,37 @@ pub fn window_consistency(windows: &[WindowFit]) -> Option<f64> {
         .map(|(x, wi)| x.mu_kinetic * wi)
         .sum::<f64>()
         / sw;
-    let q: f64 = windows
+    windows
         .iter()
         .zip(&w)
         .map(|(x, wi)| (x.mu_kinetic - mean).powi(2) * wi)
-        .sum();
+        .sum()
+}
+
+/// The windows' scale factor S = sqrt(chi2 / (windows - 1)) ([`window_chi2`]); 1 with fewer
+/// than two windows, or when they agree better than their errors say. Above 1 the windows
+/// scatter more than their errors allow, and an error made from them is short by this factor
+/// (the Particle Data Group's scale factor).
+pub fn window_scale_factor(windows: &[WindowFit]) -> f64 {
+    if windows.len() < 2 {
+        return 1.0;
+    }
+    let s = (window_chi2(windows) / (windows.len() - 1) as f64).sqrt();
+    if s.is_finite() {
+        s.max(1.0)
+    } else {
+        1.0
+    }
+}
+
+/// Whether the windows' values agree within their errors: the p-value of [`window_chi2`]
+/// against chi-square with (windows - 1) degrees of freedom. `None` with fewer than two
+/// windows.
+pub fn window_consistency(windows: &[WindowFit]) -> Option<f64> {
+    if windows.len() < 2 {
+        return None;
+    }
+    let q = window_chi2(windows);
     if !q.is_finite() {
         return Some(0.0);
     }
@@ -702,7 +726,10 @@ const PROFILE_RISE_TOL: f64 = 2.5e-4;
 
 #[cfg(test)]
 mod tests {
-    use super::{motion_bounds, runs_p, window_spread, WindowCut, WindowFit, MAX_WINDOWS};
+    use super::{
+        motion_bounds, runs_p, window_scale_factor, window_spread, WindowCut, WindowFit,
+        MAX_WINDOWS,
+    };
     use crate::model::{Direction, Mode};
     use crate::sim::{Event, EventKind, Outcome};
 
@@ -769,6 +796,25 @@ mod tests {
             (bounds.len(), cut),
             (MAX_WINDOWS + 1, WindowCut::SlideGroups)
         );
+    }
+
+    /// The scale factor is the windows' spread over their errors (chi-square per degree of
+    /// freedom, its square root), never below 1.
+    #[test]
+    fn window_scale_factor_is_the_spread_over_the_errors() {
+        let w = |mu: f64, stderr: f64| WindowFit {
+            t_start: 0.0,
+            t_end: 1.0,
+            mu_kinetic: mu,
+            stderr,
+        };
+        // Two windows 0.02 apart with errors of 0.001: chi-square 200 on one degree of
+        // freedom, S = sqrt(200).
+        let s = window_scale_factor(&[w(0.26, 1e-3), w(0.24, 1e-3)]);
+        assert!((s - 200f64.sqrt()).abs() < 1e-9, "{s}");
+        // Windows that agree better than their errors are not narrowed: S = 1.
+        assert_eq!(window_scale_factor(&[w(0.25, 1e-3), w(0.2501, 1e-3)]), 1.0);
+        assert_eq!(window_scale_factor(&[w(0.25, 1e-3)]), 1.0);
     }
 
     /// The spread weighs each window by 1/se^2: a window that says little moves it little.

@@ -138,6 +138,10 @@ pub struct TrajectoryProblem {
     /// Extra weight per row (robust loss, outliers at zero); `None` while every weight is one,
     /// so the common case stores nothing per row.
     weights: Option<Arc<Vec<f64>>>,
+    /// The frame times' noise (s, [`crate::fit::noise::frame_time_noise`]): each row's noise
+    /// is sigma and v times it in quadrature, v the marker's speed along the row's coordinate
+    /// ([`Self::set_time_noise`]). 0: exact times.
+    pub time_noise: f64,
     layout: Arc<Layout>,
     /// Evaluations of this problem and its clones, for the report.
     pub counters: Arc<Counters>,
@@ -211,6 +215,7 @@ impl TrajectoryProblem {
             options,
             sigma: [1.0, 1.0],
             weights: None,
+            time_noise: 0.0,
             layout: Arc::new(Layout {
                 obs_index,
                 // Markers need positions only (a lag, which needs velocities, asks again).
@@ -287,7 +292,52 @@ impl TrajectoryProblem {
         pr.tie_static = self.tie_static;
         pr.sigma = self.sigma;
         pr.counters = self.counters.clone();
+        pr.set_time_noise(self.time_noise);
         pr
+    }
+
+    /// Take the frame times' noise `sigma_t` (s) into every row's weight: a position recorded
+    /// at a time off by dt is off by v dt, v the marker's speed along the row's coordinate, so
+    /// the row's noise is sqrt(sigma^2 + (v sigma_t)^2) with sigma the marker's (set
+    /// [`Self::sigma`] first). v comes from the track itself (the positions about 5 ms either
+    /// side, at least the neighbours), never from the model, so no misfit can hide in it. Rows
+    /// whose weight would stay within a thousandth of one keep it, and a recording none of
+    /// whose rows moves is left as it is (nothing stored).
+    pub fn set_time_noise(&mut self, sigma_t: f64) {
+        self.time_noise = sigma_t;
+        if sigma_t.is_nan() || sigma_t <= 0.0 {
+            return;
+        }
+        let obs = self.obs.clone();
+        let step = crate::fit::stages::frame_step(&obs.times);
+        let span = ((0.005 / step).round() as usize).max(1);
+        let speed = |marker: usize, coord: usize, i: usize| -> f64 {
+            let track = if marker == 0 { &obs.slider } else { &obs.bob };
+            let lo = i.saturating_sub(span);
+            let hi = (i + span).min(track.len() - 1);
+            match (track[lo], track[hi]) {
+                (Some(a), Some(b)) if hi > lo => {
+                    (b[coord] - a[coord]) / (obs.times[hi] - obs.times[lo])
+                }
+                _ => 0.0,
+            }
+        };
+        let weights: Vec<f64> = self
+            .rows()
+            .map(|row| {
+                let i = self.layout.obs_index[row.frame];
+                let s = self.sigma[row.marker];
+                let vt = speed(row.marker, row.coord, i) * sigma_t;
+                s / (s * s + vt * vt).sqrt()
+            })
+            .collect();
+        if weights.iter().all(|w| *w > 0.999) {
+            return;
+        }
+        let merged = (0..weights.len())
+            .map(|r| self.row_weight(r) * weights[r])
+            .collect();
+        self.set_row_weights(merged);
     }
 
     /// Every residual row in order: frame-major, the slider before the bob, x before y.

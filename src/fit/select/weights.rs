@@ -32,19 +32,32 @@ pub fn model_weights(rows: &mut [ModelRow], c: f64) {
     }
 }
 
-/// The spread of mu_kinetic across the models the weights leave in play: sum w_i (mu_i -
+/// Occam's window: the least weight, relative to the best model's, that a model needs to count
+/// in mu's spread across models (e^-3, a BIC 6 behind).
+const OCCAM: f64 = 0.049_787_068_367_863_944;
+
+/// The spread of mu_kinetic across the models the weights leave in play (within [`OCCAM`]): sum w_i (mu_i -
 /// mu)^2 around the chosen model's `mu`, and the models that carry it (the chosen one, and
 /// each that gives a tenth of the sum or more).
 /// Added in quadrature to the chosen model's variance it gives the unconditional standard
 /// error (Burnham and Anderson, eq. 4.9, with the chosen model's value for the average).
 pub fn model_spread(rows: &[ModelRow], mu: f64) -> (f64, Vec<String>) {
+    // Occam's window (Madigan and Raftery): a model whose weight is below e^-3 of the best's
+    // (6 in BIC, where the report stops calling two laws alike) is left out. Every law is now
+    // weighed outright, and on clean recordings viscous friction or the direction law 6-9
+    // units behind, whose mu_kinetic trades off against their own parameter, had widened
+    // the interval 2-4 times.
+    let best = rows.iter().map(|r| r.weight).fold(0.0, f64::max);
+    let in_window = |r: &&ModelRow| r.weight >= best * OCCAM;
     let var = rows
         .iter()
+        .filter(in_window)
         .filter(|r| r.weight > 0.0 && r.mu_kinetic.is_finite())
         .map(|r| r.weight * (r.mu_kinetic - mu).powi(2))
         .sum();
     let names = rows
         .iter()
+        .filter(in_window)
         .filter(|r| r.weight > 0.0 && r.mu_kinetic.is_finite())
         .filter(|r| r.chosen || r.weight * (r.mu_kinetic - mu).powi(2) >= 0.1 * var)
         .map(|r| {
@@ -137,13 +150,19 @@ mod tests {
         assert!((rows[0].weight / rows[1].weight - (-5.0f64).exp()).abs() < 1e-12);
         assert_eq!(rows[3].weight, 0.0);
         assert_eq!(rows[4].weight, 0.0);
+        // The base model, 10 behind, is outside Occam's window (6): its mu does not count.
         let (var, names) = model_spread(&rows, 0.25);
-        let want = rows[0].weight * 0.05f64.powi(2) + rows[2].weight * 0.02f64.powi(2);
+        let want = rows[2].weight * 0.02f64.powi(2);
         assert!((var - want).abs() < 1e-15);
+        assert!(!names.iter().any(|n| n.starts_with("base")));
         assert!(names.iter().any(|n| n.starts_with("rail_tilt+marker_lag")));
         assert!(names.iter().any(|n| n.starts_with("rail_tilt ")));
         model_weights(&mut rows, 2.0);
         assert!((rows[0].weight / rows[1].weight - (-2.5f64).exp()).abs() < 1e-12);
+        // Under a misfit (c = 2) it is 5 behind, inside the window.
+        let (var, _) = model_spread(&rows, 0.25);
+        let want = rows[0].weight * 0.05f64.powi(2) + rows[2].weight * 0.02f64.powi(2);
+        assert!((var - want).abs() < 1e-15);
     }
 
     /// Adequate alternatives: as many parameters and a chi-square within the 1 % point of a

@@ -32,6 +32,32 @@ fn decimals(se: f64) -> Option<usize> {
     two_digit_decimals(se).map(|d| d.min(12))
 }
 
+/// How many times the models' spread widens mu_kinetic's standard error over the noise's and
+/// the rig's (1 when it does not).
+pub fn models_widening(rep: &FitReport) -> f64 {
+    rep.mu_parts.map_or(1.0, |p| {
+        let own = p.noise.hypot(p.rig);
+        if own > 0.0 && p.total.is_finite() {
+            (p.total / own).max(1.0)
+        } else {
+            1.0
+        }
+    })
+}
+
+/// The words said when models that fit as well widen mu's interval more than twice: a
+/// widening the answer does not state is a claim hidden in a number.
+fn models_words(rep: &FitReport) -> String {
+    let w = models_widening(rep);
+    if w > 2.0 {
+        format!(
+            "; other models fit about as well and give other mu_kinetic, and its interval is {w:.1} times as wide to hold them (see the models compared)"
+        )
+    } else {
+        String::new()
+    }
+}
+
 /// The one-line answer: `mu_kinetic = V +- E (95 %: LO to HI), model adequate`, or `...,
 /// limited by the model: WHY; WHAT TO TRY`, or why there is no value.
 pub fn answer(rep: &FitReport) -> String {
@@ -59,7 +85,7 @@ pub fn answer(rep: &FitReport) -> String {
             return head;
         }
     } else if rep.adequacy.limited_by_model.is_none() {
-        return format!("{head}, model adequate");
+        return format!("{head}, model adequate{}", models_words(rep));
     }
     let a = &rep.adequacy;
     let mut why: Vec<String> = rep
@@ -71,21 +97,15 @@ pub fn answer(rep: &FitReport) -> String {
         })
         .collect();
     why.extend(
-        failed_tests(
-            a.p_value,
-            a.block_se_ratio,
-            a.runs_p_value,
-            a.windows_p_value,
-        )
-        .into_iter()
-        .map(|t| match t {
-            FailedTest::ChiSquare(_) => {
-                format!("misfits (reduced chi-square {:.2})", a.reduced_chi2)
-            }
-            FailedTest::Correlated(_) => "residuals correlated in time".to_owned(),
-            FailedTest::Runs(_) => "residuals keep their sign over long stretches".to_owned(),
-            FailedTest::Slides(p) => format!("the slides disagree on mu ({})", p_is(p)),
-        }),
+        failed_tests(a.p_value, a.runs_p_value, a.windows_p_value)
+            .into_iter()
+            .map(|t| match t {
+                FailedTest::ChiSquare(_) => {
+                    format!("misfits (reduced chi-square {:.2})", a.reduced_chi2)
+                }
+                FailedTest::Runs(_) => "residuals keep their sign over long stretches".to_owned(),
+                FailedTest::Slides(p) => format!("the slides disagree on mu ({})", p_is(p)),
+            }),
     );
     if why.is_empty() {
         why.push("an effect the model lacks (see below)".to_owned());

@@ -8,7 +8,7 @@ mod figure;
 mod friction_figure;
 mod text;
 
-pub use answer::{answer, value_pm, with_interval};
+pub use answer::{answer, models_widening, value_pm, with_interval};
 pub use figure::FitFigure;
 pub use friction_figure::FrictionFigure;
 pub use text::{fit_text, friction_law_text};
@@ -90,7 +90,8 @@ pub fn fit_json(rep: &FitReport) -> Value {
     let a = &rep.adequacy;
     let mut v = json!({
         "answer": answer(rep),
-        "mu_kinetic": rep.mu_kinetic.as_ref().map(estimate_json),
+        // A failed fit gives no mu: its value is not a friction coefficient (`failed` says why).
+        "mu_kinetic": rep.mu_kinetic.as_ref().filter(|_| rep.failed.is_none()).map(estimate_json),
         "mu_static": mu_static,
         "initial": {
             "x": get(rep, Param::X), "theta": get(rep, Param::Theta),
@@ -119,6 +120,8 @@ pub fn fit_json(rep: &FitReport) -> Value {
     let more = json!({
         "noise": {"slider": noise(0), "bob": noise(1)},
         "noise_m": {"slider": rep.noise_m[0], "bob": rep.noise_m[1]},
+        "time_noise_s": rep.problem.time_noise,
+        "models_widening": models_widening(rep),
         "models": rep.models,
         "nuisances": rep.nuisances.iter().map(|n| n.name()).collect::<Vec<_>>(),
         "friction_law": rep.friction,
@@ -151,7 +154,10 @@ pub fn fit_json(rep: &FitReport) -> Value {
     if let (Value::Object(m), Value::Object(extra)) = (&mut v, more) {
         m.extend(extra);
     }
-    if let (Some(parts), true) = (rep.mu_parts, rep.mu_kinetic.is_some()) {
+    if let (Some(parts), true) = (
+        rep.mu_parts,
+        rep.mu_kinetic.is_some() && rep.failed.is_none(),
+    ) {
         v["mu_kinetic"]["parts"] = json!(parts);
     }
     if rep.mu_kinetic.is_some() && rep.failed.is_none() {
