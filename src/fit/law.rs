@@ -148,17 +148,56 @@ fn best_row<'a>(inp: &'a LawInputs, nu: Option<Nuisance>) -> Option<&'a ModelRow
         .iter()
         .filter_map(|(_, n)| n.map(|n| n.name()))
         .collect();
-    inp.models
+    // The laws are weighed on the chosen model's other nuisances: a row fitted in an early
+    // round without a nuisance found later is stale evidence (a Stribeck model without the
+    // marker offset read as +1044.6 against the chosen one). Those rows count only when no
+    // row on the final nuisances holds the law.
+    let others = |ns: &[&str]| -> Vec<String> {
+        let mut o: Vec<String> = ns
+            .iter()
+            .filter(|x| !is_friction_name(x))
+            .map(|x| x.to_string())
+            .collect();
+        o.sort();
+        o
+    };
+    let chosen_names: Vec<&str> = inp.chosen.iter().map(|n| n.name()).collect();
+    let final_core = others(&chosen_names);
+    // The static law's rows hold mu_static and no law of their own: a law with mu_static
+    // above mu_kinetic is that law's evidence, not the static law's.
+    let laws: Vec<&str> = Nuisance::ALL
         .iter()
-        .filter(|r| r.failed.is_none())
-        .filter(|r| {
-            let ns = row_nuisances(r);
-            match nu {
-                Some(n) => ns.contains(&n.name()),
-                None => !ns.iter().any(|x| friction.contains(x)),
+        .filter(|n| n.is_law())
+        .map(|n| n.name())
+        .collect();
+    let holds = |r: &&ModelRow| {
+        let ns = row_nuisances(r);
+        match nu {
+            Some(Nuisance::StaticFriction) => {
+                ns.contains(&"mu_static") && !ns.iter().any(|x| laws.contains(x))
             }
-        })
-        .min_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic))
+            Some(n) => ns.contains(&n.name()),
+            None => !ns.iter().any(|x| friction.contains(x)),
+        }
+    };
+    let converged = || {
+        inp.models
+            .iter()
+            .filter(|r| r.failed.is_none())
+            .filter(holds)
+    };
+    let best = |rows: &mut dyn Iterator<Item = &'a ModelRow>| {
+        rows.min_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic))
+    };
+    best(&mut converged().filter(|r| others(&row_nuisances(r)) == final_core))
+        .or_else(|| best(&mut converged()))
+}
+
+/// Whether a model row's nuisance name is one of the rail's friction terms.
+fn is_friction_name(name: &str) -> bool {
+    Nuisance::ALL
+        .iter()
+        .any(|n| n.is_friction() && n.name() == name)
 }
 
 fn evidence(

@@ -80,6 +80,10 @@ pub struct LevenbergMarquardt {
     pub fatol: f64,
     /// Stop when the step is this small relative to the parameters.
     pub xtol: f64,
+    /// Stop, whatever the relative tolerances say, when even the full Gauss-Newton step is
+    /// predicted to lower the cost by less than this (cost units): a comparison of models
+    /// that differ by units of chi-square needs no more (0: never).
+    pub gn_tol: f64,
     /// Most trial steps per iteration before giving up.
     pub max_trials: usize,
     /// Leave the start where it is when this parameter has no gradient there (its column of
@@ -107,6 +111,7 @@ impl Default for LevenbergMarquardt {
             ftol: 1e-9,
             fatol: 1e-4,
             xtol: 1e-9,
+            gn_tol: 0.0,
             max_trials: 30,
             flat_exit: None,
             last_rel_decrease: f64::INFINITY,
@@ -195,7 +200,8 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
         // than spending trial simulations that cannot decrease the cost.
         if let Some(chol) = a.clone().cholesky() {
             let predicted = 0.5 * g.dot(&chol.solve(&g));
-            if predicted.is_finite() && predicted <= self.ftol * cost && predicted <= self.fatol {
+            let within = predicted <= self.ftol * cost && predicted <= self.fatol;
+            if predicted.is_finite() && (within || predicted < self.gn_tol) {
                 self.converged = true;
                 return Ok((state.param(p).gradient(g).hessian(a).cost(cost), None));
             }

@@ -37,7 +37,7 @@ pub(super) fn solve_loose<P: lm::LeastSquares + Clone>(
 
 /// Levenberg-Marquardt stopping at `ftol` when given (relative cost and step, no absolute
 /// tolerance), else at its defaults.
-pub(super) fn loose(ftol: Option<f64>) -> LevenbergMarquardt {
+pub(crate) fn loose(ftol: Option<f64>) -> LevenbergMarquardt {
     let mut lm = LevenbergMarquardt::default();
     if let Some(tol) = ftol {
         // Only the next fit's start: no absolute tolerance.
@@ -63,7 +63,7 @@ pub fn at_iteration_limit(reason: &str) -> bool {
 }
 
 /// Run `lm` on `problem` from `p0`: optimum, cost, iterations and termination reason.
-pub(super) fn run_lm<P: lm::LeastSquares + Clone>(
+pub(crate) fn run_lm<P: lm::LeastSquares + Clone>(
     problem: &P,
     p0: DVector<f64>,
     max_iters: u64,

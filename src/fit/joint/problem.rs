@@ -285,6 +285,10 @@ impl Candidate for JointProblem {
         let parts = self.parts.iter().map(|p| p.static_tied()).collect();
         JointProblem::new(parts, self.same_camera)
     }
+    fn coulomb(&self) -> Self {
+        let parts = self.parts.iter().map(|p| p.coulomb()).collect();
+        JointProblem::new(parts, self.same_camera)
+    }
     fn static_near_tie(&self) -> Self {
         let mut out = self.clone();
         out.parts = out.parts.iter().map(|p| p.static_near_tie()).collect();

@@ -46,6 +46,9 @@ pub trait Candidate: LeastSquares + Clone + Send + Sync + 'static {
     /// The model with mu_static just above mu_kinetic, where the static coefficient (and
     /// Stribeck's law) does what Coulomb's law with one coefficient does.
     fn static_near_tie(&self) -> Self;
+    /// The model with Coulomb's law with one coefficient in place of its friction law
+    /// ([`Nuisance::is_friction`] left out), every other value kept.
+    fn coulomb(&self) -> Self;
     /// Predicted chi-square drop of each screened candidate at `p` (the score test).
     fn score_drops(&self, p: &DVector<f64>, candidates: &[Nuisance]) -> Vec<(Nuisance, f64)>;
     /// Whether its current values hold one no real rig has ([`crate::fit::priors`]): such a
@@ -121,6 +124,9 @@ impl Candidate for TrajectoryProblem {
         let mut tied = self.clone();
         tied.rig.mu_static = tied.rig.mu_kinetic * (1.0 + 1e-9);
         tied
+    }
+    fn coulomb(&self) -> Self {
+        super::nuisance::coulomb_of(self)
     }
     fn score_drops(&self, p: &DVector<f64>, candidates: &[Nuisance]) -> Vec<(Nuisance, f64)> {
         score_drops(self, p, candidates)

@@ -4,7 +4,9 @@
 //! open candidates, those worth fitting, their fits in two batches, the best taken or the
 //! selection ended), then the table completed with the models' weights.
 
-use super::attempt::{failed_row, fit_candidate, fit_candidate_within, held_rig_start, Outcome};
+use super::attempt::{
+    failed_row, fit_candidate, fit_candidate_within, fit_law, held_rig_start, Outcome,
+};
 use super::{
     chi2_of, misfits, model_weights, Candidate, ModelRow, Nuisance, SelectOptions, Selection,
 };
@@ -141,6 +143,7 @@ pub fn forward<M: Candidate>(
         }
     }
     swap_twins(&mut search, opts, &crit);
+    weigh_laws(&mut search, opts, &crit);
     finish(search, &crit)
 }
 
@@ -554,6 +557,245 @@ fn swap_twins<M: Candidate>(s: &mut Search<M>, opts: &SelectOptions<M::Start>, c
             }
         }
     }
+}
+
+/// Starts of mu_static over mu_kinetic for the static law besides the onsets' value: its
+/// cost has a valley per stick the slip ends, and a single start stalled in the wrong one
+/// (reduced chi-square 3.2 where the truth gives 1.0).
+const STATIC_RATIOS: [f64; 2] = [1.1, 1.3];
+
+/// The score test's predicted chi-square drop from which a law with an interior neutral
+/// value is fitted outright on the chosen model's other nuisances: below a unit it can
+/// neither take the model (it needs 2 more than its ln(n)) nor tie with it.
+const LAW_SCREEN_DROP: f64 = 1.0;
+
+/// Every friction law fitted to convergence on the chosen model's other nuisances and compared
+/// on the one criterion: Coulomb's (one coefficient), static above kinetic, Stribeck's, the
+/// direction and the load law, viscous friction, and, when static friction earns its place,
+/// static friction with the direction or the load law. The selection's rounds only screen
+/// laws (a law dropped by the score test, or fitted in an early round without the nuisances
+/// found later, is no evidence against it); here each is weighed where the answer stands. The
+/// best replaces the chosen model when its criterion is lower by more than 2. Skipped when
+/// the user fixed the law (`--friction`, `--with` a law, `--mu-static`) or the plain model.
+fn weigh_laws<M: Candidate>(s: &mut Search<M>, opts: &SelectOptions<M::Start>, crit: &Criterion) {
+    let user_law = opts
+        .forced
+        .iter()
+        .chain(&opts.already)
+        .any(|n| n.is_friction());
+    if opts.max_added == 0 || !opts.friction_candidates || user_law {
+        return;
+    }
+    let core: Vec<Nuisance> = s
+        .chosen
+        .iter()
+        .copied()
+        .filter(|n| !n.is_friction())
+        .collect();
+    let allowed = |n: &Nuisance| !opts.excluded.contains(n);
+    // Coulomb's law on the other nuisances, from the chosen optimum with the law taken out.
+    let (coulomb, coulomb_chi2) = if core.len() == s.chosen.len() {
+        (s.current.0.clone(), s.current.2)
+    } else {
+        let m = s.current.0.coulomb();
+        match fit_candidate(&m, None, opts, None) {
+            Ok((q, cost, iters)) => {
+                s.iterations += iters;
+                let mut fitted = m;
+                fitted.set_values(&q);
+                let c2 = chi2_of(cost);
+                s.rows.push(crit.row(&core, &fitted, c2));
+                (fitted, c2)
+            }
+            Err((why, chi2, iters)) => {
+                s.iterations += iters;
+                s.rows.push(failed_row(crit.row(&core, &m, chi2), why));
+                return;
+            }
+        }
+    };
+    let mu_k = coulomb.mu_kinetic();
+    let push = |jobs: &mut Vec<Job<M>>, set: &[Nuisance], mu_s: f64| {
+        let mut m = coulomb.clone();
+        for &nu in set {
+            m = m.with_nuisance(nu, mu_s);
+        }
+        let mut all = core.clone();
+        for &nu in set {
+            all = nu.join(&all);
+        }
+        // A model the selection fitted on these nuisances already is in the table: it did
+        // not beat the model chosen then, nor can it the chosen one now.
+        let done = s
+            .rows
+            .iter()
+            .any(|r| r.failed.is_none() && !r.stopped_early && same_set(&r.name, &all));
+        let fits = coulomb.width() + set.iter().map(|n| n.new_params(&coulomb)).sum::<usize>();
+        if !done && fits <= MAX_FREE && set.iter().all(allowed) {
+            jobs.push((all, m, Some(coulomb_chi2)));
+        }
+    };
+    // Static friction from the onsets' value (a threshold has no gradient at mu_static =
+    // mu_kinetic: no score test can screen it), the direction and the load law, each fitted
+    // outright: on a load-law recording whose other nuisances had taken part of the load's
+    // effect, the score test predicted the load law a drop below a unit where its fit
+    // lowered the chi-square by 310. Viscous friction, which adds to every law, is screened
+    // by the score test at this model and fitted outright when it predicts a chi-square drop
+    // of a unit or more, or whatever it predicts while the model misfits.
+    let mut jobs: Vec<Job<M>> = Vec::new();
+    for law in [
+        Nuisance::StaticFriction,
+        Nuisance::Direction,
+        Nuisance::Load,
+    ] {
+        push(&mut jobs, &[law], opts.mu_static_start);
+    }
+    let screened: Vec<Nuisance> = [Nuisance::ViscousFriction]
+        .into_iter()
+        .filter(allowed)
+        .collect();
+    let drops = coulomb.score_drops(&coulomb.values(), &screened);
+    let misfit = misfits(&coulomb, coulomb_chi2);
+    for &(law, drop) in &drops {
+        if misfit || drop >= LAW_SCREEN_DROP || !drop.is_finite() {
+            push(&mut jobs, &[law], opts.mu_static_start);
+        }
+    }
+    s.screening = drops;
+    let mut best = fit_law_jobs(jobs, opts, opts.max_iters);
+    let static_fit = best
+        .iter()
+        .find(|(set, ..)| set.len() == core.len() + 1 && set.contains(&Nuisance::StaticFriction))
+        .and_then(|(_, m, got, _)| {
+            got.as_ref().ok().map(|g| {
+                let mut at = m.clone();
+                at.set_values(&g.0);
+                (at, chi2_of(g.1))
+            })
+        });
+    // Static friction that lowers the chi-square by a unit or more: its other starts, with
+    // the direction or the load law too, and Stribeck's law from its optimum (at v_s -> 0
+    // Stribeck's law is the static one; where mu_static adds nothing, Stribeck's speed has no
+    // gradient and its fit crawled 38-45 iterations along that valley for no change).
+    let mut more: Vec<Job<M>> = Vec::new();
+    if let Some((at, c2)) = static_fit.filter(|(_, c2)| *c2 < coulomb_chi2 - 1.0) {
+        let earns = c2 < coulomb_chi2 - crit.n.ln() - 2.0;
+        if earns {
+            for r in STATIC_RATIOS {
+                push(&mut more, &[Nuisance::StaticFriction], r * mu_k);
+            }
+            for law in [Nuisance::Direction, Nuisance::Load] {
+                push(
+                    &mut more,
+                    &[law, Nuisance::StaticFriction],
+                    opts.mu_static_start,
+                );
+            }
+        }
+        let mut stribeck = Vec::new();
+        push(&mut stribeck, &[Nuisance::Stribeck], at.mu_static());
+        for (set, m, parent) in stribeck {
+            // From the static law's optimum: its mu_static and mu_kinetic, and the state.
+            let m = m.adopt(&at.with_nuisance(Nuisance::Stribeck, at.mu_static()));
+            more.push((set, m, parent));
+        }
+    }
+    best.extend(fit_law_jobs(more, opts, opts.max_iters));
+    let best = best_of_each(best);
+    let cur_bic = crit.bic(s.current.0.n_free(), s.current.2);
+    let mut winner: Option<Best<M>> = None;
+    for (set, m, solved, capped) in best {
+        let same = set.len() == s.chosen.len() && set.iter().all(|n| s.chosen.contains(n));
+        match solved {
+            Ok((q, cost, iters)) => {
+                s.iterations += iters;
+                if same {
+                    continue;
+                }
+                let c2 = chi2_of(cost);
+                let mut at = m.clone();
+                at.set_values(&q);
+                s.rows.push(ModelRow {
+                    stopped_early: capped,
+                    ..crit.row(&set, &at, c2)
+                });
+                let bic = crit.bic(m.n_free(), c2);
+                let beats = !capped
+                    && bic < cur_bic - 2.0
+                    && winner
+                        .as_ref()
+                        .is_none_or(|w| bic < crit.bic(w.1.n_free(), w.3));
+                if beats {
+                    winner = Some((set, at, q, c2, s.rows.len() - 1));
+                }
+            }
+            Err((why, chi2, iters)) => {
+                s.iterations += iters;
+                if !same {
+                    s.rows.push(failed_row(crit.row(&set, &m, chi2), why));
+                }
+            }
+        }
+    }
+    if let Some((set, m, q, c2, at)) = winner {
+        s.rows[at].path = true;
+        s.chosen = set;
+        s.current = (m, q, c2);
+    }
+}
+
+/// The laws' fits, in parallel, each with at most `max_iters` iterations a start (whether
+/// one used them all is kept: its chi-square is then an upper bound).
+fn fit_law_jobs<M: Candidate>(
+    jobs: Vec<Job<M>>,
+    opts: &SelectOptions<M::Start>,
+    max_iters: u64,
+) -> Vec<Fitted<M>> {
+    jobs.into_par_iter()
+        .with_max_len(1)
+        .map(|(set, m, parent)| {
+            let (solved, capped) = fit_law(&m, opts, parent, max_iters);
+            (set, m, solved, capped && max_iters < opts.max_iters)
+        })
+        .collect()
+}
+
+/// Whether the model row named `name` holds exactly the nuisances `set`.
+fn same_set(name: &str, set: &[Nuisance]) -> bool {
+    let ns: Vec<&str> = if name == "base" {
+        Vec::new()
+    } else {
+        name.split('+').collect()
+    };
+    ns.len() == set.len() && set.iter().all(|n| ns.contains(&n.name()))
+}
+
+/// The best fit of each nuisance set among several starts (the iterations of all counted).
+fn best_of_each<M: Candidate>(fits: Vec<Fitted<M>>) -> Vec<Fitted<M>> {
+    let mut out: Vec<Fitted<M>> = Vec::new();
+    for (set, m, solved, capped) in fits {
+        let same = |o: &Fitted<M>| o.0.len() == set.len() && o.0.iter().all(|n| set.contains(n));
+        match out.iter_mut().find(|o| same(o)) {
+            None => out.push((set, m, solved, capped)),
+            Some(o) => {
+                let spent = |x: &Outcome| x.as_ref().map_or_else(|e| e.2, |g| g.2);
+                let total = spent(&o.2) + spent(&solved);
+                let better = match (&o.2, &solved) {
+                    (Ok(a), Ok(b)) => b.1 < a.1,
+                    (Err(_), Ok(_)) => true,
+                    _ => false,
+                };
+                if better {
+                    *o = (set, m, solved, capped);
+                }
+                match &mut o.2 {
+                    Ok(g) => g.2 = total,
+                    Err(e) => e.2 = total,
+                }
+            }
+        }
+    }
+    out
 }
 
 /// The table completed: each row's BIC against the chosen model's, the chosen row marked and

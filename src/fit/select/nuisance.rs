@@ -159,6 +159,12 @@ impl Nuisance {
         out
     }
 
+    /// Whether it describes the rail's friction (a law of its own, static above kinetic or
+    /// viscous friction): the laws weighed outright on the chosen model's other nuisances.
+    pub fn is_friction(self) -> bool {
+        self.is_law() || matches!(self, Nuisance::StaticFriction | Nuisance::ViscousFriction)
+    }
+
     /// `problem` with this nuisance added at its neutral value (mu_static from `mu_static`).
     pub(super) fn add_to(self, problem: &TrajectoryProblem, mu_static: f64) -> TrajectoryProblem {
         let mut m = problem.clone();
@@ -190,4 +196,28 @@ impl Nuisance {
         }
         m
     }
+}
+
+/// `problem` with its friction back at Coulomb's law with one coefficient and no viscous
+/// friction: mu_static tied to mu_kinetic, the law's parameters no longer free and at their
+/// neutral values. Every other value stays where it is (a warm start for the laws weighed on
+/// the chosen model's other nuisances).
+pub(super) fn coulomb_of(problem: &TrajectoryProblem) -> TrajectoryProblem {
+    let mut m = problem.clone();
+    let law_params = [
+        Param::MuStatic,
+        Param::StribeckVelocity,
+        Param::FrictionSplit,
+        Param::LoadExponent,
+        Param::ViscousFriction,
+    ];
+    m.free.retain(|q| !law_params.contains(q));
+    m.rig.friction_law = FrictionLaw::Coulomb;
+    m.rig.kinetic_split = 0.0;
+    m.rig.static_split = 0.0;
+    m.rig.load_exponent = 1.0;
+    m.rig.viscous_friction = 0.0;
+    m.tie_static = true;
+    m.rig.mu_static = m.rig.mu_kinetic;
+    m
 }
