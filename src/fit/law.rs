@@ -41,6 +41,10 @@ pub struct FrictionLawResult {
     pub parameters: Vec<LawParameter>,
     /// Plain sentences: what this recording cannot tell apart, and what would.
     pub notes: Vec<String>,
+    /// What the recording could not test, a short phrase each for the answer line ("slides
+    /// toward +x only: mu toward -x not measured").
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub untested: Vec<String>,
 }
 
 /// The evidence for one law.
@@ -126,6 +130,7 @@ pub fn friction_law(inp: &LawInputs) -> FrictionLawResult {
         laws,
         parameters,
         notes,
+        untested: Vec::new(),
     }
 }
 
@@ -469,4 +474,41 @@ pub fn slide_points_of(
             })
         })
         .collect()
+}
+
+/// What a motion that slides in the directions `modes` (every mode it passes through) cannot
+/// test: one direction only leaves the other's coefficient unmeasured, so mu_kinetic is that
+/// direction's and a direction-dependent rail cannot be told from this recording.
+pub fn untested_by(modes: &[crate::model::Mode]) -> Vec<String> {
+    use crate::model::{Direction, Mode};
+    let pos = modes.contains(&Mode::Slide(Direction::Positive));
+    let neg = modes.contains(&Mode::Slide(Direction::Negative));
+    match (pos, neg) {
+        (true, false) => vec!["slides toward +x only: mu toward -x not measured".to_owned()],
+        (false, true) => vec!["slides toward -x only: mu toward +x not measured".to_owned()],
+        _ => Vec::new(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::untested_by;
+    use crate::model::{Direction, Mode};
+
+    /// One direction only leaves the other's coefficient unmeasured, and says which; both
+    /// directions, or none, leave nothing to say.
+    #[test]
+    fn a_one_way_motion_says_which_direction_it_did_not_measure() {
+        let (pos, neg) = (
+            Mode::Slide(Direction::Positive),
+            Mode::Slide(Direction::Negative),
+        );
+        assert_eq!(
+            untested_by(&[Mode::Stick, neg, Mode::Stick]),
+            vec!["slides toward -x only: mu toward +x not measured".to_owned()]
+        );
+        assert!(untested_by(&[pos, Mode::Stick])[0].contains("toward -x not measured"));
+        assert!(untested_by(&[pos, Mode::Stick, neg]).is_empty());
+        assert!(untested_by(&[Mode::Stick]).is_empty());
+    }
 }

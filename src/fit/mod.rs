@@ -166,12 +166,21 @@ pub struct FitSettings {
     /// The rig file as a measurement: its rod length and mass ratio are fitted with these
     /// priors (errors in variables). `None`: the rig is taken as exact.
     pub measured: Option<priors::RigMeasurement>,
+    /// The camera scale set from a length the lab measured (`--rod-length`, a ruler in view),
+    /// as the relative standard deviation of that measurement: the camera scale is then
+    /// fitted with this prior, so the ruler's millimetre reaches mu's interval. `None`: the
+    /// scale is taken as the file or `--scale` gives it.
+    pub scale_sd: Option<f64>,
 }
 
 impl FitSettings {
-    /// The nuisances forced: `--with`'s and the law of `--friction`.
+    /// The nuisances forced: `--with`'s, the law of `--friction`, and the camera scale when
+    /// it was set from a measured length ([`FitSettings::scale_sd`]).
     pub fn forced(&self) -> Vec<Nuisance> {
         let mut forced = self.with.clone();
+        if self.scale_sd.is_some() && !forced.contains(&Nuisance::CameraScale) {
+            forced.push(Nuisance::CameraScale);
+        }
         if let Some(nu) = self
             .friction
             .and_then(|law| Nuisance::ALL.into_iter().find(|n| n.law() == Some(law)))
@@ -217,6 +226,7 @@ impl Default for FitSettings {
             friction: None,
             long_prefix: PREFIX_FRAMES,
             measured: None,
+            scale_sd: None,
         }
     }
 }

@@ -116,9 +116,12 @@ impl RigMeasurement {
             )
         });
         // Gravity is listed only when it is fitted (held as typed by default).
+        // Stated only when the file gives both the value and its deviation: gravity left out
+        // is the default 9.81 +- 0.015 it is, not a measurement the file states.
         let gravity_sd = spec.gravity_sd.unwrap_or(DEFAULT_GRAVITY_SD);
         if gravity_sd > 0.0 {
-            keys.push(("gravity", spec.gravity(), gravity_sd, true));
+            let stated = spec.gravity.is_some() && spec.gravity_sd.is_some();
+            keys.push(("gravity", spec.gravity(), gravity_sd, stated));
         }
         // The mass ratio the dynamics use, and its deviation by the delta method (central
         // differences through the same rig builder the fit's rig came from).

@@ -86,6 +86,13 @@ pub(super) fn apply_measured(
 ) -> bool {
     let ranges = priors::plausible_ranges(&problem.rig, frame);
     let mut all = priors::nuisance_priors(&ranges);
+    // A scale set from a measured length carries that measurement's error, not the range a
+    // camera's scale may plausibly be off by.
+    if let Some(sd) = settings.scale_sd {
+        for pr in all.iter_mut().filter(|pr| pr.param == Param::ScaleError) {
+            pr.sd = sd;
+        }
+    }
     let mut freed = false;
     if let Some(m) = &settings.measured {
         for pr in m.priors() {
@@ -937,8 +944,17 @@ pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
             r.said("the recording puts")
         ));
     }
+    // The modes the fitted motion passes through: a recording that slides one way only
+    // cannot measure the other way's coefficient, and the answer says so.
+    let modes: Vec<crate::model::Mode> = motion
+        .sol
+        .events
+        .iter()
+        .map(|e| e.from)
+        .chain(std::iter::once(motion.sol.final_mode))
+        .collect();
     let friction = identifiable.then(|| {
-        law::friction_law(&law::LawInputs {
+        let mut fr = law::friction_law(&law::LawInputs {
             params: &est.params,
             correlation: &est.correlation,
             models: &models,
@@ -946,7 +962,12 @@ pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
             screening: &screening,
             n_rows,
             forced: settings.friction.is_some(),
-        })
+        });
+        // Under the direction law both coefficients are reported with their own errors.
+        if !nuisances.contains(&Nuisance::Direction) {
+            fr.untested = law::untested_by(&modes);
+        }
+        fr
     });
     let c = &problem.counters;
     FitReport {

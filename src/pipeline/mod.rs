@@ -73,6 +73,16 @@ pub fn read_for_rig(
     rig_path: &Path,
     rig: &Rig<f64>,
 ) -> anyhow::Result<(Observations, Vec<String>)> {
+    read_calibrated(paths, opts, rig_path, rig).map(|(obs, notes, _)| (obs, notes))
+}
+
+/// [`read_for_rig`] with the recording's calibration (where its scale came from).
+fn read_calibrated(
+    paths: &[PathBuf],
+    opts: &ReadOptions,
+    rig_path: &Path,
+    rig: &Rig<f64>,
+) -> anyhow::Result<(Observations, Vec<String>, crate::data::Calibration)> {
     let rec = read_recording(paths, opts)?;
     let files: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
     let notes = rec
@@ -83,7 +93,30 @@ pub fn read_for_rig(
         .map(|n| format!("{}: {n}", files.join(" + ")))
         .collect();
     check_for_rig(&rec, rig_path, rig)?;
-    Ok((Observations::from(rec), notes))
+    let calibration = rec.provenance.calibration.clone();
+    Ok((Observations::from(rec), notes, calibration))
+}
+
+/// The relative standard deviation of a camera scale set from `--rod-length` (`None` for a
+/// scale from the file or `--scale`): the rod measured with the rig file's ruler
+/// (`rod_length_sd`, 1 mm by default) over the length given.
+fn scale_sd(
+    calibration: &crate::data::Calibration,
+    opts: &ReadOptions,
+    setup: &FitSetup,
+) -> Option<f64> {
+    let length = opts.rod_length?;
+    if !calibration.scale_source.starts_with("from --rod-length") {
+        return None;
+    }
+    let ruler = setup
+        .settings
+        .measured
+        .as_ref()
+        .map_or(crate::fit::priors::DEFAULT_ROD_LENGTH_SD, |m| {
+            m.rod_length.1
+        });
+    Some(ruler / length).filter(|sd| sd.is_finite() && *sd > 0.0)
 }
 
 /// A recording (read, or made from arrays) checked for the rig as [`read_for_rig`] checks
@@ -128,14 +161,22 @@ pub fn fit_files(
     setup: &FitSetup,
     keep: bool,
 ) -> Result<(Observations, FitReport, Vec<String>), FitFailure> {
-    let (obs, notes) =
-        read_for_rig(paths, opts, &setup.rig_path, &setup.rig).map_err(FitFailure::Input)?;
+    let (obs, notes, calibration) =
+        read_calibrated(paths, opts, &setup.rig_path, &setup.rig).map_err(FitFailure::Input)?;
     let (kept, given) = if keep {
         (obs.clone(), obs)
     } else {
         (Observations::default(), obs)
     };
-    let report = fit_observations(given, setup, &paths[0].display().to_string())?;
+    let name = paths[0].display().to_string();
+    let report = match scale_sd(&calibration, opts, setup) {
+        Some(sd) => {
+            let mut scaled = setup.clone();
+            scaled.settings.scale_sd = Some(sd);
+            fit_observations(given, &scaled, &name)?
+        }
+        None => fit_observations(given, setup, &name)?,
+    };
     Ok((kept, report, notes))
 }
 

@@ -77,6 +77,9 @@ pub fn answer(rep: &FitReport) -> String {
         );
     }
     let mut head = format!("mu_kinetic = {}{}", with_interval(mu), law_words(rep));
+    for u in rep.friction.iter().flat_map(|f| &f.untested) {
+        head.push_str(&format!(" ({u})"));
+    }
     if crate::fit::solve::at_iteration_limit(&rep.stop_reason) {
         // Said first, whatever else holds: the value is no minimum. What the model misses,
         // when the checks say it, still follows.
