@@ -643,11 +643,15 @@ fn weigh_laws<M: Candidate>(s: &mut Search<M>, opts: &SelectOptions<M::Start>, c
     // by the score test at this model and fitted outright when it predicts a chi-square drop
     // of a unit or more, or whatever it predicts while the model misfits.
     let mut jobs: Vec<Job<M>> = Vec::new();
-    for law in [
-        Nuisance::StaticFriction,
-        Nuisance::Direction,
-        Nuisance::Load,
-    ] {
+    // Static friction starts just above the tie unless the onsets show it higher: from the
+    // onsets' guess, a law the recording does not have took 7 iterations to come back.
+    let static_start = if opts.static_evidence {
+        opts.mu_static_start
+    } else {
+        1.02 * mu_k
+    };
+    push(&mut jobs, &[Nuisance::StaticFriction], static_start);
+    for law in [Nuisance::Direction, Nuisance::Load] {
         push(&mut jobs, &[law], opts.mu_static_start);
     }
     let screened: Vec<Nuisance> = [Nuisance::ViscousFriction]
@@ -681,8 +685,9 @@ fn weigh_laws<M: Candidate>(s: &mut Search<M>, opts: &SelectOptions<M::Start>, c
     if let Some((at, c2)) = static_fit.filter(|(_, c2)| *c2 < coulomb_chi2 - 1.0) {
         let earns = c2 < coulomb_chi2 - crit.n.ln() - 2.0;
         if earns {
-            for r in STATIC_RATIOS {
-                push(&mut more, &[Nuisance::StaticFriction], r * mu_k);
+            let onsets = (static_start != opts.mu_static_start).then_some(opts.mu_static_start);
+            for mu_s in STATIC_RATIOS.iter().map(|r| r * mu_k).chain(onsets) {
+                push(&mut more, &[Nuisance::StaticFriction], mu_s);
             }
             for law in [Nuisance::Direction, Nuisance::Load] {
                 push(
