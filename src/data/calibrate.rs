@@ -7,6 +7,10 @@ use super::{Calibration, Geometry, ReadOptions, Recording};
 /// enough that distances and their squares stay finite.
 pub const MAX_METRES: f64 = 1e12;
 
+/// How a [`Calibration::scale_source`] set from `--rod-length` begins: the scale is then a
+/// ruler's reading, whose error the fit carries (`pipeline`'s scale prior).
+pub const ROD_LENGTH_SCALE: &str = "from --rod-length";
+
 /// Scale, flip and (with `opts.rail_frame`) rotate and shift a recording in file units into the
 /// rail frame, then check the slider-bob distance. `file_scale` is the file's own metres per
 /// unit, when it says. Errors are messages naming the flag that would fix them.
@@ -29,7 +33,7 @@ pub fn calibrate(
             (
                 l / m,
                 format!(
-                    "from --rod-length {l} m over a median of {} file units",
+                    "{ROD_LENGTH_SCALE} {l} m over a median of {} file units",
                     significant(m)
                 ),
             )

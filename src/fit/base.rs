@@ -502,8 +502,7 @@ pub(super) fn fit(
     problem.sigma = sigma;
     // Frame times are a measurement too: their scatter about a uniform grid weighs each row.
     let sigma_t = super::noise::frame_time_noise(&obs.times);
-    problem.set_time_noise(sigma_t);
-    if problem.time_noise > 0.0 {
+    if problem.set_time_noise(sigma_t) {
         warnings.push(format!(
             "the frame times scatter by {:.3} ms about their frame rate's uniform grid (timestamps rounded or jittered): a marker moving at v is off by v times that, and each position is weighted for it",
             1e3 * sigma_t

@@ -149,60 +149,52 @@ fn row_nuisances(row: &ModelRow) -> Vec<&str> {
 
 /// The best converged row holding `nu` (or, for Coulomb's law, none of the friction terms).
 fn best_row<'a>(inp: &'a LawInputs, nu: Option<Nuisance>) -> Option<&'a ModelRow> {
-    let friction: Vec<&str> = LAWS
+    // A row's nuisances that are not the rail's friction, in one order.
+    let others = |ns: &[Nuisance]| -> Vec<&str> {
+        let mut o: Vec<&str> = ns
+            .iter()
+            .filter(|n| !n.is_friction())
+            .map(|n| n.name())
+            .collect();
+        o.sort_unstable();
+        o
+    };
+    // The static law's rows hold mu_static and no law of their own: a law with mu_static
+    // above mu_kinetic is that law's evidence, not the static law's.
+    let holds = |ns: &[Nuisance]| match nu {
+        Some(Nuisance::StaticFriction) => {
+            ns.contains(&Nuisance::StaticFriction) && !ns.iter().any(|n| n.is_law())
+        }
+        Some(n) => ns.contains(&n),
+        None => !ns.iter().any(|n| n.is_friction()),
+    };
+    let rows: Vec<(&ModelRow, Vec<Nuisance>)> = inp
+        .models
         .iter()
-        .filter_map(|(_, n)| n.map(|n| n.name()))
+        .filter(|r| r.failed.is_none())
+        .map(|r| (r, row_set(r)))
+        .filter(|(_, ns)| holds(ns))
         .collect();
     // The laws are weighed on the chosen model's other nuisances: a row fitted in an early
     // round without a nuisance found later is stale evidence (a Stribeck model without the
     // marker offset read as +1044.6 against the chosen one). Those rows count only when no
     // row on the final nuisances holds the law.
-    let others = |ns: &[&str]| -> Vec<String> {
-        let mut o: Vec<String> = ns
-            .iter()
-            .filter(|x| !is_friction_name(x))
-            .map(|x| x.to_string())
-            .collect();
-        o.sort();
-        o
+    let final_core = others(inp.chosen);
+    let best = |on_final: bool| {
+        rows.iter()
+            .filter(|(_, ns)| !on_final || others(ns) == final_core)
+            .map(|(r, _)| *r)
+            .min_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic))
     };
-    let chosen_names: Vec<&str> = inp.chosen.iter().map(|n| n.name()).collect();
-    let final_core = others(&chosen_names);
-    // The static law's rows hold mu_static and no law of their own: a law with mu_static
-    // above mu_kinetic is that law's evidence, not the static law's.
-    let laws: Vec<&str> = Nuisance::ALL
-        .iter()
-        .filter(|n| n.is_law())
-        .map(|n| n.name())
-        .collect();
-    let holds = |r: &&ModelRow| {
-        let ns = row_nuisances(r);
-        match nu {
-            Some(Nuisance::StaticFriction) => {
-                ns.contains(&"mu_static") && !ns.iter().any(|x| laws.contains(x))
-            }
-            Some(n) => ns.contains(&n.name()),
-            None => !ns.iter().any(|x| friction.contains(x)),
-        }
-    };
-    let converged = || {
-        inp.models
-            .iter()
-            .filter(|r| r.failed.is_none())
-            .filter(holds)
-    };
-    let best = |rows: &mut dyn Iterator<Item = &'a ModelRow>| {
-        rows.min_by(|a, b| a.delta_bic.total_cmp(&b.delta_bic))
-    };
-    best(&mut converged().filter(|r| others(&row_nuisances(r)) == final_core))
-        .or_else(|| best(&mut converged()))
+    best(true).or_else(|| best(false))
 }
 
-/// Whether a model row's nuisance name is one of the rail's friction terms.
-fn is_friction_name(name: &str) -> bool {
-    Nuisance::ALL
-        .iter()
-        .any(|n| n.is_friction() && n.name() == name)
+/// The nuisances of a model row, from its name.
+fn row_set(row: &ModelRow) -> Vec<Nuisance> {
+    row_nuisances(row)
+        .into_iter()
+        .filter_map(|name| Nuisance::ALL.into_iter().find(|n| n.name() == name))
+        .collect()
 }
 
 fn evidence(

@@ -106,7 +106,10 @@ fn scale_sd(
     setup: &FitSetup,
 ) -> Option<f64> {
     let length = opts.rod_length?;
-    if !calibration.scale_source.starts_with("from --rod-length") {
+    if !calibration
+        .scale_source
+        .starts_with(crate::data::calibrate::ROD_LENGTH_SCALE)
+    {
         return None;
     }
     let ruler = setup

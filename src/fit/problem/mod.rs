@@ -302,11 +302,11 @@ impl TrajectoryProblem {
     /// [`Self::sigma`] first). v comes from the track itself (the positions about 5 ms either
     /// side, at least the neighbours), never from the model, so no misfit can hide in it. Rows
     /// whose weight would stay within a thousandth of one keep it, and a recording none of
-    /// whose rows moves is left as it is (nothing stored).
-    pub fn set_time_noise(&mut self, sigma_t: f64) {
+    /// whose rows moves is left as it is (nothing stored). Returns whether any weight changed.
+    pub fn set_time_noise(&mut self, sigma_t: f64) -> bool {
         self.time_noise = sigma_t;
         if sigma_t.is_nan() || sigma_t <= 0.0 {
-            return;
+            return false;
         }
         let obs = self.obs.clone();
         let step = crate::fit::stages::frame_step(&obs.times);
@@ -332,12 +332,13 @@ impl TrajectoryProblem {
             })
             .collect();
         if weights.iter().all(|w| *w > 0.999) {
-            return;
+            return false;
         }
         let merged = (0..weights.len())
             .map(|r| self.row_weight(r) * weights[r])
             .collect();
         self.set_row_weights(merged);
+        true
     }
 
     /// Every residual row in order: frame-major, the slider before the bob, x before y.

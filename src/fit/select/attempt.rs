@@ -155,16 +155,14 @@ pub(super) fn fit_candidate_within<M: Candidate>(
 }
 
 /// [`fit_candidate`] for a law weighed on the chosen model's other nuisances: its solves stop
-/// at [`LAW_COST_TOL`].
-/// At most `max_iters` iterations a start; whether a start used them all is returned too.
+/// at [`LAW_COST_TOL`]; whether a start used every iteration is returned too.
 pub(super) fn fit_law<M: Candidate>(
     m: &M,
     opts: &SelectOptions<M::Start>,
     parent: Option<f64>,
-    max_iters: u64,
 ) -> (Outcome, bool) {
     let capped = Cell::new(false);
-    let got = fit_capped(m, None, opts, parent, max_iters, &capped, Tol::Law);
+    let got = fit_capped(m, None, opts, parent, opts.max_iters, &capped, Tol::Law);
     (got, capped.get())
 }
 
@@ -179,8 +177,8 @@ fn fit_capped<M: Candidate>(
 ) -> Outcome {
     let worse = |cost: f64| parent.is_some_and(|c| chi2_of(cost) > c + nested_slack(c));
     let first = solve_starts(m, fresh, max_iters, capped, tol);
-    // A law weighed on its first iterations that used them all is left where it stopped (its
-    // chi-square an upper bound, marked so): whether it goes on is the weighing's decision.
+    // A law that used every iteration is left where it stopped (its chi-square an upper
+    // bound, marked so by the weighing, which does not let it take the model).
     if matches!(tol, Tol::Law) && capped.get() {
         return first.map_err(|e| (e, f64::NAN, max_iters));
     }

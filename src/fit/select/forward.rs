@@ -635,16 +635,16 @@ fn weigh_laws<M: Candidate>(s: &mut Search<M>, opts: &SelectOptions<M::Start>, c
             jobs.push((all, m, Some(coulomb_chi2)));
         }
     };
-    // Static friction from the onsets' value (a threshold has no gradient at mu_static =
-    // mu_kinetic: no score test can screen it), the direction and the load law, each fitted
-    // outright: on a load-law recording whose other nuisances had taken part of the load's
-    // effect, the score test predicted the load law a drop below a unit where its fit
-    // lowered the chi-square by 310. Viscous friction, which adds to every law, is screened
-    // by the score test at this model and fitted outright when it predicts a chi-square drop
-    // of a unit or more, or whatever it predicts while the model misfits.
-    let mut jobs: Vec<Job<M>> = Vec::new();
+    // Static friction (a threshold has no gradient at mu_static = mu_kinetic: no score test
+    // can screen it), the direction and the load law, each fitted outright: on a load-law
+    // recording whose other nuisances had taken part of the load's effect, the score test
+    // predicted the load law a drop below a unit where its fit lowered the chi-square by 310.
     // Static friction starts just above the tie unless the onsets show it higher: from the
     // onsets' guess, a law the recording does not have took 7 iterations to come back.
+    // Viscous friction, which adds to every law, is screened by the score test at this model
+    // and fitted outright when it predicts a chi-square drop of a unit or more, or whatever it
+    // predicts while the model misfits.
+    let mut jobs: Vec<Job<M>> = Vec::new();
     let static_start = if opts.static_evidence {
         opts.mu_static_start
     } else {
@@ -666,7 +666,7 @@ fn weigh_laws<M: Candidate>(s: &mut Search<M>, opts: &SelectOptions<M::Start>, c
         }
     }
     s.screening = drops;
-    let mut best = fit_law_jobs(jobs, opts, opts.max_iters);
+    let mut best = fit_law_jobs(jobs, opts);
     let static_fit = best
         .iter()
         .find(|(set, ..)| set.len() == core.len() + 1 && set.contains(&Nuisance::StaticFriction))
@@ -705,12 +705,12 @@ fn weigh_laws<M: Candidate>(s: &mut Search<M>, opts: &SelectOptions<M::Start>, c
             more.push((set, m, parent));
         }
     }
-    best.extend(fit_law_jobs(more, opts, opts.max_iters));
+    best.extend(fit_law_jobs(more, opts));
     let best = best_of_each(best);
     let cur_bic = crit.bic(s.current.0.n_free(), s.current.2);
     let mut winner: Option<Best<M>> = None;
     for (set, m, solved, capped) in best {
-        let same = set.len() == s.chosen.len() && set.iter().all(|n| s.chosen.contains(n));
+        let same = same_nuisances(&set, &s.chosen);
         match solved {
             Ok((q, cost, iters)) => {
                 s.iterations += iters;
@@ -749,20 +749,21 @@ fn weigh_laws<M: Candidate>(s: &mut Search<M>, opts: &SelectOptions<M::Start>, c
     }
 }
 
-/// The laws' fits, in parallel, each with at most `max_iters` iterations a start (whether
-/// one used them all is kept: its chi-square is then an upper bound).
-fn fit_law_jobs<M: Candidate>(
-    jobs: Vec<Job<M>>,
-    opts: &SelectOptions<M::Start>,
-    max_iters: u64,
-) -> Vec<Fitted<M>> {
+/// The laws' fits, in parallel. One that used every iteration is marked so (its chi-square
+/// an upper bound, `stopped_early` in the table) and cannot take the model.
+fn fit_law_jobs<M: Candidate>(jobs: Vec<Job<M>>, opts: &SelectOptions<M::Start>) -> Vec<Fitted<M>> {
     jobs.into_par_iter()
         .with_max_len(1)
         .map(|(set, m, parent)| {
-            let (solved, capped) = fit_law(&m, opts, parent, max_iters);
-            (set, m, solved, capped && max_iters < opts.max_iters)
+            let (solved, capped) = fit_law(&m, opts, parent);
+            (set, m, solved, capped)
         })
         .collect()
+}
+
+/// Whether two sets of nuisances are the same, whatever their order.
+fn same_nuisances(a: &[Nuisance], b: &[Nuisance]) -> bool {
+    a.len() == b.len() && a.iter().all(|n| b.contains(n))
 }
 
 /// Whether the model row named `name` holds exactly the nuisances `set`.
@@ -779,8 +780,7 @@ fn same_set(name: &str, set: &[Nuisance]) -> bool {
 fn best_of_each<M: Candidate>(fits: Vec<Fitted<M>>) -> Vec<Fitted<M>> {
     let mut out: Vec<Fitted<M>> = Vec::new();
     for (set, m, solved, capped) in fits {
-        let same = |o: &Fitted<M>| o.0.len() == set.len() && o.0.iter().all(|n| set.contains(n));
-        match out.iter_mut().find(|o| same(o)) {
+        match out.iter_mut().find(|o| same_nuisances(&o.0, &set)) {
             None => out.push((set, m, solved, capped)),
             Some(o) => {
                 let spent = |x: &Outcome| x.as_ref().map_or_else(|e| e.2, |g| g.2);
