@@ -61,9 +61,20 @@ pub(crate) mod test_support {
     /// 200 frames/s with 0.5 mm of noise (`seed`), as a problem with mu and the initial state
     /// free, weighted by that noise.
     pub(crate) fn paper_problem(seed: u64) -> TrajectoryProblem {
+        paper_problem_on(seed, |rig| rig)
+    }
+
+    /// [`paper_problem`] recorded on the paper's rig changed by `rig` (a friction law, say),
+    /// the problem on the paper's own rig (Coulomb's law).
+    pub(crate) fn paper_problem_on(
+        seed: u64,
+        rig: impl Fn(crate::model::Rig<f64>) -> crate::model::Rig<f64>,
+    ) -> TrajectoryProblem {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("configs/paper_rest_horizontal.toml");
-        let scene = Scene::from_toml(&std::fs::read_to_string(&path).unwrap(), &path).unwrap();
+        let mut scene = Scene::from_toml(&std::fs::read_to_string(&path).unwrap(), &path).unwrap();
+        let paper_rig = scene.rig;
+        scene.rig = rig(scene.rig);
         let syn = synthesize(
             &scene,
             &SynthOptions {
@@ -78,7 +89,7 @@ pub(crate) mod test_support {
         let obs = Arc::new(Observations::from(&syn.recording));
         let free = vec![Param::MuKinetic, Param::X, Param::Theta, Param::ThetaDot];
         let options = super::FitSettings::default().options;
-        let mut problem = TrajectoryProblem::new(obs, scene.rig, scene.initial, free, options);
+        let mut problem = TrajectoryProblem::new(obs, paper_rig, scene.initial, free, options);
         problem.sigma = [5e-4, 5e-4];
         problem
     }
@@ -142,7 +153,8 @@ pub struct FitSettings {
     /// Most Levenberg-Marquardt iterations per fit.
     pub max_iters: u64,
     /// Iterations a start of a candidate model gets before those far behind the round's best
-    /// are left where they stopped (0: every candidate fitted to the end; see the selection).
+    /// are left where they stopped (0: every candidate fitted to the end, the laws too, with
+    /// no out-of-reach stop; see the selection).
     pub first_iters: u64,
     /// Known noise per marker (slider, bob), m; `None`: measured from the tracks.
     pub noise: Option<[f64; 2]>,

@@ -6,6 +6,10 @@ use crate::model::FrictionLaw;
 
 use super::Candidate;
 
+/// mu_kinetic below this while a law carries the friction alone
+/// ([`Nuisance::carries_friction_alone`]) is pinned at its bound 0: no coefficient was measured.
+pub const MU_PINNED: f64 = 1e-3;
+
 /// A departure from the ideal rig or camera that a candidate model adds (PHYSICS.md, "Real
 /// rigs" and "What a camera adds").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -165,9 +169,33 @@ impl Nuisance {
         self.is_law() || matches!(self, Nuisance::StaticFriction | Nuisance::ViscousFriction)
     }
 
+    /// Whether it can carry the rail's friction with mu_kinetic at 0 (Stribeck's law through
+    /// mu_static, viscous friction through its coefficient): a fit that leaves mu_kinetic below
+    /// [`MU_PINNED`] with it has measured no friction coefficient.
+    pub fn carries_friction_alone(self) -> bool {
+        matches!(self, Nuisance::Stribeck | Nuisance::ViscousFriction)
+    }
+
     /// `problem` with this nuisance added at its neutral value (mu_static from `mu_static`).
     pub(super) fn add_to(self, problem: &TrajectoryProblem, mu_static: f64) -> TrajectoryProblem {
         let mut m = problem.clone();
+        self.set_law(&mut m);
+        for &q in self.params() {
+            if !m.free.contains(&q) {
+                m.free.push(q);
+            }
+        }
+        if self.params().contains(&Param::MuStatic) && !problem.free.contains(&Param::MuStatic) {
+            m.tie_static = false;
+            m.rig.mu_static = mu_static.max(m.rig.mu_kinetic * 1.02);
+        }
+        m
+    }
+
+    /// `m`'s friction law made this law's (a law nuisance) at its neutral value; nothing for
+    /// the other nuisances. The law's parameters act only under its own law: scored under
+    /// Coulomb's, the direction and load laws' columns were zero and their predicted drops 0.
+    pub(super) fn set_law(self, m: &mut TrajectoryProblem) {
         match self {
             Nuisance::Stribeck => {
                 m.rig.friction_law = FrictionLaw::Stribeck;
@@ -185,16 +213,6 @@ impl Nuisance {
             }
             _ => {}
         }
-        for &q in self.params() {
-            if !m.free.contains(&q) {
-                m.free.push(q);
-            }
-        }
-        if self.params().contains(&Param::MuStatic) && !problem.free.contains(&Param::MuStatic) {
-            m.tie_static = false;
-            m.rig.mu_static = mu_static.max(m.rig.mu_kinetic * 1.02);
-        }
-        m
     }
 }
 

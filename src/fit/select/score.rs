@@ -64,7 +64,9 @@ pub(super) fn score_drops(
     let mut group: Vec<Nuisance> = Vec::new();
     let mut seen: Vec<Nuisance> = candidates.iter().copied().filter(seen_only).collect();
     for &n in candidates.iter().filter(|n| !seen_only(n)) {
-        if group.iter().map(|g| g.params().len()).sum::<usize>() + n.params().len() > room {
+        // A rig has one friction law: each law is weighed in a pass of its own.
+        let full = group.iter().map(|g| g.params().len()).sum::<usize>() + n.params().len() > room;
+        if full || (n.is_law() && group.iter().any(|g| g.is_law())) {
             groups.push((std::mem::take(&mut group), std::mem::take(&mut seen)));
         }
         if n.params().len() <= room {
@@ -81,6 +83,7 @@ pub(super) fn score_drops(
         // pass fail, which silently dropped every candidate tested with it (the camera's
         // among them).
         for n in group.iter() {
+            n.set_law(&mut aug);
             for &q in n.params() {
                 if !aug.free.contains(&q) {
                     aug.free.push(q);
@@ -276,6 +279,38 @@ mod tests {
         let m = nu.add_to(problem, problem.rig.mu_static);
         let (q, _, _) = solve(&m, m.values(), 100).unwrap();
         chi2 - m.chi2(&q).unwrap()
+    }
+
+    /// Each friction law is weighed under its own law: on recordings with a direction split
+    /// of 0.001 and a load exponent of 1.02 (mu 0.35), fitted with Coulomb's law, the
+    /// direction and load laws' predicted drops are those their fits give. Scored under
+    /// Coulomb's law, as they once were, both came out 0.
+    #[test]
+    fn the_score_test_weighs_each_law_under_its_own_law() {
+        type RigFn = fn(crate::model::Rig<f64>) -> crate::model::Rig<f64>;
+        let recordings: [(Nuisance, RigFn); 2] = [
+            (Nuisance::Direction, |r| {
+                r.with_direction_split(0.001, 0.001)
+            }),
+            (Nuisance::Load, |r| r.with_load_exponent(1.02)),
+        ];
+        for (truth, rig) in recordings {
+            let mut problem = crate::fit::test_support::paper_problem_on(11, rig);
+            let (p, _, _) = solve(&problem, problem.values(), 100).unwrap();
+            problem.set_values(&p);
+            let drops = score_drops(&problem, &p, &[Nuisance::Direction, Nuisance::Load]);
+            assert_eq!(drops.len(), 2);
+            for (nu, predicted) in drops {
+                let fitted = fitted_drop(&problem, &p, nu);
+                assert!(
+                    (predicted - fitted).abs() <= 0.2 + 0.05 * fitted,
+                    "{truth:?} recording: {nu:?} predicted {predicted}, fitted {fitted}"
+                );
+                if nu == truth {
+                    assert!(fitted > 10.0, "{truth:?}: the law's own drop {fitted}");
+                }
+            }
+        }
     }
 
     /// The score test predicts the drop a candidate's fit gives: to a tenth of a chi-square
