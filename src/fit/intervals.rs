@@ -112,7 +112,7 @@ pub(super) fn pinned_friction(
     } else {
         return None;
     };
-    (mu.value < 1e-3 && mu.value < 2.0 * mu.stderr).then(|| {
+    (mu.value < select::MU_PINNED && mu.value < 2.0 * mu.stderr).then(|| {
         format!(
             "The fit failed: mu_kinetic is pinned at {:.2e} while {carried} carries the friction, so no friction coefficient was measured; the rig's description is likely wrong (a rigid pendulum: try --with rigid_pendulum, or give rod_mass and bob_radius).",
             mu.value

@@ -199,10 +199,12 @@ fn one_slide_on_a_damped_tilted_rig_tries_the_tilt_with_the_damping() {
 }
 
 /// The selection's first pass leaves a candidate where it stopped after 15 iterations only
-/// when it lies far behind the round's best: fitting every candidate to the end
-/// (`first_iters` 0) gives the same chosen model, mu and interval, with more iterations, and
-/// a row left early is more than a quarter of the best chi-square behind and carries no
-/// weight. Release 4 of a light rigid rig on a 0.8 deg tilt, where mu_static and Stribeck
+/// when it lies far behind the round's best, and the law weighing leaves a law once even its
+/// predicted drop cannot bring it within Occam's window: fitting every candidate to the end
+/// (`first_iters` 0) gives the same chosen model, mu and interval, with more iterations; a
+/// row left after its first iterations is more than a quarter of the best chi-square behind
+/// and carries no weight, and a law left out of reach stays outside the window fitted to the
+/// end. Release 4 of a light rigid rig on a 0.8 deg tilt, where mu_static and Stribeck
 /// friction crawl (233 iterations against 517).
 #[test]
 fn candidates_left_far_behind_change_no_answer() {
@@ -244,9 +246,18 @@ fn candidates_left_far_behind_change_no_answer() {
         .map(|m| m.chi2)
         .fold(f64::INFINITY, f64::min);
     for m in stopped {
-        assert!(m.chi2 > 1.25 * best && m.weight == 0.0, "{m:?}");
-        // Fitted to the end it is no better than a quarter behind either.
         let full = b.models.iter().find(|r| r.name == m.name).unwrap();
-        assert!(full.chi2 <= m.chi2 && full.chi2 > 1.25 * best, "{full:?}");
+        // No better where it stopped than fitted to the end, up to the laws' tolerance (a
+        // Gauss-Newton step predicted to gain less than 0.1 chi-square units is not taken).
+        assert!(full.chi2 <= m.chi2 + 0.5, "{m:?} {full:?}");
+        if m.chi2 > 1.25 * best {
+            // Left after its first iterations: fitted to the end it is no better than a
+            // quarter behind either.
+            assert!(m.weight == 0.0 && full.chi2 > 1.25 * best, "{m:?} {full:?}");
+        } else {
+            // A law stopped out of reach: outside Occam's window (a BIC 6 behind) where it
+            // stopped, and fitted to the end too.
+            assert!(m.delta_bic > 6.0 && full.delta_bic > 6.0, "{m:?} {full:?}");
+        }
     }
 }

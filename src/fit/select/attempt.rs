@@ -23,27 +23,34 @@ fn solve_candidate<M: Candidate>(m: &M, p0: DVector<f64>, max_iters: u64) -> Sol
 /// no change of its criterion.
 const LAW_COST_TOL: f64 = 0.05;
 
-/// Solve `m` as the laws are weighed: as a candidate, and stopped once the full Gauss-Newton
-/// step is predicted to lower the cost by less than [`LAW_COST_TOL`].
-fn solve_law<M: Candidate>(m: &M, p0: DVector<f64>, max_iters: u64) -> Solved {
+/// Solve `m` as the laws are weighed: as a candidate, stopped once the full Gauss-Newton step
+/// is predicted to lower the cost by less than [`LAW_COST_TOL`], or once the law cannot come
+/// within reach (`reach`: the chi-square the law must reach to matter; +inf: no such stop).
+/// Whether it stopped out of reach is returned too (its chi-square is then an upper bound).
+fn solve_law<M: Candidate>(m: &M, p0: DVector<f64>, max_iters: u64, reach: f64) -> (Solved, bool) {
     let mut lm = crate::fit::solve::loose(Some(STAGE_FTOL));
     lm.gn_tol = LAW_COST_TOL;
-    crate::fit::solve::run_lm(m, p0, max_iters, lm).map(|(p, c, i, _)| (p, c, i))
+    lm.reach_floor = 0.5 * reach;
+    match crate::fit::solve::run_lm(m, p0, max_iters, lm) {
+        Ok((p, c, i, why)) => (Ok((p, c, i)), why == crate::fit::lm::OUT_OF_REACH),
+        Err(e) => (Err(e), false),
+    }
 }
 
 /// How a candidate's solves stop: to the selection's relative tolerance, or to the laws'
-/// absolute one.
+/// absolute one (and out of reach below the chi-square given).
 #[derive(Clone, Copy)]
 enum Tol {
     Stage,
-    Law,
+    Law(f64),
 }
 
 impl Tol {
-    fn solve<M: Candidate>(self, m: &M, p0: DVector<f64>, max_iters: u64) -> Solved {
+    /// The solve, and whether it stopped short of an optimum (out of reach).
+    fn solve<M: Candidate>(self, m: &M, p0: DVector<f64>, max_iters: u64) -> (Solved, bool) {
         match self {
-            Tol::Stage => solve_candidate(m, p0, max_iters),
-            Tol::Law => solve_law(m, p0, max_iters),
+            Tol::Stage => (solve_candidate(m, p0, max_iters), false),
+            Tol::Law(reach) => solve_law(m, p0, max_iters, reach),
         }
     }
 }
@@ -58,8 +65,8 @@ fn solve_starts<M: Candidate>(
     tol: Tol,
 ) -> Solved {
     let solve = |m: &M| {
-        let got = tol.solve(m, m.values(), max_iters);
-        if got.as_ref().is_ok_and(|g| g.2 >= max_iters) {
+        let (got, short) = tol.solve(m, m.values(), max_iters);
+        if short || got.as_ref().is_ok_and(|g| g.2 >= max_iters) {
             capped.set(true);
         }
         got
@@ -155,14 +162,24 @@ pub(super) fn fit_candidate_within<M: Candidate>(
 }
 
 /// [`fit_candidate`] for a law weighed on the chosen model's other nuisances: its solves stop
-/// at [`LAW_COST_TOL`]; whether a start used every iteration is returned too.
+/// at [`LAW_COST_TOL`], or out of reach above the chi-square `reach` ([`solve_law`]); whether
+/// a start used every iteration or stopped out of reach is returned too.
 pub(super) fn fit_law<M: Candidate>(
     m: &M,
     opts: &SelectOptions<M::Start>,
     parent: Option<f64>,
+    reach: f64,
 ) -> (Outcome, bool) {
     let capped = Cell::new(false);
-    let got = fit_capped(m, None, opts, parent, opts.max_iters, &capped, Tol::Law);
+    let got = fit_capped(
+        m,
+        None,
+        opts,
+        parent,
+        opts.max_iters,
+        &capped,
+        Tol::Law(reach),
+    );
     (got, capped.get())
 }
 
@@ -177,9 +194,10 @@ fn fit_capped<M: Candidate>(
 ) -> Outcome {
     let worse = |cost: f64| parent.is_some_and(|c| chi2_of(cost) > c + nested_slack(c));
     let first = solve_starts(m, fresh, max_iters, capped, tol);
-    // A law that used every iteration is left where it stopped (its chi-square an upper
-    // bound, marked so by the weighing, which does not let it take the model).
-    if matches!(tol, Tol::Law) && capped.get() {
+    // A law that used every iteration or stopped out of reach is left where it stopped (its
+    // chi-square an upper bound, marked so by the weighing, which does not let it take the
+    // model).
+    if matches!(tol, Tol::Law(_)) && capped.get() {
         return first.map_err(|e| (e, f64::NAN, max_iters));
     }
     let (mut best, mut iters) = match first {
@@ -207,9 +225,10 @@ fn fit_capped<M: Candidate>(
     }
     let mut last_err = String::from("no start converged");
     for (r, p0) in retries {
-        match tol.solve(&r, p0, 2 * max_iters) {
+        let (got, short) = tol.solve(&r, p0, 2 * max_iters);
+        match got {
             Ok((q, cost, it)) => {
-                if it >= 2 * max_iters {
+                if short || it >= 2 * max_iters {
                     capped.set(true);
                 }
                 iters += it;

@@ -17,7 +17,7 @@ mod weights;
 
 pub use candidate::Candidate;
 pub use forward::forward;
-pub use nuisance::Nuisance;
+pub use nuisance::{Nuisance, MU_PINNED};
 pub use score::score_drops_by;
 pub use weights::{adequate_spread, model_spread, model_weights};
 
@@ -50,8 +50,9 @@ pub struct ModelRow {
     /// Whether its values hold one no real rig has (a nuisance beyond its plausible range):
     /// it is then no adequate description, and carries no weight in mu's model uncertainty.
     pub implausible: bool,
-    /// Whether its fit was stopped far behind the round's best model before converging (the
-    /// selection's first pass): its chi-square is then an upper bound.
+    /// Whether its fit was stopped out of reach of the best model before converging (the
+    /// selection's first pass, far behind the round's best; or a law that even its predicted
+    /// drop leaves outside Occam's window): its chi-square is then an upper bound.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub stopped_early: bool,
 }

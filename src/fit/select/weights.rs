@@ -36,6 +36,10 @@ pub fn model_weights(rows: &mut [ModelRow], c: f64) {
 /// in mu's spread across models (e^-3, a BIC 6 behind).
 const OCCAM: f64 = 0.049_787_068_367_863_944;
 
+/// [`OCCAM`]'s window in BIC: a model this far behind the best carries no weight in mu's
+/// spread, and the report no longer calls it alike.
+pub(super) const OCCAM_BIC: f64 = 6.0;
+
 /// The spread of mu_kinetic across the models the weights leave in play (within [`OCCAM`]): sum w_i (mu_i -
 /// mu)^2 around the chosen model's `mu`, and the models that carry it (the chosen one, and
 /// each that gives a tenth of the sum or more).
@@ -109,7 +113,13 @@ pub fn adequate_spread(rows: &[ModelRow], mu: f64, c: f64) -> (f64, Vec<String>)
 
 #[cfg(test)]
 mod tests {
-    use super::{adequate_spread, model_spread, model_weights, ModelRow};
+    use super::{adequate_spread, model_spread, model_weights, ModelRow, OCCAM, OCCAM_BIC};
+
+    /// The weight window and its BIC form are one rule: e^(-BIC/2) at the window's edge.
+    #[test]
+    fn occams_window_in_weight_and_in_bic_agree() {
+        assert!(((-OCCAM_BIC / 2.0).exp() / OCCAM - 1.0).abs() < 1e-15);
+    }
 
     fn row(name: &str, delta_bic: f64, mu: f64, chosen: bool) -> ModelRow {
         ModelRow {

@@ -250,7 +250,9 @@ fn models(s: &mut String, rep: &FitReport) {
                 m.weight,
                 m.mu_kinetic,
                 if m.stopped_early {
-                    "  (stopped far behind the best: chi2 at most)"
+                    "  (stopped out of reach of the best: chi2 at most)"
+                } else if m.implausible {
+                    "  (needs what no real rig has)"
                 } else {
                     ""
                 }
