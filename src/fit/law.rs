@@ -367,7 +367,7 @@ pub fn slide_points_of(
     problem: &super::TrajectoryProblem,
     settings: &super::FitSettings,
 ) -> Vec<SlidePoint> {
-    use crate::model::{observed_markers, Mode, Shorthands, X_DOT};
+    use crate::model::observed_markers;
     let obs = problem.observations();
     let Some(&t_end) = obs.times.last() else {
         return Vec::new();
@@ -434,16 +434,7 @@ pub fn slide_points_of(
                 .samples
                 .iter()
                 .filter(|s| s.t >= w.t_start && s.t <= w.t_end)
-                .filter_map(|s| match s.mode {
-                    Mode::Slide(d) => {
-                        let sh = Shorthands::at(rig, &s.state);
-                        let x_dot = s.state[X_DOT];
-                        let sigma = rig.slide_sigma(&sh, d.sign(), x_dot)?;
-                        let n = rig.slide(&sh, d.sign(), sigma, x_dot).normal.abs();
-                        Some((d.sign(), x_dot.abs(), n / rig.static_load()))
-                    }
-                    Mode::Stick => None,
-                })
+                .filter_map(|s| slide_load(rig, s))
                 .collect();
             if slides.is_empty() {
                 return None;
@@ -468,6 +459,39 @@ pub fn slide_points_of(
         .collect()
 }
 
+/// A sample's slide: its direction (+1 or -1), speed |x'| and normal force over the static
+/// load ([`crate::model::Rig::slide_load`]); `None` while stuck.
+fn slide_load(
+    rig: &crate::model::Rig<f64>,
+    s: &crate::sim::Sample<f64>,
+) -> Option<(f64, f64, f64)> {
+    let crate::model::Mode::Slide(d) = s.mode else {
+        return None;
+    };
+    let load = rig.slide_load(&s.state, d.sign())?;
+    Some((d.sign(), s.state[crate::model::X_DOT].abs(), load))
+}
+
+/// The spread of the normal force over the static load within which a recording's slides do
+/// not test a load law: the load law's exponent was then read as Coulomb's mu at that load,
+/// 9 to 16 standard errors from a load-law rail's coefficient.
+pub const LOAD_UNTESTED: f64 = 0.15;
+
+/// What a motion whose slides' normal forces over the static load span `loads` (lowest,
+/// highest) cannot test about the load: when they all stay within [`LOAD_UNTESTED`] of it,
+/// mu is the coefficient at that load and a load-dependent rail cannot be told from this
+/// recording.
+pub fn load_untested_by(loads: Option<[f64; 2]>) -> Option<String> {
+    let [lo, hi] = loads?;
+    let spread = (hi - 1.0).max(1.0 - lo);
+    (spread < LOAD_UNTESTED).then(|| {
+        format!(
+            "normal force within {:.0} % of its static value: mu's load dependence not measured",
+            100.0 * spread
+        )
+    })
+}
+
 /// What a motion that slides in the directions `modes` (every mode it passes through) cannot
 /// test: one direction only leaves the other's coefficient unmeasured, so mu_kinetic is that
 /// direction's and a direction-dependent rail cannot be told from this recording.
@@ -486,6 +510,17 @@ pub fn untested_by(modes: &[crate::model::Mode]) -> Vec<String> {
 mod tests {
     use super::untested_by;
     use crate::model::{Direction, Mode};
+
+    /// Slides within 15 % of the static load leave the load law untested, and say by how
+    /// much; a wider span, or no slide, leaves nothing to say.
+    #[test]
+    fn slides_at_one_load_say_the_load_law_was_not_measured() {
+        let said = super::load_untested_by(Some([0.93, 1.08])).unwrap();
+        assert!(said.starts_with("normal force within 8 % "), "{said}");
+        assert!(super::load_untested_by(Some([0.8, 1.05])).is_none());
+        assert!(super::load_untested_by(Some([0.95, 1.2])).is_none());
+        assert!(super::load_untested_by(None).is_none());
+    }
 
     /// One direction only leaves the other's coefficient unmeasured, and says which; both
     /// directions, or none, leave nothing to say.

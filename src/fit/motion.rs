@@ -21,6 +21,8 @@ pub(super) struct Motion {
     pub(super) needed_ratio: f64,
     /// Lowest and highest sliding speed |x'| at the frames that slide.
     pub(super) slide_speeds: Option<[f64; 2]>,
+    /// Lowest and highest normal force over the static load at the frames that slide.
+    pub(super) slide_loads: Option<[f64; 2]>,
 }
 
 /// The fitted motion at the frame times.
@@ -29,6 +31,7 @@ pub(super) fn motion(problem: &TrajectoryProblem) -> Result<Motion, FitError> {
     let (mut slides, mut sticks) = (false, false);
     let mut needed_ratio: f64 = 0.0;
     let mut slide_speeds: Option<[f64; 2]> = None;
+    let mut slide_loads: Option<[f64; 2]> = None;
     let sol = simulate_each(
         &problem.rig,
         &problem.initial,
@@ -41,11 +44,15 @@ pub(super) fn motion(problem: &TrajectoryProblem) -> Result<Motion, FitError> {
         },
         &mut |s: Sample<f64>| {
             range = (range.0.min(s.state[0]), range.1.max(s.state[0]));
-            if matches!(s.mode, Mode::Slide(_)) {
+            if let Mode::Slide(d) = s.mode {
                 slides = true;
                 let v = s.state[2].abs();
                 let r = slide_speeds.get_or_insert([v, v]);
                 *r = [r[0].min(v), r[1].max(v)];
+                if let Some(n) = problem.rig.slide_load(&s.state, d.sign()) {
+                    let r = slide_loads.get_or_insert([n, n]);
+                    *r = [r[0].min(n), r[1].max(n)];
+                }
             }
             sticks |= s.mode == Mode::Stick;
             let sh = Shorthands::at(&problem.rig, &s.state);
@@ -60,6 +67,7 @@ pub(super) fn motion(problem: &TrajectoryProblem) -> Result<Motion, FitError> {
         sticks,
         needed_ratio,
         slide_speeds,
+        slide_loads,
     })
 }
 

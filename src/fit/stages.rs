@@ -967,6 +967,11 @@ pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
         if !nuisances.contains(&Nuisance::Direction) {
             fr.untested = law::untested_by(&modes);
         }
+        // Nor can slides at one load measure a load law.
+        if !nuisances.contains(&Nuisance::Load) {
+            fr.untested
+                .extend(law::load_untested_by(motion.slide_loads));
+        }
         fr
     });
     let c = &problem.counters;

@@ -318,6 +318,17 @@ impl<T: Scalar> Rig<T> {
         }
     }
 
+    /// |N| / N_0, the normal force over the static load (m1 + m2) g, of a slide toward `s`
+    /// at state `y` on its branch ([`Rig::slide_sigma`]); `None` where no branch is
+    /// consistent. How far a motion's slides move it from 1 is what they can say of a load
+    /// law.
+    pub fn slide_load(&self, y: &[T], s: f64) -> Option<T> {
+        let sh = Shorthands::at(self, y);
+        let x_dot = y[X_DOT];
+        let sigma = self.slide_sigma(&sh, s, x_dot)?;
+        Some(self.slide(&sh, s, sigma, x_dot).normal.abs() / self.static_load())
+    }
+
     /// Power of friction F x' while sliding on branch sigma: F = -mu s |N| - c_v x'.
     #[inline]
     pub fn friction_power(&self, dynamics: &SlideDynamics<T>, x_dot: T, s: f64, sigma: f64) -> T {

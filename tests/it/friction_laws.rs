@@ -361,6 +361,55 @@ fn static_and_stribeck_laws_are_weighed_and_found() {
     assert!(bad.is_empty(), "{bad:#?}");
 }
 
+/// A motion that keeps the normal force near its static value cannot test the load law, and
+/// the answer says so: a rigid pendulum's small swing from the judgement generator
+/// (tests/data/judgement/clean_007.csv, Coulomb's law) is fitted as Coulomb's, holds the
+/// truth, and its answer line adds that mu's load dependence was not measured, with the
+/// normal force's spread no more than the 15 % that makes the statement. The law recordings'
+/// large swings (the same generator) never say it.
+#[test]
+fn a_load_the_motion_hardly_varies_is_said_untested() {
+    let (dir, cases) = judgement_cases("clean");
+    assert_eq!(cases.len(), 1);
+    let c = &cases[0];
+    let rep = fit_measured(
+        &dir.join(c["recording"].as_str().unwrap()),
+        &dir.join(c["rig_file"].as_str().unwrap()),
+    );
+    let fr = rep.friction.as_ref().expect("slides");
+    let said: Vec<&String> = fr.untested.iter().filter(|u| u.contains("load")).collect();
+    let e = rep.mu_kinetic.unwrap();
+    let truth = c["truth_mu"].as_f64().unwrap();
+    assert!(
+        fr.chosen == "coulomb" && e.ci95[0] <= truth && truth <= e.ci95[1] && !flagged(&rep),
+        "{} {e:?} for {truth}",
+        fr.chosen
+    );
+    assert_eq!(said.len(), 1, "{:?}", fr.untested);
+    let pct: f64 = said[0]
+        .split("within ")
+        .nth(1)
+        .and_then(|t| t.split(" %").next())
+        .and_then(|t| t.parse().ok())
+        .unwrap_or_else(|| panic!("no percentage in {:?}", said[0]));
+    assert!((1.0..=15.0).contains(&pct), "{}", said[0]);
+    let line = appell::report::fit::answer(&rep);
+    assert!(line.contains("load dependence not measured"), "{line}");
+    for c in judgement_cases("laws").1.iter().take(3) {
+        let rep = fit_measured(
+            &dir.join(c["recording"].as_str().unwrap()),
+            &dir.join(c["rig_file"].as_str().unwrap()),
+        );
+        let fr = rep.friction.as_ref().expect("slides");
+        assert!(
+            fr.untested.iter().all(|u| !u.contains("load")),
+            "{}: {:?}",
+            c["id"],
+            fr.untested
+        );
+    }
+}
+
 /// Timestamps are a measurement too: 240 frames/s written in whole milliseconds (as phones
 /// write them) or jittered by 0.3 ms (tests/data/judgement). The frame times' scatter about
 /// their grid is measured (1 ms / sqrt(12) for the rounded ones) and enters each position's
