@@ -1,6 +1,6 @@
 """Seeds of the structure-aware HDF5 targets (fuzz/fuzz_targets/{hdf5,pickle}_structured.rs).
 
-Written with h5py 3.16 and numpy (the venv of scripts/make_budget_h5.py); run from the repo root:
+Written with h5py 3.16 and numpy (the venv of scripts/fixtures/make_budget_h5.py); run from the repo root:
     /tmp/venv-rigid/bin/python fuzz/seeds/make_seeds.py
 - sleap_*.h5: small SLEAP analysis files (tracks[2][2][3][40], node_names, track_names,
   track_occupancy) stored contiguous, chunked with deflate + shuffle, Fletcher-32, scale-offset,

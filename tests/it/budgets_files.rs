@@ -2,7 +2,7 @@
 //! without bound. Each runs the binary under a 4 GiB address-space cap and must end within
 //! 20 s: refused with exit code 2 naming the file and the limit (no output file left, the
 //! input untouched), or read when it is a legitimate recording. The HDF5 files are made by
-//! `scripts/make_budget_h5.py` (tests/data/budget/README.md).
+//! `scripts/fixtures/make_budget_h5.py` (tests/data/budget/README.md).
 
 use std::fs::File;
 use std::path::{Path, PathBuf};

@@ -237,7 +237,7 @@ fn estimate(rep: &appell::fit::FitReport, q: Param) -> Option<appell::fit::Estim
     rep.params.iter().find(|(p, _)| *p == q).map(|(_, e)| *e)
 }
 
-/// The recordings of scripts/friction_law_generator.py (an independent Newton-Euler
+/// The recordings of scripts/generators/friction_law_generator.py (an independent Newton-Euler
 /// generator; tests/data/friction), fitted as a lab would (the rig file says nothing about
 /// friction): each chooses the law that made it, with every parameter of the law within 3
 /// standard errors of the truth, or is flagged. Direction and load rails on the light and
@@ -319,13 +319,13 @@ fn judgement_cases(set: &str) -> (std::path::PathBuf, Vec<serde_json::Value>) {
     (dir, cases)
 }
 
-/// Static friction above kinetic, the commonest law of a dry rail, and Stribeck's law, on
-/// the three rigs (scripts/judgement_generator.py, an independent Newton-Euler generator;
-/// tests/data/judgement): each fit chooses the law that made the recording, with mu_kinetic
-/// and mu_static within 3 standard errors of the truth, and is not flagged. Before every law
-/// was weighed on the chosen model's other nuisances, the static law was chosen in 3 of the
-/// 9 recordings of the judgement sweep's first seed of this layout, the others confidently
-/// wrong by up to 28 standard errors.
+/// Static friction above kinetic, the commonest law of a dry rail, and Stribeck's law, on the
+/// three rigs (scripts/generators/judgement_generator.py, an independent Newton-Euler
+/// generator; tests/data/judgement): each fit chooses the law that made the recording, with
+/// mu_kinetic and mu_static within 3 standard errors of the truth, and is not flagged. Before
+/// every law was weighed on the chosen model's other nuisances, the static law was chosen in 3
+/// of the 9 recordings of the judgement sweep's first seed of this layout, the others
+/// confidently wrong by up to 28 standard errors.
 #[test]
 fn static_and_stribeck_laws_are_weighed_and_found() {
     let (dir, cases) = judgement_cases("laws");

@@ -1,8 +1,8 @@
 //! The joint fit of many releases of one rig, on campaigns made by an independent generator
-//! (`scripts/campaign_generator.py`, `tests/data/campaign/`: the rigid paper rig on a rail
-//! tilted by 0.5 deg, mu 0.25, releases pushed both ways; `odd/` has one release on a rail
-//! with mu 0.30). Checked: the joint interval covers mu and the tilt and is narrower than the
-//! releases' own; the odd release is named; a release of another rig is refused; the block
+//! (`scripts/generators/campaign_generator.py`, `tests/data/campaign/`: the rigid paper rig on
+//! a rail tilted by 0.5 deg, mu 0.25, releases pushed both ways; `odd/` has one release on a
+//! rail with mu 0.30). Checked: the joint interval covers mu and the tilt and is narrower than
+//! the releases' own; the odd release is named; a release of another rig is refused; the block
 //! structure gives what the single fit gives on one release counted twice.
 
 use appell::data::{read_recording, ReadOptions};
@@ -512,7 +512,7 @@ fn plan_after_refuses_a_failed_fit() {
 }
 
 /// The odd release of a campaign by an independent generator (`tests/data/campaign37`, made
-/// by `scripts/campaign_sweep_generator.py`): its file name and the rail's mu.
+/// by `scripts/generators/campaign_sweep_generator.py`): its file name and the rail's mu.
 fn odd_of(dir: &str) -> (String, f64) {
     let t = truth(dir);
     let file = t["odd_release"]["file"].as_str().expect("an odd campaign");

@@ -1,5 +1,5 @@
 //! The rig file as a measurement (issue 34): recordings of point-pendulum rigs made by an
-//! independent Newton-Euler generator (`scripts/measured_rig_generator.py`,
+//! independent Newton-Euler generator (`scripts/generators/measured_rig_generator.py`,
 //! `tests/data/measured/`), fitted with rig files whose rod length or masses are off by what a
 //! ruler and a kitchen scale allow, and recordings with effects no nuisance describes (a
 //! pin's Coulomb torque at the pivot, a rolling shutter, a sagging rail, load-dependent

@@ -1,10 +1,10 @@
 //! Recordings with effects the fit's model does not describe, made by an independent
-//! Newton-Euler generator (`scripts/misspec_generator.py`, `tests/data/misspec/`): air drag,
-//! barrel lens distortion, four effects at once, friction that varies along the rail, frame-time
-//! jitter and occlusion bursts, on three rigs from light to heavy slider (seed 1 of each; the
-//! 10-seed sweep is `scripts/misspec_sweep.py`, outside CI). The rule checked: mu within 3
-//! standard errors of the truth, or the report says the model limits the result; never a
-//! confident wrong answer.
+//! Newton-Euler generator (`scripts/generators/misspec_generator.py`, `tests/data/misspec/`):
+//! air drag, barrel lens distortion, four effects at once, friction that varies along the rail,
+//! frame-time jitter and occlusion bursts, on three rigs from light to heavy slider (seed 1 of
+//! each; the 10-seed sweep is `scripts/sweeps/misspec_sweep.py`, outside CI). The rule checked:
+//! mu within 3 standard errors of the truth, or the report says the model limits the result;
+//! never a confident wrong answer.
 
 use appell::data::{read_recording, ReadOptions};
 use appell::fit::{fit, FitReport, FitSettings, Observations};

@@ -614,7 +614,7 @@ fn tracker_projects_give_point_mass_positions_or_say_a_model_has_no_data() {
 
 #[test]
 fn sleap_analysis_hdf5_matches_the_values_h5py_reads() {
-    // The reference was written by scripts/sleap_h5_reference.py with h5py (the HDF5 C
+    // The reference was written by scripts/fixtures/sleap_h5_reference.py with h5py (the HDF5 C
     // library), independently of the pure-Rust reader.
     let t = text("sleap_three-mice_Aeon.analysis.reference.csv");
     let lines: Vec<&str> = t.lines().skip(1).collect();
@@ -706,7 +706,8 @@ fn kinovea_spreadsheet_export_reads_its_tracks_with_rows_numbered_at_fps() {
 
 #[test]
 fn ros2_tf_is_composed_to_the_tree_root_as_an_independent_decoder_composes_it() {
-    // Reference: scripts/tf_reference.py (the official mcap-ros2-support decoder and numpy).
+    // Reference: scripts/fixtures/tf_reference.py (the official mcap-ros2-support decoder and
+    // numpy).
     let t = text("mcap_ros2_evo_nav2_turtlebot_tf.reference.csv");
     let lines: Vec<&str> = t.lines().skip(1).collect();
     let want = rows(

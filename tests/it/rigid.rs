@@ -3,7 +3,7 @@
 //! sphere, Newton-Euler's forces and torque from the simulated accelerations, the conserved
 //! momentum, the energy with J, the impulse law from the pivot's angular momentum, the period of
 //! small swings; and fits of recordings made by an independent Newton-Euler generator
-//! (`scripts/rigid_generator.py`, `tests/data/rigid/`).
+//! (`scripts/generators/rigid_generator.py`, `tests/data/rigid/`).
 
 use crate::helpers::*;
 use appell::data::{read_recording, ReadOptions};

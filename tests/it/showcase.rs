@@ -1,10 +1,11 @@
-//! The showcase recordings (`tests/data/showcase/`): one release of a point-pendulum rig made by
-//! an independent generator (`scripts/showcase_generator.py`) and written as DeepLabCut, SLEAP,
-//! OptiTrack Motive and Tracker write their files, with camera noise, dropped frames and planted
-//! mis-tracks. Each is fitted as the README shows it, with the flags its tool needs, and the
-//! rig file a lab would type (rod 1 mm long, masses 2 % off). The oracle is the generator's
-//! truth file: mu inside the 95 % interval, the model adequate, and no position left out
-//! beyond the planted mis-tracks (give or take a few noise draws past the filter's threshold).
+//! The showcase recordings (`tests/data/showcase/`): one release of a point-pendulum rig made
+//! by an independent generator (`scripts/generators/showcase_generator.py`) and written as
+//! DeepLabCut, SLEAP, OptiTrack Motive and Tracker write their files, with camera noise,
+//! dropped frames and planted mis-tracks. Each is fitted as the README shows it, with the flags
+//! its tool needs, and the rig file a lab would type (rod 1 mm long, masses 2 % off). The
+//! oracle is the generator's truth file: mu inside the 95 % interval, the model adequate, and
+//! no position left out beyond the planted mis-tracks (give or take a few noise draws past the
+//! filter's threshold).
 
 use std::path::PathBuf;
 use std::process::Command;

@@ -590,7 +590,7 @@ fn uniform(state: &mut u64) -> f64 {
 /// (1e-7 to 1e-2 relative) below the largest ratio their energy level needs, so that the stick
 /// margin only grazes zero, the closed-form runs (slides at rtol 1e-12) have the event sequence
 /// of the integrator at 1e-13, each event within 1e-9 s (a grazing slip's time is
-/// ill-conditioned). Outside CI, `scripts/closed_form_sweep.rs` runs 3000 and 1889 such
+/// ill-conditioned). Outside CI, `scripts/sweeps/closed_form_sweep.rs` runs 3000 and 1889 such
 /// releases: among the grazing ones one sequence differs (where the integrator at 1e-12 also
 /// misses slips, as it does in 3 more) and one slip is 1.4e-9 s off.
 #[test]

@@ -1,7 +1,7 @@
 //! Standalone benchmark: appell's paper scene solved with the `differential-equations` crate.
 //!
 //! The stick/slide equations, the friction-cone test and the switching events are ported from
-//! `scripts/compare_scipy.py` (itself an independent re-derivation of `docs/physics.md`), and
+//! `scripts/bench/compare_scipy.py` (itself an independent re-derivation of `docs/physics.md`), and
 //! the hybrid run is integrated with `differential-equations` 0.7's DOP853 (rtol 1e-10,
 //! atol 1e-12). Every mode switch is a terminal event detected by the crate's `EventSolout`;
 //! the integration is restarted there in the new mode, exactly as the scipy script does with

@@ -1,0 +1,16 @@
+#!/usr/bin/env bash
+# The Python package's tests, as the README says: build the wheel into a fresh virtual
+# environment (.venv, with the test extras: pytest, pandas, dask.distributed), run pytest
+# against the `appell` binary `cargo test --release` builds, then the notebook-style example.
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+python3 -m venv .venv
+.venv/bin/pip install --quiet --upgrade pip
+.venv/bin/pip install --quiet './python[test]'
+# The binary `cargo test --release` builds (a no-op after it; plain `cargo build` would
+# compile the library again, its dependencies unified without the dev-dependencies).
+cargo test --release --no-run --quiet
+APPELL_BIN="$PWD/target/release/appell" .venv/bin/python -m pytest -q -p no:cacheprovider python/tests
+out=$(mktemp -d)
+trap 'rm -rf "$out"' EXIT
+.venv/bin/python docs/examples/notebook.py "$out"
