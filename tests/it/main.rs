@@ -1,5 +1,6 @@
 //! Integration tests: one binary, shared helpers, one module per capability.
 
+mod architecture;
 mod budgets;
 mod budgets_files;
 mod budgets_mcap;
