@@ -1,7 +1,7 @@
 //! Scenes: a TOML file with a rig, an initial state, a run and what the run should produce.
 //! Key names are fixed (scripts use them); unknown keys are errors so typos never pass.
 
-use crate::fit::Param;
+use crate::model::Param;
 use crate::model::{FrictionLaw, PendulumKeys, Rig, RigError, State};
 use crate::sim::{Method, Options, Request, RestRule};
 use serde::Deserialize;

@@ -7,6 +7,7 @@ mod forces;
 mod friction;
 mod markers;
 mod mode;
+mod param;
 pub mod pendulum;
 pub mod regions;
 mod rig;
@@ -15,6 +16,7 @@ mod transition;
 pub use forces::{energy, momentum, Shorthands, SlideBranches, SlideDynamics};
 pub use markers::{markers, observed_markers, observed_markers_with, Camera};
 pub use mode::{Direction, Mode};
+pub use param::{Param, CAMERA_PARAMS};
 pub use rig::{
     FrictionLaw, PendulumKeys, Rig, RigConstants, RigError, RigidPendulum, LOAD_EXPONENT_MAX,
     LOAD_EXPONENT_MIN,

@@ -18,8 +18,7 @@
 //! Scene's place. `scene.rs` builds the simulator's `Request` and `Options` from a scene file
 //! (it imports `sim` as well as `model`), so it cannot stand beside `model`; `data/synth.rs`
 //! synthesises recordings from a `Scene`, so it must stand below `data`. It sits between `sim`
-//! and `data`. Its one import from above, the fit's parameter names (`crate::fit::Param`), is an
-//! exception until `Param` moves below it as issue 62 plans.
+//! and `data`. The parameters' names it takes (`Param`) live with the model, below it.
 //!
 //! What counts as an import, file by file:
 //! - every leaf of a `use` tree (`pub use` too), groups expanded: `use crate::fit::{a, b::{c,
@@ -73,13 +72,7 @@ struct Exception {
 }
 
 /// The imports allowed upward for now, today's all. Each should go with issue 62.
-const UPWARD_EXCEPTIONS: [Exception; 3] = [
-    Exception {
-        file: "scene.rs",
-        path: "crate::fit::Param",
-        reason: "a scene names the parameters a fit may free; issue 62 plans to move `Param` \
-                 below scene",
-    },
+const UPWARD_EXCEPTIONS: [Exception; 2] = [
     Exception {
         file: "fit/adequacy.rs",
         path: "crate::report::p_is",
@@ -103,11 +96,25 @@ struct LoopException {
     reason: &'static str,
 }
 
-/// The loops allowed for now: the folders outside `fit/`, which issue 62 does not reshape. In
-/// most of them the only loop is the face's (the face re-exports its children and they take the
-/// shared vocabulary back from it); the reason says where files also call each other in a loop.
-/// The loops of `fit/` and `fit/joint/` have no exception: they are what issue 62 untangles.
-const LOOP_EXCEPTIONS: [LoopException; 8] = [
+/// The loops allowed for now. In most folders the only loop is the face's (the face re-exports
+/// its children and they take the shared vocabulary back from it); the reason says where files
+/// also call each other in a loop. The loops of `fit/` and `fit/joint/` are what issue 62
+/// untangles: they stand here at today's size so that they can only shrink while it is done.
+const LOOP_EXCEPTIONS: [LoopException; 10] = [
+    LoopException {
+        folder: "fit/",
+        files: 25,
+        reason: "issue 62, open: fit/mod.rs is both the face and the vocabulary (`FitSettings`, \
+                 `FitReport`, `Estimate`, `FitError`, ...) 12 files take back, and without those \
+                 imports base, stages, select/, uncertainty, law and the rest still form a loop \
+                 of 21 files",
+    },
+    LoopException {
+        folder: "fit/joint/",
+        files: 9,
+        reason: "issue 62, open: the face only: eight files take the joint fit's vocabulary \
+                 back from fit/joint/mod.rs",
+    },
     LoopException {
         folder: "model/",
         files: 5,
@@ -1226,7 +1233,6 @@ fn strongly_connected(imports: &[&Import]) -> Vec<Vec<String>> {
 // The tests.
 
 #[test]
-#[ignore = "the fit's layers land with issue 62"]
 fn src_keeps_its_layers_and_has_no_loops() {
     let report = check(&read_src(), &UPWARD_EXCEPTIONS, &LOOP_EXCEPTIONS);
     assert!(

@@ -1,15 +1,14 @@
 //! The estimation problem: predicted minus observed marker positions at every frame with data,
 //! weighted per marker, as a function of the free parameters (rig and initial state).
 //!
-//! `param.rs` names the parameters; `normal.rs` holds the exact normal equations by dual
+//! The parameters' names ([`Param`]) live with the model, below scenes and the fit; `normal.rs` holds the exact normal equations by dual
 //! numbers; this file holds the observations, the problem's layout, its parameter vector and
 //! its residuals.
 
 mod normal;
-mod param;
 
+pub use crate::model::Param;
 pub use normal::MAX_FREE;
-pub use param::Param;
 
 use crate::fit::priors::{Plausibility, Prior};
 use crate::model::{markers, observed_markers, Camera, Rig, Scalar, State};

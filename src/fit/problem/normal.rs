@@ -2,10 +2,10 @@
 //! integrator, summed into the normal equations as the simulation runs (the fit never holds
 //! the Jacobian), at one of a few fixed dual widths ([`by_width`]).
 
-use super::param::CAMERA_PARAMS;
 use super::{to_err, Param, TrajectoryProblem};
 use crate::fit::lm::{LeastSquares, Normal};
 use crate::model::dual::Dual;
+use crate::model::CAMERA_PARAMS;
 use crate::model::{
     observed_markers_with, re_state, Scalar as _, LOAD_EXPONENT_MAX, LOAD_EXPONENT_MIN,
 };

@@ -1,6 +1,7 @@
 //! The quantities a fit can estimate ([`Param`]), with their names, units and kinds (the rig's,
-//! a release's initial state, the camera's): the vocabulary every other part of the fit and
-//! the plan speaks.
+//! a release's initial state, the camera's): the vocabulary scenes, the fit and the plan
+//! speak. It lives with the model, below them all, because a scene names the parameters a fit
+//! may free before any fit exists.
 
 use serde::Serialize;
 
