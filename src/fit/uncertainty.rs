@@ -549,6 +549,9 @@ pub fn window_consistency(windows: &[WindowFit]) -> Option<f64> {
 /// parameter held rises by 3.84 times `scale` (the reduced chi-square when above one).
 /// `at`, the covariance and chi-square at `p` when known, warm-starts a long recording's
 /// profile points on the linear prediction of the other parameters (and saves a pass).
+/// The steps: the quadratic ends of a long recording ([`Profile::quadratic_ends`]), else on
+/// each side a bracket of the target rise ([`Profile::bracket`]) closed by a root search
+/// ([`Profile::root`]).
 #[allow(clippy::too_many_arguments)]
 pub fn profile_interval(
     problem: &TrajectoryProblem,
@@ -560,80 +563,20 @@ pub fn profile_interval(
     lower_limit: f64,
     at: Option<(&DMatrix<f64>, f64)>,
 ) -> Option<[f64; 2]> {
-    let target = 3.84 * scale;
-    let base = p.clone();
-    let cov = at.map(|a| a.0);
     let s_min = match at {
         Some((_, chi2)) => chi2,
         None => problem.chi2(p).ok()?,
     };
-    let mut fixed = problem.clone();
-    fixed.free.remove(k);
-    let others: Vec<usize> = (0..p.len()).filter(|&i| i != k).collect();
-    // The problem with parameter k held at v.
-    let held = |v: f64| {
-        let mut pr = fixed.clone();
-        let mut full = base.clone();
-        full[k] = v;
-        let mut tmp = problem.clone();
-        tmp.set_values(&full);
-        pr.rig = tmp.rig;
-        pr.initial = tmp.initial;
-        pr.camera = tmp.camera;
-        pr
-    };
-    let profile = |v: f64, warm: &DVector<f64>| -> Option<(f64, DVector<f64>)> {
-        let (opt, cost, _) = solve(&held(v), warm.clone(), settings.max_iters).ok()?;
-        Some((2.0 * cost - s_min, opt))
-    };
-    let start: DVector<f64> = DVector::from_iterator(others.len(), others.iter().map(|&i| p[i]));
-    // Where the other parameters move, to first order, when this one moves by dv from a
-    // point whose optimum is `opt`: each profile fit starts there and needs fewer iterations.
-    let shift = |opt: &DVector<f64>, dv: f64| -> DVector<f64> {
-        match cov {
-            Some(c) if c[(k, k)] > 0.0 => DVector::from_iterator(
-                others.len(),
-                others
-                    .iter()
-                    .zip(opt.iter())
-                    .map(|(&i, &o)| o + c[(i, k)] / c[(k, k)] * dv),
-            ),
-            _ => opt.clone(),
-        }
-    };
+    let pr = Profile::new(problem, p, k, s_min, at.map(|a| a.0), settings);
+    let target = 3.84 * scale;
     // A long recording's interval is so narrow that the chi-square is quadratic across it to
     // high accuracy: one profile point at each Wald end checks that, and when its rise is
     // within 20% of the target, the end follows from it (exact for a quadratic). Otherwise,
     // and always for short recordings, the search below.
     let long = problem.frame_times().len() > settings.long_prefix.saturating_mul(2);
     if long && se.is_finite() && se > 0.0 {
-        let half = 1.96 * se;
-        let mut quick = [0.0; 2];
-        let mut ok = true;
-        for (side, dir) in [-1.0f64, 1.0].iter().enumerate() {
-            let v = p[k] + dir * half;
-            // Where the other parameters go when this one is held at v, to first order.
-            let warm = shift(&start, v - p[k]);
-            // From there one Gauss-Newton step is as good as the whole minimisation (the
-            // prediction misses by second-order terms): the minimum is the chi-square there
-            // less the step's predicted drop, g'H^-1 g, from one pass over the recording.
-            let gauss_newton = || -> Option<f64> {
-                let n = held(v).normal_equations(&warm).ok()?;
-                let step = n.jtj.clone().cholesky()?.solve(&n.jtr);
-                Some(2.0 * n.cost - n.jtr.dot(&step) - s_min)
-            };
-            match gauss_newton() {
-                Some(d) if v >= lower_limit && d > 0.8 * target && d < 1.25 * target => {
-                    quick[side] = p[k] + dir * half * (target / d).sqrt();
-                }
-                _ => ok = false,
-            }
-            if !ok {
-                break;
-            }
-        }
-        if ok {
-            return Some(quick);
+        if let Some(ends) = pr.quadratic_ends(se, target, lower_limit) {
+            return Some(ends);
         }
     }
     let side = |dir: f64| -> Option<f64> {
@@ -649,16 +592,153 @@ pub fn profile_interval(
         } else {
             0.01 * scale_v
         };
-        let mut lo = (p[k], 0.0);
-        let mut warm = start.clone();
+        match pr.bracket(dir, step0, target, lower_limit)? {
+            Bracket::AtLimit => Some(lower_limit),
+            Bracket::Open => None,
+            Bracket::Found { lo, hi, warm } => pr.root(lo, hi, warm, target, step0),
+        }
+    };
+    let (low, high) = rayon::join(|| side(-1.0), || side(1.0));
+    Some([low?, high?])
+}
+
+/// What a side's bracket search found: the target rise between two values (the lower rise
+/// and its optimum to warm-start from), the lower limit before the target, or neither
+/// within its doublings.
+enum Bracket {
+    Found {
+        lo: (f64, f64),
+        hi: (f64, f64),
+        warm: DVector<f64>,
+    },
+    AtLimit,
+    Open,
+}
+
+/// The profile of parameter `k`: the problem with it held, the optimum it is profiled about
+/// and how the other parameters move with it.
+struct Profile<'a> {
+    problem: &'a TrajectoryProblem,
+    /// The problem without parameter `k` among the free ones.
+    fixed: TrajectoryProblem,
+    /// The optimum.
+    base: DVector<f64>,
+    k: usize,
+    /// The chi-square at the optimum.
+    s_min: f64,
+    /// The covariance at the optimum, when known.
+    cov: Option<&'a DMatrix<f64>>,
+    /// The indices of the other parameters.
+    others: Vec<usize>,
+    /// The other parameters' values at the optimum.
+    start: DVector<f64>,
+    max_iters: u64,
+}
+
+impl<'a> Profile<'a> {
+    fn new(
+        problem: &'a TrajectoryProblem,
+        p: &DVector<f64>,
+        k: usize,
+        s_min: f64,
+        cov: Option<&'a DMatrix<f64>>,
+        settings: &FitSettings,
+    ) -> Self {
+        let mut fixed = problem.clone();
+        fixed.free.remove(k);
+        let others: Vec<usize> = (0..p.len()).filter(|&i| i != k).collect();
+        let start = DVector::from_iterator(others.len(), others.iter().map(|&i| p[i]));
+        Profile {
+            problem,
+            fixed,
+            base: p.clone(),
+            k,
+            s_min,
+            cov,
+            others,
+            start,
+            max_iters: settings.max_iters,
+        }
+    }
+
+    /// The problem with parameter k held at v.
+    fn held(&self, v: f64) -> TrajectoryProblem {
+        let mut pr = self.fixed.clone();
+        let mut full = self.base.clone();
+        full[self.k] = v;
+        let mut tmp = self.problem.clone();
+        tmp.set_values(&full);
+        pr.rig = tmp.rig;
+        pr.initial = tmp.initial;
+        pr.camera = tmp.camera;
+        pr
+    }
+
+    /// The chi-square's rise with parameter k held at v, fitted from `warm`, and the optimum.
+    fn rise(&self, v: f64, warm: &DVector<f64>) -> Option<(f64, DVector<f64>)> {
+        let (opt, cost, _) = solve(&self.held(v), warm.clone(), self.max_iters).ok()?;
+        Some((2.0 * cost - self.s_min, opt))
+    }
+
+    /// Where the other parameters move, to first order, when this one moves by dv from a
+    /// point whose optimum is `opt`: each profile fit starts there and needs fewer iterations.
+    fn shift(&self, opt: &DVector<f64>, dv: f64) -> DVector<f64> {
+        let k = self.k;
+        match self.cov {
+            Some(c) if c[(k, k)] > 0.0 => DVector::from_iterator(
+                self.others.len(),
+                self.others
+                    .iter()
+                    .zip(opt.iter())
+                    .map(|(&i, &o)| o + c[(i, k)] / c[(k, k)] * dv),
+            ),
+            _ => opt.clone(),
+        }
+    }
+
+    /// Both ends from one Gauss-Newton pass at each Wald end, when the rise there is within
+    /// 20 % of the target (the chi-square quadratic across the interval); `None` otherwise.
+    fn quadratic_ends(&self, se: f64, target: f64, lower_limit: f64) -> Option<[f64; 2]> {
+        let (p_k, half) = (self.base[self.k], 1.96 * se);
+        let mut quick = [0.0; 2];
+        for (side, dir) in [-1.0f64, 1.0].iter().enumerate() {
+            let v = p_k + dir * half;
+            // Where the other parameters go when this one is held at v, to first order.
+            let warm = self.shift(&self.start, v - p_k);
+            // From there one Gauss-Newton step is as good as the whole minimisation (the
+            // prediction misses by second-order terms): the minimum is the chi-square there
+            // less the step's predicted drop, g'H^-1 g, from one pass over the recording.
+            let gauss_newton = || -> Option<f64> {
+                let n = self.held(v).normal_equations(&warm).ok()?;
+                let step = n.jtj.clone().cholesky()?.solve(&n.jtr);
+                Some(2.0 * n.cost - n.jtr.dot(&step) - self.s_min)
+            };
+            match gauss_newton() {
+                Some(d) if v >= lower_limit && d > 0.8 * target && d < 1.25 * target => {
+                    quick[side] = p_k + dir * half * (target / d).sqrt();
+                }
+                _ => return None,
+            }
+        }
+        Some(quick)
+    }
+
+    /// From the optimum toward `dir`, steps doubling from 2 `step0` (at most 12, none past
+    /// `lower_limit`) until the rise reaches the target. `None` when a profile fit fails.
+    fn bracket(&self, dir: f64, step0: f64, target: f64, lower_limit: f64) -> Option<Bracket> {
+        let p_k = self.base[self.k];
+        let mut lo = (p_k, 0.0);
+        let mut warm = self.start.clone();
         let mut step = 2.0 * step0;
-        let mut hi = None;
         for _ in 0..12 {
-            let v = (p[k] + dir * step).max(lower_limit);
-            let (d, opt) = profile(v, &shift(&warm, v - lo.0))?;
+            let v = (p_k + dir * step).max(lower_limit);
+            let (d, opt) = self.rise(v, &self.shift(&warm, v - lo.0))?;
             if d >= target {
-                hi = Some((v, d));
-                break;
+                return Some(Bracket::Found {
+                    lo,
+                    hi: (v, d),
+                    warm,
+                });
             }
             lo = (v, d);
             warm = opt;
@@ -667,13 +747,26 @@ pub fn profile_interval(
             }
             step *= 2.0;
         }
-        let Some(mut hi) = hi else {
-            return (lo.0 == lower_limit).then_some(lower_limit);
-        };
-        // The rise's square root is nearly linear in the value (exactly, for a quadratic
-        // chi-square): the secant through the last two points on it, or regula falsi the
-        // Illinois way when the secant leaves the bracket (an end kept twice has its weight
-        // halved), until a point's rise is within PROFILE_RISE_TOL of the target.
+        Some(if lo.0 == lower_limit {
+            Bracket::AtLimit
+        } else {
+            Bracket::Open
+        })
+    }
+
+    /// The value in the bracket `lo`..`hi` (values and rises) where the rise is the target.
+    /// The rise's square root is nearly linear in the value (exactly, for a quadratic
+    /// chi-square): the secant through the last two points on it, or regula falsi the
+    /// Illinois way when the secant leaves the bracket (an end kept twice has its weight
+    /// halved), until a point's rise is within PROFILE_RISE_TOL of the target.
+    fn root(
+        &self,
+        mut lo: (f64, f64),
+        mut hi: (f64, f64),
+        mut warm: DVector<f64>,
+        target: f64,
+        step0: f64,
+    ) -> Option<f64> {
         let root = target.sqrt();
         let (mut f_lo, mut f_hi) = (lo.1.max(0.0).sqrt() - root, hi.1.sqrt() - root);
         let mut last = [(lo.0, f_lo), (hi.0, f_hi)];
@@ -688,7 +781,7 @@ pub fn profile_interval(
             } else {
                 lo.0 + (f_lo / (f_lo - f_hi)).clamp(0.0, 1.0) * (hi.0 - lo.0)
             };
-            let (d, opt) = profile(v, &shift(&warm, v - lo.0))?;
+            let (d, opt) = self.rise(v, &self.shift(&warm, v - lo.0))?;
             let f = d.max(0.0).sqrt() - root;
             if f.abs() <= PROFILE_RISE_TOL * root {
                 return Some(v);
@@ -715,9 +808,7 @@ pub fn profile_interval(
             }
         }
         Some(0.5 * (lo.0 + hi.0))
-    };
-    let (low, high) = rayon::join(|| side(-1.0), || side(1.0));
-    Some([low?, high?])
+    }
 }
 
 /// How close a profile end's rise comes to its target, relative, in the square root of the
