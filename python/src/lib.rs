@@ -361,7 +361,7 @@ impl Fit {
             law,
             releases: vec![(
                 name,
-                appell::fit::law::slide_points(&self.report, &self.settings),
+                appell::fit::law::slide_points_of(&self.report.problem, &self.settings),
             )],
         };
         write_figure(py, Some(path), &paths(&self.inputs), &figure)

@@ -233,7 +233,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
             law,
             releases: vec![(
                 args.inputs[0].display().to_string(),
-                appell::fit::law::slide_points(&rep, settings),
+                appell::fit::law::slide_points_of(&rep.problem, settings),
             )],
         };
         written(p, render(p, &figure), args.json)?;

@@ -1,44 +1,9 @@
 //! Whether the model describes the recording: the residuals' RMS per marker, a noise-free
 //! recording told apart, and the one plain sentence when the model limits the result.
 
+use super::estimate::Estimate;
 use super::uncertainty;
-use super::Estimate;
 use crate::report::p_is;
-
-/// Per-marker RMS of raw residuals (weight-zero rows left out), with a degrees-of-freedom
-/// correction, and the overall RMS: residuals added one at a time as a run passes them.
-#[derive(Debug, Default)]
-pub(super) struct MarkerRms {
-    ss: [f64; 2],
-    n: [usize; 2],
-}
-
-impl MarkerRms {
-    /// Add `weighted`, a solver's residual of marker `marker` (row weight `w`, noise `sigma`).
-    pub fn add(&mut self, marker: usize, weighted: f64, w: f64, sigma: f64) {
-        if w > 0.0 {
-            // Back in metres from the solver's weighted residual.
-            let r = weighted * sigma / w;
-            self.ss[marker] += r * r;
-            self.n[marker] += 1;
-        }
-    }
-
-    /// The RMS per marker (slider, bob) and overall, for a fit of `n_params` parameters.
-    pub fn finish(&self, n_params: usize) -> ([f64; 2], f64) {
-        let (ss, n) = (self.ss, self.n);
-        let total = (n[0] + n[1]).max(1);
-        let dof_frac = (1.0 - n_params as f64 / total as f64).max(1e-3);
-        let rms = [0, 1].map(|m| {
-            if n[m] > 0 {
-                (ss[m] / n[m] as f64 / dof_frac).sqrt()
-            } else {
-                f64::NAN
-            }
-        });
-        (rms, ((ss[0] + ss[1]) / total as f64).sqrt())
-    }
-}
 
 /// Below this many times the fit's relative tolerance times the rod length, a measured noise
 /// and the residuals are below what the model's own positions resolve: the integrator's global

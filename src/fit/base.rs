@@ -5,9 +5,12 @@
 //! ([`push_check`]), a long recording carried over by doubling ([`carry_over`]) and a robust
 //! loss's reweighting ([`reweight`]).
 
+use super::error::FitError;
+use super::outcome::StartOutcome;
 use super::problem::{Observations, Param, TrajectoryProblem};
+use super::settings::{FitSettings, Loss, StaticMode};
 use super::solve::{at_iteration_limit, loose, run_lm, run_lm_damped, solve, Traced, STAGE_FTOL};
-use super::{guess, uncertainty, FitError, FitSettings, Loss, StartOutcome, StaticMode};
+use super::{guess, uncertainty};
 use crate::fit::lm::LevenbergMarquardt;
 use crate::model::{Rig, State};
 use nalgebra::DVector;
@@ -511,7 +514,7 @@ pub(super) fn fit(
     // A short recording's candidates take the rig file's priors and freed measurements now,
     // so the measured-rig stage has nothing left to refit; its probes go without them.
     let plain = problem.clone();
-    let freed = !long && super::stages::apply_measured(&mut problem, frame, settings);
+    let freed = !long && super::rig_priors::apply_measured(&mut problem, frame, settings);
     let (mut models, free_model) = candidates(&problem, &g);
     let probe = freed.then(|| candidates(&plain, &g).0.swap_remove(0));
     let jobs = starts(rig, g.mu0, settings, &models);
@@ -540,7 +543,7 @@ pub(super) fn fit(
         // fit them on the way: the measured-rig stage then has nothing left to refit over
         // the whole recording.
         problem.set_values(&p);
-        if super::stages::apply_measured(&mut problem, frame, settings) {
+        if super::rig_priors::apply_measured(&mut problem, frame, settings) {
             p = problem.values();
         }
         let (whole, q, it, reason) = carry_over(problem, p, obs, prefix, settings)?;

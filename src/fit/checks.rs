@@ -186,9 +186,9 @@ pub fn check_recording(rec: &Recording) -> Result<(), RecordingCheck> {
 /// the slider against the largest friction ratio |F/N| the fitted stuck pendulum demanded, a
 /// lower bound on mu_static.
 pub(super) fn never_slides(
-    obs: &super::Observations,
+    obs: &super::problem::Observations,
     slider_noise: f64,
-    mu_static: &super::StaticResult,
+    mu_static: &super::outcome::StaticResult,
 ) -> String {
     let mut x: Vec<f64> = obs.slider.iter().flatten().map(|p| p[0]).collect();
     let range = if x.len() >= 10 {
@@ -201,7 +201,7 @@ pub(super) fn never_slides(
         format!("within ten noise deviations of {slider_noise:.2e} m")
     };
     let bound = match mu_static {
-        super::StaticResult::LowerBound(r) => format!(
+        super::outcome::StaticResult::LowerBound(r) => format!(
             "; while it stuck, the rail held it against a friction force of up to {r:.4} times the normal force (the stuck pendulum fitted to the bob's track), so mu_static >= {r:.4}"
         ),
         _ => String::new(),

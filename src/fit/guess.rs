@@ -2,6 +2,7 @@
 //! and its rate from the first frames' geometry, the slider's state from its track, and mu
 //! from the accelerations of a sliding stretch through the sliding equation.
 
+use super::priors::RigMeasurement;
 use super::problem::Observations;
 use crate::model::{sign, Rig, Shorthands};
 
@@ -263,6 +264,44 @@ fn hinge_sse(t: &[f64], x: &[f64], t_star: f64) -> f64 {
                 .map(|(&ti, &xi)| (xi - basis(ti).dot(&c)).powi(2)),
         )
         .sum()
+}
+
+/// The rig to start from: with a measured rod, its length at the recording's median
+/// slider-bob marker distance when that lies within 5 of the measurement's deviations of the
+/// file's value (the markers measure the rod to micrometres; a base model fitted on a rod a
+/// ruler's error off takes friction nuisances for the wrong geometry and can end in another
+/// optimum). A rigid pendulum's equivalent length moves in proportion. Only the start: the
+/// prior stays centred on the file's value.
+pub fn start_from_markers(
+    obs: &Observations,
+    rig: &Rig<f64>,
+    measured: Option<&RigMeasurement>,
+) -> Rig<f64> {
+    let Some((file, sd)) = measured.map(|m| m.rod_length).filter(|(_, sd)| *sd > 0.0) else {
+        return *rig;
+    };
+    let mut d: Vec<f64> = obs
+        .slider
+        .iter()
+        .zip(&obs.bob)
+        .filter_map(|(s, b)| {
+            let (s, b) = ((*s)?, (*b)?);
+            Some((b[0] - s[0]).hypot(b[1] - s[1]))
+        })
+        .filter(|d| d.is_finite())
+        .collect();
+    if d.len() < 10 {
+        return *rig;
+    }
+    let median = crate::data::calibrate::median(&mut d);
+    if (median - file).abs() > 5.0 * sd {
+        return *rig;
+    }
+    let mut out = *rig;
+    let ratio = rig.rod_length / rig.marker_length;
+    out.marker_length = median;
+    out.rod_length = median * ratio;
+    out
 }
 
 #[cfg(test)]

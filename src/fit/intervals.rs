@@ -2,9 +2,9 @@
 //! windows, the releases) and cut at the physical bounds, and a mu pinned at its bound said
 //! as a failed fit.
 
+use super::estimate::Estimate;
 use super::problem::{Param, TrajectoryProblem};
 use super::select::{self, ModelRow};
-use super::Estimate;
 
 /// `e` widened by a further standard deviation `s` (a source of error its interval did not
 /// hold), named `tag` in its interval's method: the standard error becomes sqrt(se^2 + s^2) and

@@ -4,8 +4,9 @@
 //! coefficient under the direction law), and plain sentences where this recording cannot
 //! tell two explanations apart and what measurement would.
 
+use super::estimate::Estimate;
 use super::select::{ModelRow, Nuisance};
-use super::{Estimate, Param};
+use crate::model::Param;
 use nalgebra::DMatrix;
 use serde::Serialize;
 
@@ -357,22 +358,18 @@ pub struct SlidePoint {
 /// everything else held at the chosen model's values (viscous friction left out, so that the
 /// coefficient is all the rail's friction); speeds and loads from the chosen model's motion,
 /// and the chosen law's value from the same fit of that motion.
-pub fn slide_points(rep: &super::FitReport, settings: &super::FitSettings) -> Vec<SlidePoint> {
-    slide_points_of(&rep.problem, settings)
-}
-
-/// [`slide_points`] of one fitted problem (a single fit's chosen model, or a release of a
-/// joint fit at the joint optimum).
+/// `problem` is one fitted problem: a single fit's chosen model (the report's `problem`), or
+/// a release of a joint fit at the joint optimum.
 pub fn slide_points_of(
-    problem: &super::TrajectoryProblem,
-    settings: &super::FitSettings,
+    problem: &super::problem::TrajectoryProblem,
+    settings: &super::settings::FitSettings,
 ) -> Vec<SlidePoint> {
     use crate::model::observed_markers;
     let obs = problem.observations();
     let Some(&t_end) = obs.times.last() else {
         return Vec::new();
     };
-    let coulomb_of = |p: &super::TrajectoryProblem| {
+    let coulomb_of = |p: &super::problem::TrajectoryProblem| {
         let mut c = p.clone();
         c.rig.friction_law = crate::model::FrictionLaw::Coulomb;
         c.rig.kinetic_split = 0.0;
@@ -409,12 +406,12 @@ pub fn slide_points_of(
             (Some([m[0], m[1]]), Some([m[2], m[3]]))
         })
         .unzip();
-    let model_obs = super::Observations {
+    let model_obs = super::problem::Observations {
         times: obs.times.clone(),
         slider,
         bob,
     };
-    let mut model_problem = super::TrajectoryProblem::new(
+    let mut model_problem = super::problem::TrajectoryProblem::new(
         std::sync::Arc::new(model_obs),
         problem.rig,
         problem.initial,

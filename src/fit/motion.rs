@@ -1,8 +1,8 @@
 //! What the fitted motion does at the frame times (its range, slides, sticks and the
 //! friction it needs), summed as it runs, and whether the raw slider track moves at all.
 
+use super::error::FitError;
 use super::problem::{Observations, TrajectoryProblem};
-use super::FitError;
 use crate::model::{Mode, Shorthands};
 use crate::sim::{simulate_each, Request, Sample, Solution};
 

@@ -5,8 +5,8 @@
 
 use super::adequacy::numerical_accuracy_m;
 use super::problem::{Observations, TrajectoryProblem};
+use super::settings::FitSettings;
 use super::solve::solve;
-use super::FitSettings;
 use nalgebra::DVector;
 
 /// Neighbours on each side of the local quadratic.

@@ -2,8 +2,8 @@
 //! check against its pendulum: its own file because the delta method over (L, r') is
 //! self-contained and only the report reads it.
 
+use super::estimate::Estimate;
 use super::problem::{idx, Param, TrajectoryProblem};
-use super::Estimate;
 use crate::model::Rig;
 use nalgebra::DMatrix;
 

@@ -1,11 +1,12 @@
 //! The recording made ready to fit: enough frames with both markers, times from zero, each
 //! marker's noise measured from its track (or given) and the mis-tracked positions dropped.
 
+use super::error::FitError;
 use super::motion::{track_span, STILL_NOISES};
 use super::noise::{self, NoiseEstimate};
 use super::outliers;
 use super::problem::Observations;
-use super::{FitError, FitSettings};
+use super::settings::FitSettings;
 use std::sync::Arc;
 
 /// The recording ready to fit: times from zero, mis-tracked positions out, each marker's noise.
@@ -38,7 +39,7 @@ pub(super) fn prepare(obs: Observations, settings: &FitSettings) -> Result<Prepa
     }
     let noise_dof = noise.iter().flatten().map(|e| e.dof).sum::<f64>().max(2.0);
     Ok(Prepared {
-        frame: super::stages::frame_step(&obs.times),
+        frame: super::problem::frame_step(&obs.times),
         obs: Arc::new(obs),
         n_frames,
         sigma,

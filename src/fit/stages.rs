@@ -6,21 +6,20 @@
 
 use super::adequacy::{self, adequacy_sentence, is_noise_free, WINDOWS_P};
 use super::base::Base;
+use super::error::FitError;
+use super::estimate::{Estimate, MuParts, RigValue};
 use super::intervals::{model_uncertainty, pinned_friction, widen, within_bounds};
 use super::law;
 use super::motion::{motion, slider_moves, Motion};
+use super::outcome::{Adequacy, FitReport, StaticResult, Work};
 use super::outliers::{residual_outliers, ResidualOutliers, RESIDUAL_OUTLIER};
 use super::pendulum::pendulum_found;
 use super::prepare::Prepared;
-use super::priors;
 use super::problem::{idx, Observations, Param, TrajectoryProblem, MAX_FREE};
 use super::select::{self, ModelRow, Nuisance, SelectOptions};
+use super::settings::{FitSettings, StaticMode};
 use super::solve::{solve, solve_traced};
 use super::uncertainty::{self, Assessment, WindowCut, WindowFit};
-use super::{
-    Adequacy, Estimate, FitError, FitReport, FitSettings, MuParts, RigValue, StaticMode,
-    StaticResult, Work,
-};
 use crate::model::{FrictionLaw, Rig};
 use crate::sim::EventKind;
 use nalgebra::{DMatrix, DVector};
@@ -54,7 +53,7 @@ pub(super) struct Seen {
 /// their first solve, a long one's doubling stages), so the refit is only a safety net for a
 /// base model that came without them.
 pub(super) fn measured_rig(f: &mut Fitting, frame: f64, settings: &FitSettings) {
-    let freed = apply_measured(&mut f.problem, frame, settings);
+    let freed = super::rig_priors::apply_measured(&mut f.problem, frame, settings);
     f.p = f.problem.values();
     if freed {
         if let Ok((q, _, it)) = solve(&f.problem, f.p.clone(), settings.max_iters) {
@@ -64,55 +63,6 @@ pub(super) fn measured_rig(f: &mut Fitting, frame: f64, settings: &FitSettings) 
         }
         f.moved = true;
     }
-}
-
-/// The median step between frame times (1 ms for a single frame).
-pub(super) fn frame_step(times: &[f64]) -> f64 {
-    let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
-    if steps.is_empty() {
-        1e-3
-    } else {
-        crate::data::calibrate::median(&mut steps)
-    }
-}
-
-/// [`measured_rig`]'s priors and freed parameters set on `problem` (frames `frame` s apart),
-/// without the refit. Returns whether a parameter was freed. A long recording's base fit
-/// takes them before its doubling stages, which then fit them on the way ([`super::base`]).
-pub(super) fn apply_measured(
-    problem: &mut TrajectoryProblem,
-    frame: f64,
-    settings: &FitSettings,
-) -> bool {
-    let ranges = priors::plausible_ranges(&problem.rig, frame);
-    let mut all = priors::nuisance_priors(&ranges);
-    // A scale set from a measured length carries that measurement's error, not the range a
-    // camera's scale may plausibly be off by.
-    if let Some(sd) = settings.scale_sd {
-        for pr in all.iter_mut().filter(|pr| pr.param == Param::ScaleError) {
-            pr.sd = sd;
-        }
-    }
-    let mut freed = false;
-    if let Some(m) = &settings.measured {
-        for pr in m.priors() {
-            if pr.param == Param::RodLength && settings.fit_rod_length {
-                continue;
-            }
-            all.push(pr);
-            if !problem.free.contains(&pr.param) {
-                problem.free.push(pr.param);
-                freed = true;
-            }
-        }
-    }
-    let file_ratio = settings
-        .measured
-        .as_ref()
-        .map_or(problem.rig.mass_ratio(), |m| m.mass_ratio.0);
-    problem.priors = Arc::new(all);
-    problem.plausible = Arc::new(priors::Plausibility { ranges, file_ratio });
-    freed
 }
 
 /// Does the fitted motion slide? A slide shorter than the slider's noise is not seen;
@@ -444,7 +394,7 @@ pub(super) struct Verdict {
     pub lag1: f64,
     /// The one plain sentence when the model limits the result.
     pub limited: Option<String>,
-    /// The chosen model's values no real rig has, a sentence each ([`priors::implausible`]).
+    /// The chosen model's values no real rig has, a sentence each ([`crate::fit::implausible::implausible`]).
     pub implausible: Vec<String>,
     /// Why the fit failed although it ran.
     pub failed: Option<String>,
@@ -490,7 +440,7 @@ pub(super) fn adequacy(
     // A value no real rig has is evidence that the model explains the recording with
     // something the rig does not have: it flags the fit (below). It does not widen the
     // interval: a real rig can have it (a worn pivot), and then the model is right.
-    let implausible = priors::implausible(problem);
+    let implausible = super::implausible::implausible(problem);
     // The selection stopped for want of room (every free parameter the dual numbers allow
     // taken) while its model still misfits by the selection's own rule: what is left of the
     // misfit was never given a chance to be explained.

@@ -5,8 +5,8 @@
 
 use super::lm::{LeastSquares, Normal};
 use super::problem::{Param, TrajectoryProblem};
+use super::settings::FitSettings;
 use super::solve::{solve, solve_loose, STAGE_FTOL};
-use super::FitSettings;
 use crate::model::Mode;
 use crate::sim::{simulate, simulate_each, Request, Sample};
 use nalgebra::{DMatrix, DVector};
@@ -65,7 +65,7 @@ pub fn assess(
     // dual-number run, without the Jacobian in memory.
     let n_frames = problem.frame_times().len();
     let mut streams: Vec<Vec<f64>> = (0..4).map(|_| Vec::with_capacity(n_frames)).collect();
-    let mut rms = super::adequacy::MarkerRms::default();
+    let mut rms = MarkerRms::default();
     problem
         .for_each_weighted(p.as_slice(), |row, marker, coord, v| {
             streams[2 * marker + coord].push(v);
@@ -543,6 +543,41 @@ pub fn window_consistency(windows: &[WindowFit]) -> Option<f64> {
     ChiSquared::new((windows.len() - 1) as f64)
         .ok()
         .map(|c| c.sf(q))
+}
+
+/// Per-marker RMS of raw residuals (weight-zero rows left out), with a degrees-of-freedom
+/// correction, and the overall RMS: residuals added one at a time as a run passes them.
+#[derive(Debug, Default)]
+pub(super) struct MarkerRms {
+    ss: [f64; 2],
+    n: [usize; 2],
+}
+
+impl MarkerRms {
+    /// Add `weighted`, a solver's residual of marker `marker` (row weight `w`, noise `sigma`).
+    pub fn add(&mut self, marker: usize, weighted: f64, w: f64, sigma: f64) {
+        if w > 0.0 {
+            // Back in metres from the solver's weighted residual.
+            let r = weighted * sigma / w;
+            self.ss[marker] += r * r;
+            self.n[marker] += 1;
+        }
+    }
+
+    /// The RMS per marker (slider, bob) and overall, for a fit of `n_params` parameters.
+    pub fn finish(&self, n_params: usize) -> ([f64; 2], f64) {
+        let (ss, n) = (self.ss, self.n);
+        let total = (n[0] + n[1]).max(1);
+        let dof_frac = (1.0 - n_params as f64 / total as f64).max(1e-3);
+        let rms = [0, 1].map(|m| {
+            if n[m] > 0 {
+                (ss[m] / n[m] as f64 / dof_frac).sqrt()
+            } else {
+                f64::NAN
+            }
+        });
+        (rms, ((ss[0] + ss[1]) / total as f64).sqrt())
+    }
 }
 
 /// 95% profile-likelihood interval for parameter `k`: where the best chi-square with that

@@ -2,7 +2,7 @@
 //! held, tested as the single fit tests its windows, and each one's leave-one-out z; the
 //! releases' spread, and the sentence that says what the interval holds.
 
-use super::ReleaseRow;
+use super::outcome::ReleaseRow;
 use crate::fit::problem::{Param, TrajectoryProblem};
 use crate::fit::solve::solve_loose;
 use crate::fit::uncertainty::{self, WindowFit};

@@ -4,11 +4,13 @@
 //! is judged against a model chosen without it.
 
 use super::agreement::{consistency, leave_one_out, own_pairs, AGREE_P};
+use super::error::JointError;
 use super::model::{self, JointModel};
+use super::outcome::ReleaseRow;
 use super::releases::{release_row, release_rows};
+use super::settings::JointSettings;
 use super::shared::{self, SharedFit};
 use super::singles::{self, set_param, Single};
-use super::{JointError, JointSettings, ReleaseRow};
 use crate::fit::select::Candidate;
 use crate::fit::solve::solve_loose;
 use crate::fit::{Estimate, FitSettings};

@@ -17,154 +17,30 @@
 
 mod agreement;
 mod analysis;
+mod error;
 mod model;
+mod outcome;
 mod problem;
 mod releases;
 mod rigs;
 mod set_aside;
+mod settings;
 mod shared;
 mod singles;
 
+pub use error::JointError;
+pub use outcome::{JointReport, ReleaseRow};
 pub use problem::JointProblem;
 pub use rigs::other_rigs;
+pub use settings::{JointSettings, Release};
 
+use super::estimate::{Estimate, RigValue};
 use super::intervals::model_uncertainty;
-use super::problem::{Observations, Param};
-use super::select::{self, ModelRow, Nuisance};
-use super::{Estimate, FitError, FitSettings, RigValue};
+use super::problem::Param;
+use super::select;
+use super::settings::FitSettings;
 use crate::model::Rig;
 use nalgebra::DMatrix;
-use serde::Serialize;
-
-/// One release of a joint fit: its name and its tracks.
-#[derive(Debug, Clone)]
-pub struct Release {
-    /// The recording's name (its file, for messages and the table).
-    pub name: String,
-    /// Its tracks.
-    pub obs: Observations,
-}
-
-/// Settings of a joint fit beyond the single fit's.
-#[derive(Debug, Clone, Default)]
-pub struct JointSettings {
-    /// One camera for every release: its scale and marker offsets shared.
-    pub same_camera: bool,
-    /// Fit the other releases when one fails (it is named); otherwise a failure ends the fit.
-    pub keep_going: bool,
-}
-
-/// A release in the joint fit's table.
-#[derive(Debug, Clone, Serialize)]
-pub struct ReleaseRow {
-    /// The recording's name.
-    pub name: String,
-    /// Frames with a marker.
-    pub frames: usize,
-    /// Mode transitions of the joint model in this release.
-    pub transitions: usize,
-    /// mu_kinetic of this release alone, with the shared nuisances held at the joint values.
-    pub own_mu: Option<Estimate>,
-    /// mu_kinetic of the release's single fit (its own nuisances, chosen from it alone).
-    pub single_mu: Option<Estimate>,
-    /// Nuisances its single fit chose.
-    pub single_nuisances: Vec<&'static str>,
-    /// RMS residual under the joint model (m).
-    pub rms_residual_m: f64,
-    /// Chi-square of its residuals under the joint model.
-    pub chi2: f64,
-    /// Its residual rows.
-    pub n_residuals: usize,
-    /// (own mu - the others' joint mu) / combined standard error.
-    pub z: f64,
-    /// Whether its own mu agrees with the other releases' (|z| below 3, or the releases agree).
-    pub agrees: bool,
-}
-
-impl ReleaseRow {
-    /// Chi-square per residual row under the model the row is of.
-    pub fn chi2_per_residual(&self) -> f64 {
-        self.chi2 / self.n_residuals.max(1) as f64
-    }
-}
-
-/// The result of a joint fit. Its values are those of the releases kept: a release set aside
-/// is listed apart ([`JointReport::set_aside`]) with its own values and the evidence.
-#[derive(Debug, Clone)]
-pub struct JointReport {
-    /// mu_kinetic of the rail from the releases kept, with its interval.
-    pub mu_kinetic: Estimate,
-    /// Why the result is no measurement (`None` when it is one): a joint interval wider than
-    /// a single release's, or mu at its bound 0. The values are then not an answer.
-    pub failed: Option<String>,
-    /// Every shared parameter with its estimate (mu_kinetic first).
-    pub shared: Vec<(Param, Estimate)>,
-    /// Covariance of the shared parameters (the releases' own parameters marginalised):
-    /// its inverse is what the releases know of them.
-    pub shared_covariance: DMatrix<f64>,
-    /// The releases kept (those the result is of).
-    pub releases: Vec<ReleaseRow>,
-    /// The releases set aside: each one's own mu and z under the kept releases' model (a
-    /// model chosen without it), more than 3 standard errors off.
-    pub set_aside: Vec<ReleaseRow>,
-    /// Releases that failed and were left out (name, why), with `keep_going`.
-    pub left_out: Vec<(String, String)>,
-    /// p-value of the kept releases' own mu agreeing (chi-square of their spread), with two
-    /// or more releases.
-    pub consistency_p: Option<f64>,
-    /// p-value of every release's own mu agreeing under the model chosen on all of them.
-    pub consistency_p_all: Option<f64>,
-    /// The releases set aside, by name.
-    pub disagreeing: Vec<String>,
-    /// Nuisances in the joint model.
-    pub nuisances: Vec<Nuisance>,
-    /// Every joint model compared.
-    pub models: Vec<ModelRow>,
-    /// Chi-square of the joint model.
-    pub chi2: f64,
-    /// Residual rows minus free parameters.
-    pub dof: f64,
-    /// chi2 / dof.
-    pub reduced_chi2: f64,
-    /// Free parameters in all.
-    pub n_params: usize,
-    /// One plain sentence on what the interval holds.
-    pub sentence: String,
-    /// Warnings.
-    pub warnings: Vec<String>,
-    /// Levenberg-Marquardt iterations of the joint stages (the single fits not counted).
-    pub iterations: u64,
-    /// The friction law the releases share, its parameters and every law's evidence.
-    pub friction: crate::fit::law::FrictionLawResult,
-    /// Each release's problem at the joint optimum, in the order of `releases`: what the
-    /// friction figure cuts into slides.
-    pub parts: Vec<crate::fit::TrajectoryProblem>,
-    /// The joint model's values no real rig has (a tilt on a levelled rail, ...), a sentence
-    /// each: the result is then limited by the model, as a single fit's would be.
-    pub implausible: Vec<String>,
-}
-
-/// Why a joint fit could not run.
-#[derive(Debug, thiserror::Error)]
-pub enum JointError {
-    /// Fewer than two releases to fit.
-    #[error("a joint fit needs two or more recordings, got {0}")]
-    TooFew(usize),
-    /// Releases of different rigs.
-    #[error("{0}")]
-    OtherRig(String),
-    /// A release's own fit failed.
-    #[error("{name}: {error}")]
-    Release {
-        /// The release.
-        name: String,
-        /// Its failure.
-        error: FitError,
-    },
-    /// The joint fit failed.
-    #[error("the joint fit failed: {0}")]
-    Joint(String),
-}
 
 /// Fit the releases jointly: each alone first (its start, noise, outliers, own mu and
 /// nuisances), then all together from the single fits' consensus, the nuisances chosen by the
@@ -256,7 +132,7 @@ pub fn fit_joint(
     // A shared value (a tilt) is the same in every release: each sentence once.
     let mut implausible: Vec<String> = Vec::new();
     for part in &model.problem.parts {
-        for sentence in crate::fit::priors::implausible(part) {
+        for sentence in crate::fit::implausible::implausible(part) {
             if !implausible.contains(&sentence) {
                 implausible.push(sentence);
             }

@@ -3,8 +3,9 @@
 //! selection over the joint problem, from the consensus on), and the chosen model polished
 //! to the solver's full tolerance.
 
+use super::error::JointError;
+use super::problem::JointProblem;
 use super::singles::{Single, Start};
-use super::{JointError, JointProblem};
 use crate::fit::select::{self, Candidate, ModelRow, Nuisance, SelectOptions};
 use crate::fit::solve::{solve_loose, STAGE_FTOL};
 use crate::fit::FitSettings;

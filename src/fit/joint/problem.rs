@@ -264,7 +264,7 @@ impl Candidate for JointProblem {
     fn implausible(&self) -> bool {
         self.parts
             .iter()
-            .any(|p| !crate::fit::priors::implausible(p).is_empty())
+            .any(|p| !crate::fit::implausible::implausible(p).is_empty())
     }
     fn with_nuisance(&self, nu: Nuisance, mu_static: f64) -> Self {
         let parts = self

@@ -2,8 +2,10 @@
 //! nuisances held), its residuals and its mode transitions.
 
 use super::agreement::own_mu;
+use super::outcome::ReleaseRow;
+use super::problem::JointProblem;
+use super::settings::Release;
 use super::singles::Single;
-use super::{JointProblem, Release, ReleaseRow};
 use crate::fit::problem::{Param, TrajectoryProblem};
 use crate::fit::{FitReport, FitSettings};
 use crate::sim::{simulate, Request};

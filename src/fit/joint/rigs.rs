@@ -1,7 +1,7 @@
 //! Releases of another rig told apart before a joint fit: the marker distance (the rod, as the
 //! camera sees it) of each release against the releases' median.
 
-use super::Release;
+use super::settings::Release;
 use crate::fit::problem::Observations;
 
 /// Marker distance per release: the median slider-to-bob distance and the spread of one

@@ -6,8 +6,9 @@
 
 use super::agreement::{consistency, own_pairs};
 use super::analysis::{analyse, score, Analysis, Context};
+use super::error::JointError;
+use super::outcome::ReleaseRow;
 use super::singles::Single;
-use super::{JointError, ReleaseRow};
 use rayon::prelude::*;
 
 /// What the search found.

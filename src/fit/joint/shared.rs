@@ -2,8 +2,9 @@
 //! Jacobian's, scaled by the reduced chi-square when above one, or the block covariance over
 //! each release's stretches of frames when larger), the shared estimates and their covariance.
 
+use super::error::JointError;
+use super::problem::JointProblem;
 use super::singles::Single;
-use super::{JointError, JointProblem};
 use crate::fit::intervals::within_bounds;
 use crate::fit::problem::Param;
 use crate::fit::uncertainty;

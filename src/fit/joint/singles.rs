@@ -2,8 +2,10 @@
 //! alone (its state, noise, outliers and nuisances), and the joint problem's start built from
 //! those single fits.
 
+use super::error::JointError;
+use super::problem::JointProblem;
 use super::rigs::other_rigs;
-use super::{JointError, JointProblem, JointSettings, Release};
+use super::settings::{JointSettings, Release};
 use crate::fit::problem::{Param, TrajectoryProblem};
 use crate::fit::select::{Candidate, Nuisance};
 use crate::fit::{fit, FitError, FitReport, FitSettings};

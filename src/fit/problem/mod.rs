@@ -8,7 +8,9 @@
 mod normal;
 
 pub use crate::model::Param;
-pub use normal::MAX_FREE;
+
+/// The most parameters a fit frees at once (the dual-number Jacobian is built for each count).
+pub const MAX_FREE: usize = 12;
 
 use crate::fit::priors::{Plausibility, Prior};
 use crate::model::{markers, observed_markers, Camera, Rig, Scalar, State};
@@ -149,7 +151,7 @@ pub struct TrajectoryProblem {
     /// normal equations (a pseudo-observation); one not free adds nothing.
     pub priors: Arc<Vec<Prior>>,
     /// The nuisances' plausible ranges and the rig file's mass ratio, to judge a fitted
-    /// model's values ([`crate::fit::priors::implausible`]).
+    /// model's values ([`crate::fit::implausible::implausible`]).
     pub plausible: Arc<Plausibility>,
 }
 
@@ -308,7 +310,7 @@ impl TrajectoryProblem {
             return false;
         }
         let obs = self.obs.clone();
-        let step = crate::fit::stages::frame_step(&obs.times);
+        let step = frame_step(&obs.times);
         let span = ((0.005 / step).round() as usize).max(1);
         let speed = |marker: usize, coord: usize, i: usize| -> f64 {
             let track = if marker == 0 { &obs.slider } else { &obs.bob };
@@ -672,6 +674,16 @@ impl From<&crate::data::Recording> for Observations {
             slider: rec.slider.clone(),
             bob: rec.bob.clone(),
         }
+    }
+}
+
+/// The median step between frame times (1 ms for a single frame).
+pub fn frame_step(times: &[f64]) -> f64 {
+    let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
+    if steps.is_empty() {
+        1e-3
+    } else {
+        crate::data::calibrate::median(&mut steps)
     }
 }
 

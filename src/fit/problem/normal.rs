@@ -2,7 +2,7 @@
 //! integrator, summed into the normal equations as the simulation runs (the fit never holds
 //! the Jacobian), at one of a few fixed dual widths ([`by_width`]).
 
-use super::{to_err, Param, TrajectoryProblem};
+use super::{to_err, Param, TrajectoryProblem, MAX_FREE};
 use crate::fit::lm::{LeastSquares, Normal};
 use crate::model::dual::Dual;
 use crate::model::CAMERA_PARAMS;
@@ -13,9 +13,6 @@ use crate::sim::{Sample, SimError};
 use argmin::core::Error;
 use nalgebra::{DMatrix, DVector};
 use std::sync::atomic::Ordering;
-
-/// The most parameters a fit frees at once (the dual-number Jacobian is built for each count).
-pub const MAX_FREE: usize = 12;
 
 /// Run `$body` with the const `$n` set to the dual width for `$k` free parameters, or give
 /// an error beyond [`MAX_FREE`]. Each width is a full copy of the simulator in the binary:

@@ -1,7 +1,8 @@
 //! One candidate model fitted: from its own start and the data's, retried when a nested model
 //! ends worse than the model it extends, and marked failed when it still does.
 
-use super::{chi2_of, Candidate, ModelRow, SelectOptions};
+use super::candidate::Candidate;
+use super::selection::{chi2_of, ModelRow, SelectOptions};
 use crate::fit::problem::Param;
 use crate::fit::solve::{solve_loose, Solved, STAGE_FTOL};
 use nalgebra::DVector;

@@ -7,11 +7,11 @@
 use super::attempt::{
     failed_row, fit_candidate, fit_candidate_within, fit_law, held_rig_start, Outcome,
 };
+use super::candidate::Candidate;
+use super::nuisance::{Nuisance, MU_PINNED};
+use super::selection::{chi2_of, misfits, ModelRow, SelectOptions, Selection};
+use super::weights::model_weights;
 use super::weights::OCCAM_BIC;
-use super::{
-    chi2_of, misfits, model_weights, Candidate, ModelRow, Nuisance, SelectOptions, Selection,
-    MU_PINNED,
-};
 use crate::fit::problem::MAX_FREE;
 use nalgebra::DVector;
 use rayon::prelude::*;
@@ -242,7 +242,7 @@ fn open_candidates<M: Candidate>(
         .into_iter()
         .filter(|n| !chosen.contains(n) && !chosen.iter().any(|c| c.conflicts(*n)))
         .filter(|n| !opts.excluded.contains(n))
-        .filter(|n| cur_problem.width() + n.new_params(cur_problem) <= MAX_FREE)
+        .filter(|n| cur_problem.width() + n.new_params(|q| cur_problem.frees(q)) <= MAX_FREE)
         .filter(|n| n.screened() || friction)
         // A pendulum the rig file gives is used as given (`--with` may still free it).
         .filter(|n| *n != Nuisance::RigidPendulum || !cur_problem.pendulum_given())
@@ -535,7 +535,7 @@ fn swap_twins<M: Candidate>(s: &mut Search<M>, opts: &SelectOptions<M::Start>, c
         }
         let mut m = s.base.clone();
         for &nu in set.iter().filter(|n| !opts.already.contains(n)) {
-            if m.width() + nu.new_params(&m) > MAX_FREE {
+            if m.width() + nu.new_params(|q| m.frees(q)) > MAX_FREE {
                 continue;
             }
             m = m.with_nuisance(nu, opts.mu_static_start);
@@ -634,7 +634,11 @@ fn weigh_laws<M: Candidate>(s: &mut Search<M>, opts: &SelectOptions<M::Start>, c
             .rows
             .iter()
             .any(|r| r.failed.is_none() && !r.stopped_early && same_set(&r.name, &all));
-        let fits = coulomb.width() + set.iter().map(|n| n.new_params(&coulomb)).sum::<usize>();
+        let fits = coulomb.width()
+            + set
+                .iter()
+                .map(|n| n.new_params(|q| coulomb.frees(q)))
+                .sum::<usize>();
         // A smooth law from its neutral value, on a model that fits: its first Gauss-Newton
         // step predicts its drop, and it stops there when even that cannot bring it within
         // Occam's window of the chosen model (the direction law and viscous friction on the

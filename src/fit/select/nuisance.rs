@@ -4,8 +4,6 @@
 use crate::fit::problem::{Param, TrajectoryProblem};
 use crate::model::FrictionLaw;
 
-use super::Candidate;
-
 /// mu_kinetic below this while a law carries the friction alone
 /// ([`Nuisance::carries_friction_alone`]) is pinned at its bound 0: no coefficient was measured.
 pub const MU_PINNED: f64 = 1e-3;
@@ -147,9 +145,9 @@ impl Nuisance {
         (self == Nuisance::Stribeck).then_some(Nuisance::StaticFriction)
     }
 
-    /// Parameters it adds to each simulation of `m` (those not free already).
-    pub(super) fn new_params<M: Candidate>(self, m: &M) -> usize {
-        self.params().iter().filter(|&&q| !m.frees(q)).count()
+    /// Parameters it adds to each simulation of a model that frees those `frees` says.
+    pub(super) fn new_params(self, frees: impl Fn(Param) -> bool) -> usize {
+        self.params().iter().filter(|&&q| !frees(q)).count()
     }
 
     /// `chosen` with this nuisance added (and what it supersedes removed).

@@ -2,7 +2,8 @@
 //! augmented normal equations at the current optimum, so that only the promising candidates
 //! are fitted.
 
-use super::{Candidate, Nuisance};
+use super::candidate::Candidate;
+use super::nuisance::Nuisance;
 use crate::fit::lm::Normal;
 use crate::fit::problem::{Param, TrajectoryProblem, MAX_FREE};
 use nalgebra::{DMatrix, DVector};
@@ -23,7 +24,7 @@ pub fn score_drops_by<M: Candidate>(
 ) -> Vec<(Nuisance, f64)> {
     candidates
         .iter()
-        .filter(|nu| m.width() + nu.new_params(m) <= MAX_FREE)
+        .filter(|nu| m.width() + nu.new_params(|q| m.frees(q)) <= MAX_FREE)
         .map(|&nu| {
             let aug = augmented(nu);
             let q = aug.values();

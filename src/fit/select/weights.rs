@@ -1,7 +1,7 @@
 //! The models' weights by the Bayesian information criterion and the spread of mu_kinetic
 //! across the models they leave in play (the interval's share of model uncertainty).
 
-use super::ModelRow;
+use super::selection::ModelRow;
 
 /// Each converged, plausible model's weight w_i = exp(-dBIC_i / (2 c)) / sum, the Bayesian information
 /// criterion's approximation to the posterior probability of the model (Burnham and Anderson,
