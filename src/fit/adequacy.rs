@@ -3,7 +3,6 @@
 
 use super::estimate::Estimate;
 use super::uncertainty;
-use crate::report::p_is;
 
 /// Below this many times the fit's relative tolerance times the rod length, a measured noise
 /// and the residuals are below what the model's own positions resolve: the integrator's global
@@ -94,61 +93,49 @@ pub fn failed_tests(p_value: f64, runs_p: f64, windows_p: Option<f64>) -> Vec<Fa
     failed
 }
 
-/// The one plain sentence when the model limits the result: the tests of [`failed_tests`]
-/// that failed, and what the widened interval holds.
-pub(super) fn adequacy_sentence(
+/// Why a result is limited by the model, in the order the report says it: prose the fit
+/// wrote (a value no real rig has, every free parameter taken, mu pinned at a bound), or the
+/// adequacy tests that failed, as numbers the report words (`report::fit::limited_sentence`).
+#[derive(Debug, Clone, PartialEq)]
+pub enum LimitPart {
+    /// A sentence of the fit's.
+    Said(String),
+    /// The adequacy tests that failed.
+    Tests(FailedTests),
+}
+
+/// The adequacy tests a fit failed ([`failed_tests`]), with the chi-square they were read
+/// from, and mu_kinetic's widened interval and its method when mu was fitted.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FailedTests {
+    /// The tests that failed, with their p-values.
+    pub tests: Vec<FailedTest>,
+    /// Chi-square against the measured noise.
+    pub chi2: f64,
+    /// Its degrees of freedom.
+    pub dof: f64,
+    /// chi2 / dof.
+    pub reduced_chi2: f64,
+    /// mu_kinetic's 95 % interval and its method (`profile+block+windows`, ...).
+    pub mu_interval: Option<([f64; 2], &'static str)>,
+}
+
+/// The tests of [`failed_tests`] that failed, as a part of why the model limits the result
+/// (`None` when none failed), with what the widened interval of `mu` holds.
+pub(super) fn failed_part(
     a: &uncertainty::Assessment,
     windows_p: Option<f64>,
     runs_p: f64,
     mu: Option<&Estimate>,
-) -> Option<String> {
-    let why: Vec<String> = failed_tests(a.p_value, runs_p, windows_p)
-        .into_iter()
-        .map(|t| match t {
-            FailedTest::ChiSquare(p) => format!(
-                "chi-square is {:.0} for {:.0} degrees of freedom against the noise measured from the tracks (reduced {:.2}, {})",
-                a.chi2,
-                a.dof,
-                a.reduced_chi2,
-                p_is(p)
-            ),
-            FailedTest::Runs(p) => format!(
-                "the residuals keep their sign over long stretches (runs test {})",
-                p_is(p)
-            ),
-            FailedTest::Slides(p) => format!(
-                "the recording's slides, fitted one by one, disagree on mu_kinetic ({})",
-                p_is(p)
-            ),
+) -> Option<LimitPart> {
+    let tests = failed_tests(a.p_value, runs_p, windows_p);
+    (!tests.is_empty()).then(|| {
+        LimitPart::Tests(FailedTests {
+            tests,
+            chi2: a.chi2,
+            dof: a.dof,
+            reduced_chi2: a.reduced_chi2,
+            mu_interval: mu.map(|e| (e.ci95, e.interval)),
         })
-        .collect();
-    if why.is_empty() {
-        return None;
-    }
-    let interval = mu.map_or(String::new(), |e| {
-        let what: Vec<&str> = e
-            .interval
-            .split('+')
-            .filter_map(|tag| match tag {
-                "block" => Some("the residuals' correlation"),
-                "windows" => Some("the slides' disagreement (their scale factor)"),
-                "models" => Some("the spread of close models"),
-                "path" => Some("as much as mu moved while nuisances were added"),
-                _ => None,
-            })
-            .collect();
-        let held = if what.is_empty() {
-            String::new()
-        } else {
-            format!(" to hold {}", what.join(", "))
-        };
-        format!(
-            "; the interval for mu_kinetic was widened{held}: [{:.5}, {:.5}] ({})",
-            e.ci95[0], e.ci95[1], e.interval
-        )
-    });
-    Some(format!(
-        "The result is limited by the model, not by the noise: {}{interval}.",
-        why.join("; ")
-    ))
+    })
 }

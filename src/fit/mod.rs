@@ -60,7 +60,9 @@ pub mod solve;
 mod stages;
 mod uncertainty;
 
-pub use adequacy::{failed_tests, is_noise_free, FailedTest, RUNS_P, WINDOWS_P};
+pub use adequacy::{
+    failed_tests, is_noise_free, FailedTest, FailedTests, LimitPart, RUNS_P, WINDOWS_P,
+};
 pub use checks::{check_recording, RecordingCheck};
 pub use error::FitError;
 pub use estimate::{Estimate, MuParts, RigValue};

@@ -1,6 +1,7 @@
 //! What a fit found ([`FitReport`]) and its parts: mu_static's verdict, the starts, the
 //! adequacy against the noise and the work done.
 
+use super::adequacy::LimitPart;
 use super::estimate::{Estimate, MuParts, RigValue};
 use super::law;
 use super::noise::NoiseEstimate;
@@ -63,8 +64,10 @@ pub struct Adequacy {
     pub runs_p_value: f64,
     /// p-value of the windows' agreement (`None` with fewer than two sliding windows).
     pub windows_p_value: Option<f64>,
-    /// One plain sentence when the result is limited by the model; `None` when it is not.
-    pub limited_by_model: Option<String>,
+    /// Why the result is limited by the model (empty when it is not), worded by the report
+    /// as one plain sentence (`report::fit::limited_sentence`).
+    #[serde(skip)]
+    pub limited_by_model: Vec<LimitPart>,
     /// The recording is noise-free to the model's numerical accuracy ([`is_noise_free`]):
     /// mu is recovered to rounding, the intervals are not meaningful, and no adequacy test
     /// (all of which compare the residuals with the noise) applies.

@@ -4,7 +4,7 @@
 //! estimates, the adequacy and its widenings, mu_static's result and the report. Each stage says what it reads and returns;
 //! the driver only orders them.
 
-use super::adequacy::{self, adequacy_sentence, is_noise_free, WINDOWS_P};
+use super::adequacy::{self, failed_part, is_noise_free, LimitPart, WINDOWS_P};
 use super::base::Base;
 use super::error::FitError;
 use super::estimate::{Estimate, MuParts, RigValue};
@@ -393,7 +393,7 @@ pub(super) struct Verdict {
     pub block_ratio: f64,
     pub lag1: f64,
     /// The one plain sentence when the model limits the result.
-    pub limited: Option<String>,
+    pub limited: Vec<LimitPart>,
     /// The chosen model's values no real rig has, a sentence each ([`crate::fit::implausible::implausible`]).
     pub implausible: Vec<String>,
     /// Why the fit failed although it ran.
@@ -481,13 +481,13 @@ pub(super) fn adequacy(
         *e = within_bounds(*q, *e, 0.0);
     }
     let mu = mu_index.map(|i| &est.params[i].1);
-    let mut limited = adequacy_sentence(a, windows_p, runs_p, mu);
+    // Why the model limits the result, in the order the report says it (each later reason
+    // goes first): the failed tests, mu pinned at a bound, every parameter taken, a value no
+    // real rig has.
+    let mut limited: Vec<LimitPart> = failed_part(a, windows_p, runs_p, mu).into_iter().collect();
     let failed = pinned_friction(problem, mu);
     if let Some(why) = &failed {
-        limited = Some(match limited {
-            Some(s) => format!("{why} {s}"),
-            None => why.clone(),
-        });
+        limited.insert(0, LimitPart::Said(why.clone()));
     }
     let (rms_per_marker_m, rms_residual_m) = (a.residuals.rms_per_marker_m, a.residuals.rms_m);
     let noise_free = is_noise_free(
@@ -498,7 +498,7 @@ pub(super) fn adequacy(
         a.reduced_chi2,
     );
     if noise_free && failed.is_none() {
-        limited = None;
+        limited.clear();
         if let Some(e) = mu {
             f.warnings.push(format!(
                 "the recording is noise-free to the model's numerical accuracy (noise measured from the tracks {:.1e} m, residual RMS {:.1e} m): mu_kinetic is recovered as {:.10}, and its standard error and interval are not meaningful",
@@ -513,20 +513,14 @@ pub(super) fn adequacy(
             "The result is limited by the model: it took every free parameter the fit allows ({MAX_FREE}) and still misfits (chi-square {:.0} for {:.0} degrees of freedom, beyond 5 standard deviations of its distribution), so an effect it lacks may be in mu_kinetic.",
             a.chi2, a.dof
         );
-        limited = Some(match limited {
-            Some(l) => format!("{s} {l}"),
-            None => s,
-        });
+        limited.insert(0, LimitPart::Said(s));
     }
     if !implausible.is_empty() {
         let s = format!(
             "The fit needs what no real rig has, so the result is limited by the model, not by the noise: {}; mu_kinetic may carry an effect the model lacks.",
             implausible.join("; ")
         );
-        limited = Some(match limited {
-            Some(l) => format!("{s} {l}"),
-            None => s,
-        });
+        limited.insert(0, LimitPart::Said(s));
     }
     Verdict {
         implausible,

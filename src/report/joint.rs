@@ -88,7 +88,7 @@ pub fn joint_json(rep: &JointReport) -> Value {
         "adequacy": {"chi2": rep.chi2, "dof": rep.dof, "reduced_chi2": rep.reduced_chi2},
         "n_params": rep.n_params,
         "models": rep.models,
-        "sentence": rep.sentence,
+        "sentence": agreement_sentence(rep),
         "answer": joint_answer(rep),
         "warnings": rep.warnings,
         "iterations": rep.iterations,
@@ -102,7 +102,7 @@ pub fn joint_text(rep: &JointReport) -> String {
     if rep.failed.is_some() {
         let _ = writeln!(s, "FAILED: no value for mu_kinetic.");
     }
-    let _ = writeln!(s, "{}", rep.sentence);
+    let _ = writeln!(s, "{}", agreement_sentence(rep));
     if !rep.implausible.is_empty() {
         let _ = writeln!(
             s,
@@ -333,4 +333,45 @@ impl Figure for JointFigure<'_> {
         }
         Ok(())
     }
+}
+
+/// The plain sentence on what the joint interval holds: every release agrees; some were set
+/// aside (each with its own mu and z under the others' model) and the rest agree; or the
+/// releases disagree and no few of them account for it.
+pub fn agreement_sentence(rep: &JointReport) -> String {
+    let n_kept = rep.releases.len();
+    let (kept_p, all_p, aside) = (rep.consistency_p, rep.consistency_p_all, &rep.set_aside);
+    let p = |p: Option<f64>| crate::report::p_is(p.unwrap_or(f64::NAN));
+    if rep.unresolved {
+        return format!(
+            "The releases disagree ({}), and no set of at most half of them, set aside, leaves releases that agree: the interval is widened by the releases' spread, and is the rail's only if every release ran on one rail.",
+            p(all_p)
+        );
+    }
+    if aside.is_empty() {
+        return format!(
+            "The {n_kept} releases agree ({}); the interval is what they support together.",
+            p(kept_p)
+        );
+    }
+    let named: Vec<String> = aside
+        .iter()
+        .map(|r| {
+            r.own_mu.map_or(r.name.clone(), |e| {
+                format!(
+                    "{} (own mu {:.5} +- {:.1e}, z {:+.1})",
+                    r.name, e.value, e.stderr, r.z
+                )
+            })
+        })
+        .collect();
+    format!(
+        "The releases disagree ({}); {} {} set aside: {} off the other {n_kept} under a model chosen without {}. The result is the {n_kept} releases kept, which agree ({}).",
+        p(all_p),
+        named.join(", "),
+        if aside.len() == 1 { "is" } else { "are" },
+        if aside.len() == 1 { "it lies" } else { "each lies" },
+        if aside.len() == 1 { "it" } else { "them" },
+        p(kept_p)
+    )
 }

@@ -41,7 +41,7 @@ fn fit_exact(recording: &Path, rig: &Rig<f64>) -> FitReport {
 }
 
 pub(crate) fn flagged(rep: &FitReport) -> bool {
-    rep.adequacy.limited_by_model.is_some() || rep.failed.is_some()
+    !rep.adequacy.limited_by_model.is_empty() || rep.failed.is_some()
 }
 
 fn manifest() -> serde_json::Value {

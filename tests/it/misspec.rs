@@ -87,7 +87,7 @@ fn fit_all() -> Vec<Fitted> {
 }
 
 fn flagged(rep: &FitReport) -> bool {
-    rep.adequacy.limited_by_model.is_some() || rep.failed.is_some()
+    !rep.adequacy.limited_by_model.is_empty() || rep.failed.is_some()
 }
 
 /// The acceptance rule on every file, the coverage of the 95% intervals, and what the effects

@@ -493,7 +493,7 @@ fn rigid_recordings_fit_with_the_measured_pendulum() {
         let rep = fit(observations(rig), &r, &FitSettings::default()).unwrap();
         mu_within_three_se(rig, &rep, mu);
         assert!(
-            rep.adequacy.limited_by_model.is_none(),
+            rep.adequacy.limited_by_model.is_empty(),
             "{rig}: {:?}",
             rep.adequacy
         );
@@ -578,7 +578,7 @@ fn mu_pinned_at_zero_by_stribeck_is_reported_as_a_failed_fit() {
     assert!(e.ci95[0] >= 0.0, "{:?}", e.ci95);
     let why = rep.failed.expect("a pinned mu is a failed fit");
     assert!(why.starts_with("The fit failed"), "{why}");
-    let limited = rep.adequacy.limited_by_model.unwrap();
+    let limited = appell::report::fit::limited_sentence(&rep.adequacy).unwrap();
     assert!(limited.starts_with("The fit failed"), "{limited}");
 }
 

@@ -1,6 +1,6 @@
 //! Whether the releases agree on mu_kinetic: each release's own mu with the shared nuisances
 //! held, tested as the single fit tests its windows, and each one's leave-one-out z; the
-//! releases' spread, and the sentence that says what the interval holds.
+//! releases' spread (the report words what the interval holds).
 
 use super::outcome::ReleaseRow;
 use crate::fit::problem::{Param, TrajectoryProblem};
@@ -80,51 +80,6 @@ pub(super) fn own_mu(
     let a = uncertainty::assess(&m, &p, f64::INFINITY).ok()?;
     let i = m.free.iter().position(|q| *q == Param::MuKinetic)?;
     Some(Estimate::wald(p[i], a.se[i].max(a.se_block[i])))
-}
-
-/// The sentence on what the interval holds: every release agrees; some were set aside
-/// (`aside`: name, own mu, z under the others' model) and the rest agree; or the releases
-/// disagree and no few of them account for it (`all_p` their p-value).
-pub(super) fn sentence(
-    n_kept: usize,
-    kept_p: Option<f64>,
-    all_p: Option<f64>,
-    aside: &[ReleaseRow],
-    unresolved: bool,
-) -> String {
-    let p = |p: Option<f64>| crate::report::p_is(p.unwrap_or(f64::NAN));
-    if unresolved {
-        return format!(
-            "The releases disagree ({}), and no set of at most half of them, set aside, leaves releases that agree: the interval is widened by the releases' spread, and is the rail's only if every release ran on one rail.",
-            p(all_p)
-        );
-    }
-    if aside.is_empty() {
-        return format!(
-            "The {n_kept} releases agree ({}); the interval is what they support together.",
-            p(kept_p)
-        );
-    }
-    let named: Vec<String> = aside
-        .iter()
-        .map(|r| {
-            r.own_mu.map_or(r.name.clone(), |e| {
-                format!(
-                    "{} (own mu {:.5} +- {:.1e}, z {:+.1})",
-                    r.name, e.value, e.stderr, r.z
-                )
-            })
-        })
-        .collect();
-    format!(
-        "The releases disagree ({}); {} {} set aside: {} off the other {n_kept} under a model chosen without {}. The result is the {n_kept} releases kept, which agree ({}).",
-        p(all_p),
-        named.join(", "),
-        if aside.len() == 1 { "is" } else { "are" },
-        if aside.len() == 1 { "it lies" } else { "each lies" },
-        if aside.len() == 1 { "it" } else { "them" },
-        p(kept_p)
-    )
 }
 
 /// The releases' precision-weighted spread of own mu about `mu` (their rows'), by which an

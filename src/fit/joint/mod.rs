@@ -89,13 +89,6 @@ pub fn fit_joint(
         let spread = agreement::spread(&rows, mu.value);
         super::intervals::widen(&mut mu, spread, "releases");
     }
-    let sentence = agreement::sentence(
-        rows.len(),
-        consistency_p,
-        consistency_p_all,
-        &aside,
-        unresolved,
-    );
     if select::misfits(&model.problem, shared.chi2) {
         warnings.push(format!(
             "the joint model misfits the releases (reduced chi-square {:.2}): the interval is the Jacobian's scaled by it",
@@ -166,7 +159,7 @@ pub fn fit_joint(
         dof: shared.dof,
         reduced_chi2: shared.reduced_chi2,
         n_params: model.p.len(),
-        sentence,
+        unresolved,
         warnings,
         iterations: model.iterations,
     })

@@ -81,8 +81,9 @@ pub struct JointReport {
     pub reduced_chi2: f64,
     /// Free parameters in all.
     pub n_params: usize,
-    /// One plain sentence on what the interval holds.
-    pub sentence: String,
+    /// The releases disagree and no few of them, set aside, leave releases that agree: the
+    /// interval is widened by their spread (`report::joint::agreement_sentence` says so).
+    pub unresolved: bool,
     /// Warnings.
     pub warnings: Vec<String>,
     /// Levenberg-Marquardt iterations of the joint stages (the single fits not counted).

@@ -2,7 +2,7 @@
 //! as many digits as its uncertainty carries, and the verdict in a few words, so that a lab
 //! reads the result before the tables that back it.
 
-use crate::fit::{failed_tests, Estimate, FailedTest, FitReport};
+use crate::fit::{failed_tests, Adequacy, Estimate, FailedTest, FitReport, LimitPart};
 use crate::report::{p_is, two_digit_decimals};
 
 /// `value +- se` rounded where the uncertainty puts it: the standard error to two significant
@@ -84,10 +84,10 @@ pub fn answer(rep: &FitReport) -> String {
         // Said first, whatever else holds: the value is no minimum. What the model misses,
         // when the checks say it, still follows.
         head.push_str(", not converged: the solve stopped at its iteration limit");
-        if rep.adequacy.limited_by_model.is_none() {
+        if rep.adequacy.limited_by_model.is_empty() {
             return head;
         }
-    } else if rep.adequacy.limited_by_model.is_none() {
+    } else if rep.adequacy.limited_by_model.is_empty() {
         return format!("{head}, model adequate{}", models_words(rep));
     }
     let a = &rep.adequacy;
@@ -157,6 +157,71 @@ fn law_words(rep: &FitReport) -> String {
         "stribeck" => ", Stribeck law".to_owned(),
         other => format!(", {other} law"),
     }
+}
+
+/// The one plain sentence that says why the result is limited by the model (`None` when it is
+/// not): the fit's own sentences, then the adequacy tests that failed, worded here with their
+/// p-values, and what the widened interval of mu_kinetic holds.
+pub fn limited_sentence(a: &Adequacy) -> Option<String> {
+    let parts: Vec<String> = a.limited_by_model.iter().map(limit_part).collect();
+    (!parts.is_empty()).then(|| parts.join(" "))
+}
+
+/// One part of [`limited_sentence`].
+fn limit_part(part: &LimitPart) -> String {
+    let t = match part {
+        LimitPart::Said(s) => return s.clone(),
+        LimitPart::Tests(t) => t,
+    };
+    let why: Vec<String> = t
+        .tests
+        .iter()
+        .map(|test| match *test {
+            FailedTest::ChiSquare(p) => format!(
+                "chi-square is {:.0} for {:.0} degrees of freedom against the noise measured from the tracks (reduced {:.2}, {})",
+                t.chi2,
+                t.dof,
+                t.reduced_chi2,
+                p_is(p)
+            ),
+            FailedTest::Runs(p) => format!(
+                "the residuals keep their sign over long stretches (runs test {})",
+                p_is(p)
+            ),
+            FailedTest::Slides(p) => format!(
+                "the recording's slides, fitted one by one, disagree on mu_kinetic ({})",
+                p_is(p)
+            ),
+        })
+        .collect();
+    let interval = t
+        .mu_interval
+        .as_ref()
+        .map_or(String::new(), |(ci95, method)| {
+            let what: Vec<&str> = method
+                .split('+')
+                .filter_map(|tag| match tag {
+                    "block" => Some("the residuals' correlation"),
+                    "windows" => Some("the slides' disagreement (their scale factor)"),
+                    "models" => Some("the spread of close models"),
+                    "path" => Some("as much as mu moved while nuisances were added"),
+                    _ => None,
+                })
+                .collect();
+            let held = if what.is_empty() {
+                String::new()
+            } else {
+                format!(" to hold {}", what.join(", "))
+            };
+            format!(
+                "; the interval for mu_kinetic was widened{held}: [{:.5}, {:.5}] ({method})",
+                ci95[0], ci95[1]
+            )
+        });
+    format!(
+        "The result is limited by the model, not by the noise: {}{interval}.",
+        why.join("; ")
+    )
 }
 
 #[cfg(test)]

@@ -125,7 +125,7 @@ impl FitFigure<'_> {
             rep.noise_m[0] * 1e3,
             rep.noise_m[1] * 1e3
         ));
-        if a.limited_by_model.is_some() {
+        if !a.limited_by_model.is_empty() {
             notes.push("limited by the model, not by the noise (see the report)".into());
         }
         let left_out = tr.left_out.iter().flatten().filter(|b| **b).count();

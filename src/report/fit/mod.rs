@@ -8,7 +8,7 @@ mod figure;
 mod friction_figure;
 mod text;
 
-pub use answer::{answer, models_widening, value_pm, with_interval};
+pub use answer::{answer, limited_sentence, models_widening, value_pm, with_interval};
 pub use figure::FitFigure;
 pub use friction_figure::FrictionFigure;
 pub use text::{fit_text, friction_law_text};
@@ -131,7 +131,7 @@ pub fn fit_json(rep: &FitReport) -> Value {
         "runs_p_value": a.runs_p_value,
         "block_se_ratio": a.block_se_ratio,
         "block_frames": a.block_frames,
-        "limited_by_model": a.limited_by_model,
+        "limited_by_model": limited_sentence(a),
         "noise_free": a.noise_free,
         "outliers": {"slider": rep.outliers[0], "bob": rep.outliers[1]},
         "sliding_speed_range": rep.sliding_speed_range,

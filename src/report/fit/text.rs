@@ -39,7 +39,7 @@ pub fn fit_text(rep: &FitReport) -> String {
     if let Some(sentence) = &rep.not_identifiable {
         let _ = writeln!(s, "{sentence}\n");
     }
-    if let Some(sentence) = &rep.adequacy.limited_by_model {
+    if let Some(sentence) = &super::answer::limited_sentence(&rep.adequacy) {
         let _ = writeln!(s, "{sentence}\n");
     }
     statistics(&mut s, rep);
