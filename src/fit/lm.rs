@@ -143,6 +143,84 @@ impl LevenbergMarquardt {
         self.nu *= 2.0;
     }
 
+    /// Before any trial, what the full Gauss-Newton step predicts: the point to stop at and
+    /// its cost when the predicted decrease is below both tolerances (MINPACK's
+    /// predicted-reduction test: a start at a minimum, as a final polish often is, ends here
+    /// rather than spending trial simulations that cannot decrease the cost), or when even
+    /// [`REACH_SAFETY`] times it leaves the cost above [`Self::reach_floor`] (then the point
+    /// one undamped step away when its cost, evaluated alone, is lower); `None` otherwise.
+    fn gauss_newton_stop<O: LeastSquares>(
+        &mut self,
+        problem: &mut Problem<O>,
+        p: &DVector<f64>,
+        g: &DVector<f64>,
+        a: &DMatrix<f64>,
+        cost: f64,
+    ) -> Result<Option<(DVector<f64>, f64)>, Error> {
+        let Some(chol) = a.clone().cholesky() else {
+            return Ok(None);
+        };
+        let predicted = 0.5 * g.dot(&chol.solve(g));
+        let within = predicted <= self.ftol * cost && predicted <= self.fatol;
+        if predicted.is_finite() && (within || predicted < self.gn_tol) {
+            self.converged = true;
+            return Ok(Some((p.clone(), cost)));
+        }
+        if predicted.is_finite() && cost - REACH_SAFETY * predicted > self.reach_floor {
+            self.out_of_reach = true;
+            let mut trial = p - chol.solve(g);
+            problem.problem("operator_count", |o| {
+                o.project(&mut trial);
+                Ok(())
+            })?;
+            let alone = problem.problem("cost_count", |o| Ok(o.cost(&trial)))?;
+            if let Some(Ok(c)) = alone.filter(|c| c.as_ref().is_ok_and(|c| *c < cost)) {
+                return Ok(Some((trial, c)));
+            }
+            return Ok(Some((p.clone(), cost)));
+        }
+        Ok(None)
+    }
+
+    /// The trial point of the step damped by the current `lambda` (each parameter by its own
+    /// curvature `diag`), projected onto the bounds; `None` when the damped matrix is not
+    /// positive definite.
+    fn damped_trial<O: LeastSquares>(
+        &self,
+        problem: &mut Problem<O>,
+        p: &DVector<f64>,
+        g: &DVector<f64>,
+        a: &DMatrix<f64>,
+        diag: &DVector<f64>,
+    ) -> Result<Option<DVector<f64>>, Error> {
+        let mut m = a.clone();
+        for i in 0..m.nrows() {
+            m[(i, i)] += self.lambda * diag[i];
+        }
+        let Some(chol) = m.cholesky() else {
+            return Ok(None);
+        };
+        let step = -chol.solve(g);
+        let mut trial = p + &step;
+        problem.problem("operator_count", |o| {
+            o.project(&mut trial);
+            Ok(())
+        })?;
+        Ok(Some(trial))
+    }
+
+    /// A trial kept (`rho` its decrease over the predicted one, from `cost` to `trial_cost`,
+    /// a relative step `rel_step`): the damping eased by Nielsen's rule, and the decrease and
+    /// the step kept for the convergence tests.
+    fn keep(&mut self, rho: f64, rejected: bool, cost: f64, trial_cost: f64, rel_step: f64) {
+        self.retried = rejected;
+        self.lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
+        self.nu = 2.0;
+        self.last_rel_decrease = (cost - trial_cost) / cost.max(f64::MIN_POSITIVE);
+        self.last_decrease = cost - trial_cost;
+        self.last_step = rel_step;
+    }
+
     /// The damping the solver holds now (after a run: where it ended).
     pub fn damping(&self) -> f64 {
         self.lambda
@@ -217,26 +295,8 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
         // cost by less than both tolerances (MINPACK's predicted-reduction test, taken before
         // any trial run): a start at a minimum, as a final polish often is, ends here rather
         // than spending trial simulations that cannot decrease the cost.
-        if let Some(chol) = a.clone().cholesky() {
-            let predicted = 0.5 * g.dot(&chol.solve(&g));
-            let within = predicted <= self.ftol * cost && predicted <= self.fatol;
-            if predicted.is_finite() && (within || predicted < self.gn_tol) {
-                self.converged = true;
-                return Ok((state.param(p).gradient(g).hessian(a).cost(cost), None));
-            }
-            if predicted.is_finite() && cost - REACH_SAFETY * predicted > self.reach_floor {
-                self.out_of_reach = true;
-                let mut trial = &p - chol.solve(&g);
-                problem.problem("operator_count", |o| {
-                    o.project(&mut trial);
-                    Ok(())
-                })?;
-                let alone = problem.problem("cost_count", |o| Ok(o.cost(&trial)))?;
-                if let Some(Ok(c)) = alone.filter(|c| c.as_ref().is_ok_and(|c| *c < cost)) {
-                    return Ok((state.param(trial).gradient(g).hessian(a).cost(c), None));
-                }
-                return Ok((state.param(p).gradient(g).hessian(a).cost(cost), None));
-            }
+        if let Some((q, c)) = self.gauss_newton_stop(problem, &p, &g, &a, cost)? {
+            return Ok((state.param(q).gradient(g).hessian(a).cost(c), None));
         }
         // Marquardt scaling: damp each parameter by its own curvature, floored so a parameter
         // the data do not constrain still gets a finite step.
@@ -251,20 +311,10 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
         // taken on the normal equations' own cost, so the path is the same.
         let mut rejected = false;
         for _ in 0..self.max_trials {
-            let mut m = a.clone();
-            for i in 0..m.nrows() {
-                m[(i, i)] += self.lambda * diag[i];
-            }
-            let Some(chol) = m.cholesky() else {
+            let Some(trial) = self.damped_trial(problem, &p, &g, &a, &diag)? else {
                 self.raise_damping();
                 continue;
             };
-            let step = -chol.solve(&g);
-            let mut trial = &p + &step;
-            problem.problem("operator_count", |o| {
-                o.project(&mut trial);
-                Ok(())
-            })?;
             let actual_step = &trial - &p;
             // A step the bounds cut to nothing: the optimum sits on a bound to working accuracy.
             if actual_step.norm() <= self.xtol * (p.norm() + self.xtol) {
@@ -297,12 +347,13 @@ impl<O: LeastSquares> Solver<O, LmState> for LevenbergMarquardt {
                 -1.0
             };
             if rho > 0.0 && trial_cost <= cost {
-                self.retried = rejected;
-                self.lambda *= (1.0 - (2.0 * rho - 1.0).powi(3)).max(1.0 / 3.0);
-                self.nu = 2.0;
-                self.last_rel_decrease = (cost - trial_cost) / cost.max(f64::MIN_POSITIVE);
-                self.last_decrease = cost - trial_cost;
-                self.last_step = actual_step.norm() / (p.norm() + self.xtol);
+                self.keep(
+                    rho,
+                    rejected,
+                    cost,
+                    trial_cost,
+                    actual_step.norm() / (p.norm() + self.xtol),
+                );
                 return Ok((
                     state
                         .param(trial)

@@ -780,6 +780,91 @@ pub(super) fn starts_agree(f: &mut Fitting, base: &Base, est: &Estimates) {
     }
 }
 
+/// The values the fit held, each parameter not free but the Stribeck speed under another
+/// law and a point pendulum's equivalent length and mass ratio (its rod and masses).
+fn fixed_values(problem: &TrajectoryProblem) -> Vec<(Param, f64)> {
+    Param::ALL
+        .into_iter()
+        // The Stribeck speed means nothing under Coulomb's law.
+        .filter(|q| {
+            *q != Param::StribeckVelocity || problem.rig.friction_law == FrictionLaw::Stribeck
+        })
+        // A point pendulum's equivalent length and mass ratio are its rod and masses.
+        .filter(|q| {
+            !matches!(q, Param::PendulumLength | Param::MassRatio) || problem.rig.pendulum.is_some()
+        })
+        .filter(|q| !problem.free.contains(q))
+        .map(|q| (q, problem.get(q)))
+        .collect()
+}
+
+/// Where each free parameter started: the data's initial state and mu on the rig as given.
+fn start_values(
+    problem: &TrajectoryProblem,
+    data: &Prepared,
+    base: &Base,
+    rig_guess: &Rig<f64>,
+    settings: &FitSettings,
+) -> Vec<(Param, f64)> {
+    let start_problem = TrajectoryProblem::new(
+        data.obs.clone(),
+        *rig_guess,
+        base.y0_guess,
+        problem.free.clone(),
+        settings.options,
+    );
+    problem
+        .free
+        .iter()
+        .map(|&q| {
+            let v = if q == Param::MuKinetic {
+                base.mu0
+            } else {
+                start_problem.get(q)
+            };
+            (q, v)
+        })
+        .collect()
+}
+
+/// mu_kinetic's standard error in its parts: the noise's and the rig's shares of the
+/// Jacobian's, and the model uncertainty the widenings added.
+fn mu_parts(est: &Estimates) -> Option<MuParts> {
+    est.mu_index.map(|i| {
+        let total = est.params[i].1.stderr;
+        let base = est.se[i].min(total);
+        MuParts {
+            noise: base * (1.0 - est.rig_fraction).sqrt(),
+            rig: base * est.rig_fraction.sqrt(),
+            model: (total * total - base * base).max(0.0).sqrt(),
+            total,
+        }
+    })
+}
+
+/// The friction law's result, with what the motion cannot test: a recording that slides one
+/// way only cannot measure the other way's coefficient, nor slides at one load a load law.
+fn friction_result(inputs: &law::LawInputs, motion: &Motion) -> law::FrictionLawResult {
+    let mut fr = law::friction_law(inputs);
+    // The modes the fitted motion passes through.
+    let modes: Vec<crate::model::Mode> = motion
+        .sol
+        .events
+        .iter()
+        .map(|e| e.from)
+        .chain(std::iter::once(motion.sol.final_mode))
+        .collect();
+    // Under the direction law both coefficients are reported with their own errors.
+    if !inputs.chosen.contains(&Nuisance::Direction) {
+        fr.untested = law::untested_by(&modes);
+    }
+    if !inputs.chosen.contains(&Nuisance::Load) {
+        fr.untested
+            .extend(law::load_untested_by(motion.slide_loads));
+    }
+    fr
+}
+
 /// Everything the report is built from.
 pub(super) struct Parts<'a> {
     pub data: Prepared,
@@ -818,49 +903,18 @@ pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
     } = parts;
     let problem = f.problem;
     let a = &est.a;
-    let k = f.p.len();
     base.starts
         .sort_by(|a, b| a.mu_start.total_cmp(&b.mu_start));
-    let fixed = Param::ALL
-        .into_iter()
-        // The Stribeck speed means nothing under Coulomb's law.
-        .filter(|q| {
-            *q != Param::StribeckVelocity || problem.rig.friction_law == FrictionLaw::Stribeck
-        })
-        // A point pendulum's equivalent length and mass ratio are its rod and masses.
-        .filter(|q| {
-            !matches!(q, Param::PendulumLength | Param::MassRatio) || problem.rig.pendulum.is_some()
-        })
-        .filter(|q| !problem.free.contains(q))
-        .map(|q| (q, problem.get(q)))
-        .collect();
-    let start_problem = TrajectoryProblem::new(
-        data.obs.clone(),
-        *rig_guess,
-        base.y0_guess,
-        problem.free.clone(),
-        settings.options,
-    );
-    let start_values = problem
-        .free
-        .iter()
-        .map(|&q| {
-            let v = if q == Param::MuKinetic {
-                base.mu0
-            } else {
-                start_problem.get(q)
-            };
-            (q, v)
-        })
-        .collect();
+    let fixed = fixed_values(&problem);
+    let start_values = start_values(&problem, &data, &base, rig_guess, settings);
     let n_rows = problem.rows_used();
     let adequacy = Adequacy {
         chi2: a.chi2,
         dof: a.dof,
         reduced_chi2: a.reduced_chi2,
         p_value: a.p_value,
-        aic: a.chi2 + 2.0 * k as f64,
-        bic: a.chi2 + k as f64 * (n_rows as f64).ln(),
+        aic: a.chi2 + 2.0 * f.p.len() as f64,
+        bic: a.chi2 + f.p.len() as f64 * (n_rows as f64).ln(),
         lag1: v.lag1,
         runs_p_value: v.runs_p,
         block_se_ratio: v.block_ratio,
@@ -870,16 +924,6 @@ pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
         noise_free: v.noise_free,
     };
     let pendulum = pendulum_found(&problem, &est.params, &est.correlation, rig_guess);
-    let mu_parts = est.mu_index.map(|i| {
-        let total = est.params[i].1.stderr;
-        let base = est.se[i].min(total);
-        MuParts {
-            noise: base * (1.0 - est.rig_fraction).sqrt(),
-            rig: base * est.rig_fraction.sqrt(),
-            model: (total * total - base * base).max(0.0).sqrt(),
-            total,
-        }
-    });
     let rig_values = RigValue::of(&est.params, |q| problem.prior_on(q));
     let mut warnings = f.warnings;
     for r in rig_values.iter().filter(|r| r.off()) {
@@ -888,17 +932,8 @@ pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
             r.said("the recording puts")
         ));
     }
-    // The modes the fitted motion passes through: a recording that slides one way only
-    // cannot measure the other way's coefficient, and the answer says so.
-    let modes: Vec<crate::model::Mode> = motion
-        .sol
-        .events
-        .iter()
-        .map(|e| e.from)
-        .chain(std::iter::once(motion.sol.final_mode))
-        .collect();
     let friction = identifiable.then(|| {
-        let mut fr = law::friction_law(&law::LawInputs {
+        let inputs = law::LawInputs {
             params: &est.params,
             correlation: &est.correlation,
             models: &models,
@@ -906,22 +941,13 @@ pub(super) fn report(f: Fitting, parts: Parts) -> FitReport {
             screening: &screening,
             n_rows,
             forced: settings.friction.is_some(),
-        });
-        // Under the direction law both coefficients are reported with their own errors.
-        if !nuisances.contains(&Nuisance::Direction) {
-            fr.untested = law::untested_by(&modes);
-        }
-        // Nor can slides at one load measure a load law.
-        if !nuisances.contains(&Nuisance::Load) {
-            fr.untested
-                .extend(law::load_untested_by(motion.slide_loads));
-        }
-        fr
+        };
+        friction_result(&inputs, &motion)
     });
     let c = &problem.counters;
     FitReport {
         friction,
-        mu_parts,
+        mu_parts: mu_parts(&est),
         rig_keys: settings
             .measured
             .as_ref()
