@@ -260,7 +260,7 @@ struct FrictionKeys {
     static_split: f64,
 }
 
-/// The `[initial]` section: the state at t = 0 in PHYSICS.md's convention (radians, y down).
+/// The `[initial]` section: the state at t = 0 in docs/physics.md's convention (radians, y down).
 #[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct InitialSpec {

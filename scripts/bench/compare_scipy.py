@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Independent reference for `appell`: the paper scene solved with scipy's DOP853.
 
-The stick and slide equations of ../shared/PHYSICS.md are written here again, in Python, and
+The stick and slide equations of docs/physics.md are written here again, in Python, and
 integrated with `scipy.integrate.solve_ivp(method="DOP853")`; every mode switch is a terminal
 event and the integration is restarted there in the new mode. The script times the whole run
 (median of repeats) and prints the event timeline; with `--appell BIN` it also runs
@@ -29,7 +29,7 @@ T_END = 2.0
 
 
 def shorthands(theta, w):
-    """D, a, b, c, Q of PHYSICS.md."""
+    """D, a, b, c, Q of docs/physics.md."""
     s, c_ = math.sin(theta), math.cos(theta)
     d = M1 + M2 * c_ * c_
     a = M2 * s * c_

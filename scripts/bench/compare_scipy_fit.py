@@ -19,7 +19,7 @@ import numpy as np
 from scipy.integrate import solve_ivp
 from scipy.optimize import least_squares
 
-M1, M2, L, G = 0.5, 0.2, 0.30, 9.81  # the example recording's rig (FORMATS.md), mu = 0.12
+M1, M2, L, G = 0.5, 0.2, 0.30, 9.81  # the example recording's rig (docs/formats.md), mu = 0.12
 
 
 def shorthands(th, w):

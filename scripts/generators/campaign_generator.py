@@ -22,7 +22,7 @@ Bilateral rail, friction mu |N|.
 
 Releases
 --------
-The slider starts at x = 0. A release is (theta_deg, theta_dot, x_dot) in PHYSICS.md's
+The slider starts at x = 0. A release is (theta_deg, theta_dot, x_dot) in docs/physics.md's
 convention (theta from +x toward y DOWN, 90 deg hangs; theta_dot in rad/s; x_dot in m/s), i.e. the
 initial state (x, theta, x', theta') = (0, radians(theta_deg), x_dot, theta_dot).
 Drawn campaigns (numpy.random.default_rng(seed)): first the push directions, a permutation of
@@ -302,7 +302,7 @@ def write_campaign(out, seed, items, args, mu, tilt_rad, odd, odd_mu, ts, prefix
         tilt_convention="gravity in the rail frame (y down) = g (sin a, cos a): +x downhill "
                         "for a > 0; stuck pendulum hangs at theta = pi/2 - a (misspec's "
                         "`four`; appell's rail_tilt_deg)",
-        theta_convention="PHYSICS.md: theta from +x toward y down, pi/2 hangs; release "
+        theta_convention="docs/physics.md: theta from +x toward y down, pi/2 hangs; release "
                          "(theta_deg, theta_dot rad/s, x_dot m/s) with the slider at x = 0",
         frame="CSV: rail frame, y up (slider at (x, 0), bob at (x + l cos theta, -l sin theta))",
         frame_rate_hz=FPS, duration_s=float(ts[-1]), frames=len(ts), noise_sigma_m=NOISE,
@@ -432,7 +432,7 @@ def write_readme(out, truths, args, mu, tilt_deg, odd, odd_mu):
         "unknowns): `--rig` for the fit.",
         "- `truth.json`: mu, tilt (rad and deg), rig, seed, the releases (theta_deg, "
         "theta_dot rad/s, x_dot m/s;",
-        "  PHYSICS.md: theta from +x toward y down, 90 deg hangs), per release sliding "
+        "  docs/physics.md: theta from +x toward y down, 90 deg hangs), per release sliding "
         "frames, transitions, stops,",
         "  event timeline, x range; rejected draws and why; check figures; versions.",
         "",

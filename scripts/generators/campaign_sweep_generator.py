@@ -288,7 +288,7 @@ def write_campaign(out, spec, items, rejected, ts):
         tilt_convention="gravity in the rail frame (y down) = g (sin a, cos a): +x downhill "
                         "for a > 0; stuck pendulum hangs at theta = pi/2 - a (appell's "
                         "rail_tilt_deg)",
-        theta_convention="PHYSICS.md: theta from +x toward y down, pi/2 hangs; release "
+        theta_convention="docs/physics.md: theta from +x toward y down, pi/2 hangs; release "
                          "(theta_deg, theta_dot rad/s, x_dot m/s) with the slider at x = 0",
         frame="CSV: rail frame, y up (slider at (x, 0), bob at (x + l cos theta, -l sin theta))",
         frame_rate_hz=cg.FPS, duration_s=float(ts[-1]), frames=len(ts), noise_sigma_m=cg.NOISE,

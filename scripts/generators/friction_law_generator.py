@@ -18,7 +18,7 @@ direction-dependent coefficient (DirModel below), which enters misspec_generator
 rows and loop through the model's `mu()` and two thin dispatchers around `solve_stuck` /
 `solve_sliding` (other models pass through untouched).
 
-Conventions (PHYSICS.md, as the imported scripts)
+Conventions (docs/physics.md, as the imported scripts)
   Dynamics in the rail frame, y DOWN; theta from +x toward +y, theta = pi/2 hangs down.
   Recordings: rail frame, y UP: slider (x, 0), bob (x + l cos theta, -l sin theta), metres.
   Mirror image (x -> -x): (x, theta, x', theta') -> (-x, pi - theta, -x', -theta').
@@ -448,7 +448,7 @@ def main(argv=None):
                  frame_rate_hz=FPS, duration_s=DURATION, noise_sigma_m=NOISE, seeds=seeds,
                  frame="recordings: rail frame, y up (slider (x, 0), bob (x + l cos theta, "
                        "-l sin theta)); events' states: y down",
-                 theta_convention="PHYSICS.md: from +x toward y down, pi/2 hangs down",
+                 theta_convention="docs/physics.md: from +x toward y down, pi/2 hangs down",
                  mirror="(x, theta, x', theta') -> (-x, pi - theta, -x', -theta')",
                  sign_conventions="F: rail friction on the slider along +x; s = sign(x'); "
                                   "direction law stuck while -mu+ |N| <= F_needed <= mu- |N|",

@@ -31,7 +31,7 @@ set it (stuck solve: mu_s, so the stick test, the slip event and the cone ratio 
 sliding solve: mu_k, or Stribeck's mu(|x'|) at the state's own speed), the technique of
 friction_law_generator's DirModel. Every other model passes through untouched.
 
-Laws (PHYSICS.md and docs/physics.md, "Friction laws"; N either sign, friction uses |N|)
+Laws (docs/physics.md and docs/physics.md, "Friction laws"; N either sign, friction uses |N|)
   static    Coulomb with mu_s > mu_k: stuck while |F_needed| <= mu_s |N|; slides with
             F = -mu_k s |N|. mu_k = 0.20, mu_s / mu_k = 1.1, 1.2, 1.3.
   stribeck  sliding F = -mu(|x'|) s |N|, mu(v) = mu_k + (mu_s - mu_k) exp(-(v / v_s)^2);

@@ -43,7 +43,7 @@ Rig files (per rig; rigs/<rig>_<case>.toml)
   rod_mass_sd = bob_radius_sd = 0 not written), true_nosd (explicit zeros, no sd) and
   true_omit (no rod_mass / bob_radius keys, no sd).
 
-Effects (no nuisance of the fit describes them; Newton-Euler rows, y DOWN as PHYSICS.md)
+Effects (no nuisance of the fit describes them; Newton-Euler rows, y DOWN as docs/physics.md)
   pin      plain-pin pivot: Coulomb friction torque tau = -mu_pin r_pin |H| tanh(w / w0) on
            the pendulum (H the pivot force; reaction couple on the slider taken by the rail),
            mu_pin = 0.2, r_pin = 2 mm, w0 = 1e-3 rad/s (smoothed sign; |H| enters the rows, so
@@ -452,7 +452,7 @@ def main(argv=None):
                  scipy=scipy.__version__, solver=dict(method="DOP853", rtol=RTOL, atol=ATOL),
                  frame_rate_hz=FPS, duration_s=DURATION, noise_sigma_m=NOISE, seeds=seeds,
                  frame="rail frame, y up (bob at x + l cos theta, -l sin theta)",
-                 theta_convention="PHYSICS.md: from +x, y down, pi/2 hangs down",
+                 theta_convention="docs/physics.md: from +x, y down, pi/2 hangs down",
                  mu_true=MU, rigs={}, effects={})
     cases = []
 

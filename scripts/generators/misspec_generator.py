@@ -33,7 +33,7 @@ Dynamics
 --------
 rigid_generator.py's Newton-Euler rows (unknowns x'', theta'', Hx, Hy, N and, while stuck, F),
 extended with the effects' terms; no reduced or equivalent-rig formula is used. y DOWN, theta
-from +x toward +y (PHYSICS.md). D = (Dx, Dy) = drag on the bob at b = pivot + l (cos, sin):
+from +x toward +y (docs/physics.md). D = (Dx, Dy) = drag on the bob at b = pivot + l (cos, sin):
   Slider, x:       m1 x'' = F - Hx + m1 gx
   Slider, y:       0      = N + m1 gy - Hy
   Pendulum, x:     m_p a_x = Hx + m_p gx + Dx
@@ -519,7 +519,7 @@ def main(argv=None):
                  duration_s=DURATION, noise_sigma_m=NOISE, seeds=args.seeds,
                  bob_marker="bob centre, at rod_length along the rod (four: plus 5 mm across)",
                  frame="rail frame, y up (bob at x + l cos theta, -l sin theta)",
-                 theta_convention="PHYSICS.md: from +x, y down, pi/2 hangs down",
+                 theta_convention="docs/physics.md: from +x, y down, pi/2 hangs down",
                  effects={})
     for name in rg.RIGS:
         write_toml(args.out, name, rg.make_rig(name))

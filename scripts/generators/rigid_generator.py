@@ -4,14 +4,14 @@
 Purpose
 -------
 Generates the synthetic recordings in tests/data/rigid/ and their ground truth, to test the
-`appell` tool's rigid-pendulum support (PHYSICS.md, "Rigid pendulum"). The Rust code reduces a
+`appell` tool's rigid-pendulum support (docs/physics.md, "The rigid pendulum"). The Rust code reduces a
 rigid pendulum to an "equivalent point rig" (slider m1 + m_p - m_e, bob m_e, length L). This
 script deliberately does NOT use that mapping: it integrates the two bodies by Newton-Euler, so
 an agreement between the two is evidence that the mapping (and its implementation) is right.
 
 This script is outside CI: it needs Python 3 with numpy and scipy, and is run by hand.
 
-Rig and conventions (PHYSICS.md)
+Rig and conventions (docs/physics.md)
 --------------------------------
 Rail = x axis, y points DOWN, gravity +g along y. Slider (mass m1) at (x, 0), translating along
 x only, on a bilateral rail: the rail's normal force N (its y component on the slider) may have
@@ -57,7 +57,7 @@ Run
 Options: --seeds 1 [2 3 ...] (several seeds write rigid_<rig>_s<seed>.csv instead of
 rigid_<rig>.csv, for a coverage sweep), --noise 0.0002 (marker noise sigma, m), --check (self
 checks: energy balance, momentum at mu = 0, small-swing period, and for information the
-agreement with PHYSICS.md's reduced formulas).
+agreement with docs/physics.md's reduced formulas).
 """
 
 import argparse
@@ -359,7 +359,7 @@ def make_rig(name, mu=None):
 # Self-checks
 # --------------------------------------------------------------------------------------------
 def reduced_formulas(rig, th, w, s=None):
-    """PHYSICS.md's reduced (equivalent point rig) formulas, for an informational comparison
+    """docs/physics.md's reduced (equivalent point rig) formulas, for an informational comparison
     only; the simulation never uses them."""
     me, M = rig.m_e, rig.m1 + rig.m_p
     D = M - me * math.sin(th) ** 2
@@ -386,10 +386,10 @@ def run_checks():
     print("== Self-checks ==")
     ok_all = True
 
-    # (0) PHYSICS.md's worked example, from our own inertia sums.
+    # (0) docs/physics.md's worked example, from our own inertia sums.
     ex = Rig(0.10, 0.10, 0.30, 0.02, 0.02, 9.81, 0.35)
     T = 2 * math.pi * math.sqrt(ex.J / (ex.m_p * ex.g * ex.d))
-    print(f"(info) PHYSICS.md example: L = {ex.L:.5f} m (0.29139), m_e = {ex.m_e:.5f} kg "
+    print(f"(info) docs/physics.md example: L = {ex.L:.5f} m (0.29139), m_e = {ex.m_e:.5f} kg "
           f"(0.11325), equivalent slider {ex.m1 + ex.m_p - ex.m_e:.5f} kg (0.10675), "
           f"stuck period {T:.4f} s (1.0829)")
 
@@ -416,7 +416,7 @@ def run_checks():
                 ne = solve_sliding(rig, th, w, s)
                 rf = reduced_formulas(rig, th, w, s)
                 worst = max(worst, np.max(np.abs(ne[[0, 1, 4, 5]] - rf)))
-    print(f"(info) Newton-Euler vs PHYSICS.md reduced formulas (x'', theta'', N, F), "
+    print(f"(info) Newton-Euler vs docs/physics.md reduced formulas (x'', theta'', N, F), "
           f"1200 random states: max |diff| = {worst:.2e}")
 
     # (1) Energy balance over 2 s with slides.
@@ -535,7 +535,7 @@ def main(argv=None):
                  frame_rate_hz=FPS, duration_s=DURATION, noise_sigma_m=args.noise,
                  seeds=args.seeds, bob_marker="bob centre, at rod_length along the rod",
                  frame="rail frame, y up (bob at x + l cos theta, -l sin theta)",
-                 theta_convention="PHYSICS.md: from +x, y down, pi/2 hangs down",
+                 theta_convention="docs/physics.md: from +x, y down, pi/2 hangs down",
                  rigs={})
     for name in RIGS:
         rig = make_rig(name)

@@ -9,7 +9,7 @@ use crate::scene::Scene;
 use crate::sim::Options;
 use serde::Serialize;
 
-/// The example rig's scene (FORMATS.md): m1 = 0.5, m2 = 0.2, l = 0.30, mu = 0.12, from rest.
+/// The example rig's scene (docs/formats.md): m1 = 0.5, m2 = 0.2, l = 0.30, mu = 0.12, from rest.
 const SCENE: &str = include_str!("../../configs/markers_example.toml");
 
 /// One point of the fit's run time against its error.
@@ -108,7 +108,7 @@ pub fn fit_benchmark(rtols: &[f64], batches: usize) -> Result<Vec<FitPoint>, Str
 }
 
 /// The length ladder's scene: the paper rig released from rest with the rod horizontal, whose
-/// stick-slip goes on for minutes (FORMATS.md's 0.5 mm noise).
+/// stick-slip goes on for minutes (a noise of 0.5 mm).
 const LADDER_SCENE: &str = include_str!("../../configs/paper_rest_horizontal.toml");
 
 /// One rung of the length ladder: a whole fit (default settings) of a recording this long.

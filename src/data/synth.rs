@@ -193,7 +193,8 @@ pub fn synthesize(scene: &Scene, opts: &SynthOptions) -> Result<Synthetic, SimEr
     truth.insert("seed".into(), opts.seed.to_string());
     truth.insert(
         "convention".into(),
-        "theta0 from the rail's +x, y down (PHYSICS.md); positions rail frame, metres, y up".into(),
+        "theta0 from the rail's +x, y down (docs/physics.md); positions rail frame, metres, y up"
+            .into(),
     );
     let stopped_at = (sol.final_time < duration - 1e-12).then_some(sol.final_time);
     if let Some(t) = stopped_at {

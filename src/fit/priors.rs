@@ -28,7 +28,7 @@ pub struct Prior {
 }
 
 /// Default standard deviation of a rod length measured with a ruler (m): 0.5 mm divisions,
-/// and the pivot axis and the bob's centre are not marked (RIGS.md: 0.5-1 mm).
+/// and the pivot axis and the bob's centre are not marked (0.5-1 mm between them).
 pub const DEFAULT_ROD_LENGTH_SD: f64 = 1e-3;
 /// Default relative standard deviation of the slider's mass: a kitchen scale's 1-2 % of a
 /// 50-100 g part, and screws, bearings or a pivot pin weighed apart or forgotten (2-10 %).
@@ -217,7 +217,7 @@ pub struct Plausible {
 }
 
 /// Plausible rail tilt (rad): 0.6 deg, 10 mm/m, over three times an unlevelled table top's
-/// 1-3 mm/m; a 1 deg tilt is visible by eye (RIGS.md, "The rail").
+/// 1-3 mm/m; a 1 deg tilt is visible by eye (docs/fit.md, "The nuisances' plausible ranges").
 pub const TILT_BOUND: f64 = 0.6 * std::f64::consts::PI / 180.0;
 /// Plausible camera scale error: 2 % (a scale from a ruler in view or the rod is good to
 /// 0.1-0.3 %; a pixel scale typed from a short reference, to a percent or two).

@@ -1,11 +1,11 @@
-//! Contact forces and accelerations of both models (PHYSICS.md, "Equations of motion").
+//! Contact forces and accelerations of both models (docs/physics.md, "Equations of motion").
 //!
 //! All functions are generic over [`Scalar`] so that the same formulas serve the simulator in
 //! `f64` and the fit in dual numbers.
 
 use super::{sign, Mode, Rig, RigConstants, Scalar, State, THETA, THETA_DOT, X, X_DOT};
 
-/// The shorthands D, a, b, c, Q and A of PHYSICS.md at one (theta, theta'), with sin and cos
+/// The shorthands D, a, b, c, Q and A of docs/physics.md at one (theta, theta'), with sin and cos
 /// kept because every acceleration needs them again. With tilt and pivot damping they are the
 /// generalised forms of "Real rigs"; on the ideal rig they reduce to the paper's.
 #[derive(Debug, Clone, Copy)]
@@ -371,7 +371,7 @@ impl<T: Scalar> Rig<T> {
 /// E = 1/2 (m1 + m2) x'^2 - m2 l x' w sin(theta) + 1/2 m2 l^2 w^2 - (m1 + m2) g_x x
 /// − m2 g_x l cos(theta) − m2 g_y l sin(theta), zero at rest at x = 0 with the rod
 /// horizontal on a level rail; dE/dt = F x' - c_p w^2. On a rigid pendulum's equivalent rig
-/// this is the rigid body's energy (PHYSICS.md, "Rigid pendulum": m_e L = m_p d, m_e L^2 = J).
+/// this is the rigid body's energy (docs/physics.md, "The rigid pendulum": m_e L = m_p d, m_e L^2 = J).
 pub fn energy<T: Scalar>(rig: &Rig<T>, y: &State<T>) -> T {
     let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);
     let (gx, gy) = rig.gravity_components();

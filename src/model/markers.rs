@@ -1,5 +1,5 @@
 //! What a camera sees: marker positions in the rail frame (metres, x along the rail, y up),
-//! for ideal markers ([`markers`]) and through the observation model of PHYSICS.md ("What a
+//! for ideal markers ([`markers`]) and through the observation model of docs/physics.md ("What a
 //! camera adds": marker offsets, camera scale, a lag between the markers; [`Camera`]).
 
 use super::{Mode, Rig, Scalar, State, THETA, THETA_DOT, X, X_DOT};
@@ -80,7 +80,7 @@ impl Camera<f64> {
 }
 
 /// Marker positions `[slider_x, slider_y, bob_x, bob_y]` (rail frame, y up) as `camera` sees
-/// the rig in `mode` at state `y` (PHYSICS.md, "What a camera adds"). A lag is applied to the
+/// the rig in `mode` at state `y` (docs/physics.md, "What a camera sees"). A lag is applied to the
 /// bob by a second-order Taylor step back along the motion (lags are milliseconds, so the
 /// third-order term is far below any camera's noise).
 pub fn observed_markers<T: Scalar>(

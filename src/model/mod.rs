@@ -1,5 +1,5 @@
 //! The rig and its physics: parameters, modes, contact forces and the regions where each
-//! model holds. Every formula of `../shared/PHYSICS.md` lives here once; the integrator, the
+//! model holds. Every formula of `docs/physics.md` lives here once; the integrator, the
 //! fit, the planner and the region analysis all call these functions.
 
 pub mod dual;

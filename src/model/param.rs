@@ -15,7 +15,7 @@ pub enum Param {
     MuStatic,
     /// Initial slider position (m).
     X,
-    /// Initial rod angle (rad, PHYSICS.md convention).
+    /// Initial rod angle (rad, docs/physics.md convention).
     Theta,
     /// Initial slider velocity (m/s).
     XDot,
@@ -25,7 +25,7 @@ pub enum Param {
     /// moves with it in proportion (unless [`Param::PendulumLength`] is free).
     RodLength,
     /// Equivalent length L of a rigid pendulum (m): the dynamics' rod, the marker staying at
-    /// the rod length (PHYSICS.md, "Rigid pendulum").
+    /// the rod length (docs/physics.md, "The rigid pendulum").
     PendulumLength,
     /// Equivalent mass ratio r' = (m1 + m_p - m_e) / m_e of a rigid pendulum, with the total
     /// mass held (the motion depends on the masses through this ratio alone).

@@ -1,4 +1,4 @@
-//! The stuck pendulum in closed form through Jacobi's elliptic functions (PHYSICS.md,
+//! The stuck pendulum in closed form through Jacobi's elliptic functions (docs/physics.md,
 //! "Pendulum model"): a reference independent of the integrator, and what the simulator uses
 //! for a stick phase proven to last (nothing to integrate).
 
@@ -44,7 +44,7 @@ pub fn jacobi_sn_cn_dn(u: f64, k: f64) -> (f64, f64, f64) {
     (sn, cn, (1.0 - k * k * sn * sn).sqrt())
 }
 
-/// The stuck pendulum (slider held, PHYSICS.md "Pendulum model") released from rest at
+/// The stuck pendulum (slider held, docs/physics.md "Pendulum (stuck) mode") released from rest at
 /// amplitude `amplitude` (rad from hanging, below pi): the exact state (x = 0, theta, 0, w)
 /// at time `t`, with theta = pi/2 - phi and sin(phi/2) = k sn(K - w0 t, k), k = sin(A/2).
 pub fn stuck_pendulum(rig: &Rig<f64>, amplitude: f64, t: f64) -> [f64; 4] {

@@ -1,5 +1,5 @@
 //! Where each model holds: the critical friction mu*, its angle theta*, the paradox band where
-//! the sliding equation has two solutions or none (PHYSICS.md, "The Painleve paradox"), and the
+//! the sliding equation has two solutions or none (docs/physics.md, "The Painlevé paradox"), and the
 //! regions of both models in the (theta, theta') plane.
 //!
 //! At fixed theta the shorthands b, c and Q are quadratic in w (affine in w^2 without pivot
@@ -264,7 +264,7 @@ pub fn in_paradox_band(rig: &Rig<f64>, theta: f64) -> bool {
 }
 
 /// Number of solutions (0, 1 or 2) of the sliding equation at (theta, w) sliding in
-/// direction `s` (+1 or -1) as x' -> 0 (friction mu(0)), by the sign rule of PHYSICS.md: one
+/// direction `s` (+1 or -1) as x' -> 0 (friction mu(0)), by the sign rule of docs/physics.md: one
 /// outside the paradox band; inside it two when sign(Q) = sign(s a) and none when the signs
 /// are opposite. On the curves themselves (band edge, Q = 0) the count is the limit from the
 /// side where the margin is positive (band edge: one) or where Q > 0 (Q = 0, with
@@ -491,7 +491,7 @@ pub fn q_zero_curve(rig: &Rig<f64>, window: &PlaneWindow) -> Vec<Curve> {
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct RegionSummary {
     /// Mass ratio r = m1 / m2 of the point rig the dynamics use: for a rigid pendulum the
-    /// equivalent r' = (m1 + m_p - m_e) / m_e (PHYSICS.md, "Rigid pendulum").
+    /// equivalent r' = (m1 + m_p - m_e) / m_e (docs/physics.md, "The rigid pendulum").
     pub mass_ratio: f64,
     /// The rig's kinetic friction (the sliding model's mu).
     pub mu_kinetic: f64,

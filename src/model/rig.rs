@@ -1,11 +1,10 @@
 //! Rig parameters (masses, rod, gravity, friction) and their validation, and the rigid
-//! pendulum's equivalent point rig (PHYSICS.md, "Rigid pendulum"), computed here once.
+//! pendulum's equivalent point rig (docs/physics.md, "The rigid pendulum"), computed here once.
 
 use super::Scalar;
 use thiserror::Error;
 
-/// The load law's exponents a rig may have: polymer contacts show 0.7-0.95 (RIGS.md, "The
-/// rail"); the range leaves room either side without letting |N|^n overflow.
+/// The load law's exponents a rig may have: polymer contacts show 0.7-0.95; the range leaves room either side without letting |N|^n overflow.
 pub const LOAD_EXPONENT_MIN: f64 = 0.3;
 /// See [`LOAD_EXPONENT_MIN`].
 pub const LOAD_EXPONENT_MAX: f64 = 2.0;
@@ -34,7 +33,7 @@ pub struct Rig<T> {
     pub mu_kinetic: T,
     /// Static friction coefficient mu_s >= mu_k (the threshold for leaving stick).
     pub mu_static: T,
-    /// Rail tilt alpha (rad); +x runs downhill for alpha > 0 (PHYSICS.md, "Real rigs").
+    /// Rail tilt alpha (rad); +x runs downhill for alpha > 0 (docs/physics.md, "Real rigs").
     pub rail_tilt: T,
     /// Viscous torque coefficient c_p at the pivot (N m s): a torque -c_p theta' on the rod.
     pub pivot_damping: T,
@@ -116,7 +115,7 @@ impl FrictionLaw {
     }
 }
 
-/// The swinging part of a rig as one rigid body hinged at the slider (PHYSICS.md, "Rigid
+/// The swinging part of a rig as one rigid body hinged at the slider (docs/physics.md, "Rigid
 /// pendulum"): what a rig file describes when the rod has mass or the bob has size. Only
 /// [`Rig::with_rigid_pendulum`] turns it into dynamics, through the equivalent point rig.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -349,7 +348,7 @@ pub enum RigError {
         /// The offending value.
         value: f64,
     },
-    /// A value of a rigid pendulum's equivalent point rig (PHYSICS.md, "Rigid pendulum") that
+    /// A value of a rigid pendulum's equivalent point rig (docs/physics.md, "The rigid pendulum") that
     /// is not finite and positive: it is computed from several keys, which the message names,
     /// so no single key is blamed for it.
     #[error("the pendulum's equivalent {what} (computed from rig.slider_mass and the pendulum's keys: bob_mass, rod_mass, bob_radius or pendulum_mass, pendulum_com, pendulum_inertia) must be a finite positive number, got {value}")]
@@ -488,7 +487,7 @@ impl Rig<f64> {
         }
     }
 
-    /// The same rig with the rigid pendulum `p` (PHYSICS.md, "Rigid pendulum"): the dynamics
+    /// The same rig with the rigid pendulum `p` (docs/physics.md, "The rigid pendulum"): the dynamics
     /// take the equivalent point rig (slider m1 + m_p - m_e, bob m_e, rod L), computed here and
     /// nowhere else, and the bob's marker stays at the bob's centre, `p.marker_length`. Its
     /// energy is the rigid body's (m_e L = m_p d, m_e L^2 = J).
@@ -734,7 +733,7 @@ impl<T: Scalar> Rig<T> {
     }
 
     /// Mass ratio r = m1 / m2 that sets the critical friction: for a rigid pendulum the
-    /// equivalent r' = (m1 + m_p - m_e) / m_e (PHYSICS.md, "Rigid pendulum").
+    /// equivalent r' = (m1 + m_p - m_e) / m_e (docs/physics.md, "The rigid pendulum").
     pub fn mass_ratio(&self) -> T {
         self.slider_mass / self.bob_mass
     }

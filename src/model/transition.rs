@@ -1,4 +1,4 @@
-//! Which motion follows a state with the slider at rest (PHYSICS.md, "Transitions"): at t = 0,
+//! Which motion follows a state with the slider at rest (docs/physics.md, "Transitions between the modes"): at t = 0,
 //! after a slide stops, and (by the loop) when a stick ends.
 
 use super::{sign, Direction, Mode, Rig, Shorthands, State};

@@ -77,7 +77,7 @@ pub struct ReleaseSpec {
     /// Initial slider position (m); default 0.
     #[serde(default)]
     pub x: f64,
-    /// Range of the initial angle (degrees, PHYSICS.md convention: 90 hangs down, 0 is the rod
+    /// Range of the initial angle (degrees, docs/physics.md convention: 90 hangs down, 0 is the rod
     /// horizontal with the bob on the +x side).
     pub theta_deg: [f64; 2],
     /// Range of the initial angular velocity (rad/s): a push. Default `[0, 0]`.

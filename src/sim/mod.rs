@@ -178,7 +178,7 @@ impl EventKind {
     }
 }
 
-/// An impulsive stop of the slider (PHYSICS.md, tangential impact) taking x' from
+/// An impulsive stop of the slider (docs/physics.md, tangential impact) taking x' from
 /// `x_dot_before` to 0 in no time.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Impulse {

@@ -1,4 +1,4 @@
-//! `appell fit` as a user runs it: the shared example recordings (mu = 0.12, FORMATS.md) in
+//! `appell fit` as a user runs it: the shared example recordings (mu = 0.12, docs/formats.md) in
 //! every encoding, a directory of recordings, a figure, and bad input.
 
 use std::process::Command;

@@ -202,3 +202,102 @@ fn the_checks_find_what_they_look_for() {
         PathBuf::from("/r/tests/data/README.md")
     );
 }
+
+/// Folders the repository-wide check does not read: build output, version control, and the
+/// fuzzer's corpus and its own build (outside the workspace).
+const NOT_READ: [&str; 5] = [
+    "target",
+    ".git",
+    "fuzz/target",
+    "fuzz/corpus",
+    "fuzz/artifacts",
+];
+
+/// Words ending in `.md` that name no file: a Python attribute (`args.md`, the sweep's
+/// `--md` option) and a document name a test gives its in-memory text.
+const NOT_FILES: [&str; 2] = ["args.md", "d.md"];
+
+/// Every text file of the repository (valid UTF-8, outside [`NOT_READ`]), relative to its root.
+fn text_files(dir: &Path, out: &mut Vec<(String, String)>) {
+    let root = root();
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        let rel = path
+            .strip_prefix(&root)
+            .unwrap()
+            .to_string_lossy()
+            .into_owned();
+        if NOT_READ.contains(&rel.as_str()) {
+            continue;
+        }
+        if path.is_dir() {
+            text_files(&path, out);
+        } else if let Ok(text) = std::fs::read_to_string(&path) {
+            out.push((rel, text));
+        }
+    }
+}
+
+/// The `NAME.md` words of `text` not inside a path (no `/`, `.` or word character before them).
+fn markdown_names(text: &str) -> Vec<&str> {
+    let bytes = text.as_bytes();
+    let word = |b: u8| b.is_ascii_alphanumeric() || b == b'_' || b == b'-';
+    let mut out = Vec::new();
+    for (at, _) in text.match_indices(".md") {
+        let end = at + 3;
+        if bytes.get(end).is_some_and(|&b| word(b)) {
+            continue;
+        }
+        let mut start = at;
+        while start > 0 && word(bytes[start - 1]) {
+            start -= 1;
+        }
+        let before = start.checked_sub(1).map(|i| bytes[i]);
+        if start < at && !before.is_some_and(|b| word(b) || b == b'/' || b == b'.') {
+            out.push(&text[start..end]);
+        }
+    }
+    out
+}
+
+/// Users have the repository alone: no tracked text names a Markdown file the repository lacks
+/// (the project's shared notes stay beside a developer's checkout: the repository's own are
+/// docs/physics.md and docs/formats.md), and only docs/development.md and this check mention
+/// `../shared`.
+#[test]
+fn no_text_names_a_file_the_repository_lacks() {
+    let mut files = Vec::new();
+    text_files(&root(), &mut files);
+    assert!(files.len() > 300, "{} text files", files.len());
+    let names: std::collections::BTreeSet<String> = files
+        .iter()
+        .filter(|(rel, _)| rel.ends_with(".md"))
+        .map(|(rel, _)| rel.rsplit('/').next().unwrap().to_owned())
+        .collect();
+    let mut problems = Vec::new();
+    // This file names what it looks for.
+    let this = "tests/it/doc_links.rs";
+    for (rel, text) in files.iter().filter(|(rel, _)| rel != this) {
+        for name in markdown_names(text) {
+            if !names.contains(name) && !NOT_FILES.contains(&name) {
+                problems.push(format!(
+                    "{rel}: names {name}, which the repository does not hold"
+                ));
+            }
+        }
+        if rel != SHARED_ALLOWED && text.contains("../shared") {
+            problems.push(format!(
+                "{rel}: mentions ../shared, which is not part of the repository"
+            ));
+        }
+    }
+    problems.sort();
+    problems.dedup();
+    assert!(problems.is_empty(), "{}", problems.join("\n"));
+    // The check finds what it looks for.
+    assert_eq!(
+        markdown_names("see PHYSICS.md, docs/physics.md"),
+        ["PHYSICS.md"]
+    );
+    assert!(markdown_names("x.mdx and a.md5").is_empty());
+}

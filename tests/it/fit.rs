@@ -53,7 +53,7 @@ struct Case {
 
 fn cases() -> Vec<Case> {
     vec![
-        // The example recordings' rig (FORMATS.md): unequal masses, mu = 0.12.
+        // The example recordings' rig (docs/formats.md): unequal masses, mu = 0.12.
         Case {
             rig: Rig::new(0.5, 0.2, 0.3, 9.81, 0.12, None).unwrap(),
             y0: [0.0, FRAC_PI_2 - 0.9, 0.0, 0.0],

@@ -10,7 +10,7 @@ use appell::fit::{fit, FitReport, FitSettings, Nuisance, Observations};
 use appell::model::{observed_markers, Camera, Rig, State};
 use appell::sim::{simulate, Options, Request};
 
-/// The shared example's rig (FORMATS.md): m1 = 0.5, m2 = 0.2, l = 0.3, mu = 0.12.
+/// The shared example's rig (docs/formats.md): m1 = 0.5, m2 = 0.2, l = 0.3, mu = 0.12.
 pub(crate) fn example_rig(mu: f64) -> Rig<f64> {
     Rig::new(0.5, 0.2, 0.3, 9.81, mu, None).unwrap()
 }

@@ -34,8 +34,8 @@ pub fn elliptic_k(k: f64) -> f64 {
 }
 
 /// The sliding-rod model written independently of the library: the generalised equations of
-/// motion (PHYSICS.md, "Real rigs") as a 3x3 linear system in (x'', theta'', N), written
-/// from PHYSICS.md without the library's shorthands:
+/// motion (docs/physics.md, "Real rigs") as a 3x3 linear system in (x'', theta'', N), written
+/// from docs/physics.md without the library's shorthands:
 ///   (m1 + m2) x'' - m2 l (sin th th'' + cos th w^2) = F + (m1 + m2) g_x
 ///   l th'' - sin th x'' = g_y cos th - g_x sin th - c_p w / (m2 l)
 ///   N = m2 l (cos th th'' - sin th w^2) - (m1 + m2) g_y
@@ -260,7 +260,7 @@ pub fn svg_text(svg: &str) -> String {
     out.join(" ")
 }
 
-/// The energy of PHYSICS.md with the tilted potential, written out here from the kinetic and
+/// The energy of docs/physics.md with the tilted potential, written out here from the kinetic and
 /// potential energies of slider and bob (not the library's `energy`).
 pub fn energy_oracle(rig: &Rig<f64>, y: &State<f64>) -> f64 {
     let (m1, m2, l) = (rig.slider_mass, rig.bob_mass, rig.rod_length);

@@ -50,7 +50,7 @@ fn with_threshold(thr: f64) -> Options {
     }
 }
 
-/// The tangential impact of PHYSICS.md takes exactly D x'^2 / 2 out of the rig, with
+/// The tangential impact of docs/physics.md takes exactly D x'^2 / 2 out of the rig, with
 /// impulses P_N = a dx', P_F = D dx', and is admissible (|P_F| <= mu |P_N|) inside the band.
 #[test]
 fn impulsive_stop_loses_d_xdot_squared_over_two() {

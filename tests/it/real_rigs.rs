@@ -1,4 +1,4 @@
-//! Real rigs (PHYSICS.md, "Real rigs"): rail tilt, pivot damping, viscous and Stribeck
+//! Real rigs (docs/physics.md, "Real rigs"): rail tilt, pivot damping, viscous and Stribeck
 //! friction, checked against oracles written here from the equations of motion, the energy
 //! balance with the tilted potential, closed forms and limits.
 
@@ -438,7 +438,7 @@ fn zero_terms_are_the_ideal_rig_bit_for_bit() {
         assert_eq!(event_times(&a, 100), event_times(&b, 100));
         assert_eq!(a.final_state, b.final_state);
     }
-    // The seed paper's slip time (PHYSICS.md transitions) is untouched.
+    // The seed paper's slip time (docs/physics.md transitions) is untouched.
     assert!((a.events[0].t - 0.086825360601).abs() < 1e-9);
 }
 

@@ -1,4 +1,4 @@
-//! Region analysis against PHYSICS.md: closed forms of mu*, theta* and the band, a numerical
+//! Region analysis against docs/physics.md: closed forms of mu*, theta* and the band, a numerical
 //! minimisation, brute-force root counting of the sliding equation, and simulated trajectories.
 
 use appell::model::regions::{
@@ -12,13 +12,13 @@ use appell::scene::RigFile;
 use std::f64::consts::PI;
 use std::path::Path;
 
-/// D and a of PHYSICS.md, written out here again so the tests do not trust the library.
+/// D and a of docs/physics.md, written out here again so the tests do not trust the library.
 fn d_a(rig: &Rig<f64>, theta: f64) -> (f64, f64) {
     let (s, c) = theta.sin_cos();
     (rig.slider_mass + rig.bob_mass * c * c, rig.bob_mass * s * c)
 }
 
-/// b and c of PHYSICS.md, written out independently.
+/// b and c of docs/physics.md, written out independently.
 fn b_c(rig: &Rig<f64>, theta: f64, w: f64) -> (f64, f64) {
     let (m1, m2, l, g) = (rig.slider_mass, rig.bob_mass, rig.rod_length, rig.gravity);
     let (s, c) = theta.sin_cos();
@@ -48,7 +48,7 @@ impl Rng {
 
 #[test]
 fn mu_critical_and_theta_critical_match_physics_md() {
-    // (r, mu*, theta* in degrees) as printed in PHYSICS.md.
+    // (r, mu*, theta* in degrees) as printed in docs/physics.md.
     for (r, mu, theta) in [
         (0.5, 1.732, 60.0),
         (2.0, 4.899, 50.8),
@@ -338,7 +338,7 @@ fn region_intervals_agree_with_pointwise_tests() {
 
 #[test]
 fn release_from_horizontal_stays_in_stick_region_exactly_when_mu_s_at_least_three_quarters() {
-    // PHYSICS.md: equal masses released from rest with the rod horizontal slip exactly when
+    // docs/physics.md: equal masses released from rest with the rod horizontal slip exactly when
     // mu_s < 0.75 (the ratio |c|/|b| along the pendulum motion peaks at 0.75).
     let stays = |mu: f64| {
         let rig = rig_with(0.1, 0.1, mu);

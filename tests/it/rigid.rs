@@ -1,4 +1,4 @@
-//! The rigid pendulum (PHYSICS.md, "Rigid pendulum") against physics the library does not
+//! The rigid pendulum (docs/physics.md, "The rigid pendulum") against physics the library does not
 //! compute: the rigid body's mass, centre of mass and inertia summed here from the rod and the
 //! sphere, Newton-Euler's forces and torque from the simulated accelerations, the conserved
 //! momentum, the energy with J, the impulse law from the pivot's angular momentum, the period of
@@ -57,7 +57,7 @@ fn rig_of(m1: f64, m2: f64, m_r: f64, radius: f64, l: f64, mu: f64) -> Rig<f64> 
     .expect("a valid rig")
 }
 
-/// The rigs of the tests: PHYSICS.md's example (paper rig, 20 g rod, 2 cm sphere) and a
+/// The rigs of the tests: docs/physics.md's example (paper rig, 20 g rod, 2 cm sphere) and a
 /// light slider under a heavy bob with a heavy rod.
 fn cases() -> Vec<(Body, Rig<f64>)> {
     [
@@ -78,7 +78,7 @@ fn request(times: Vec<f64>, work: bool) -> Request {
     }
 }
 
-/// PHYSICS.md's worked example, from the sums above: L = 0.29139 m, m_e = 0.11325 kg,
+/// docs/physics.md's worked example, from the sums above: L = 0.29139 m, m_e = 0.11325 kg,
 /// equivalent slider 0.10675 kg.
 #[test]
 fn the_worked_example_of_physics_md() {
@@ -628,7 +628,7 @@ fn a_failed_fit_exits_1_with_mu_null() {
     );
 }
 
-/// With a tilted rail and pivot damping the rigid body's energy (PHYSICS.md, "Rigid pendulum":
+/// With a tilted rail and pivot damping the rigid body's energy (docs/physics.md, "The rigid pendulum":
 /// E = 1/2 (m1 + m_p) x'^2 - m_p d x' w sin + 1/2 J w^2 - (m1 + m_p) g_x x - m_p g_x d cos
 /// - m_p g_y d sin) changes by the friction work plus the damping work.
 #[test]

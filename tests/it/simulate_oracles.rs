@@ -302,8 +302,8 @@ fn event_times_converge_with_tolerance() {
         );
         assert!(errors[3] < 1e-10, "{method:?}: {errors:?}");
     }
-    // The shared example recordings' documented stick onsets (FORMATS.md): 0.3186, 0.8994,
-    // 1.4045 and 1.9210 s.
+    // The example recording's stick onsets as its independent generator documented them (rig in
+    // docs/formats.md): 0.3186, 0.8994, 1.4045 and 1.9210 s.
     let doc_rig = Rig::new(0.5, 0.2, 0.3, 9.81, 0.12, None).unwrap();
     let sol = run(
         &doc_rig,
@@ -327,7 +327,7 @@ fn event_times_converge_with_tolerance() {
 }
 
 /// Above mu* the run goes on through the paradox and says what it did, by the sign rule of
-/// PHYSICS.md: a slide with no solution is stopped impulsively (with its impulses), a slide
+/// docs/physics.md: a slide with no solution is stopped impulsively (with its impulses), a slide
 /// with two takes the positive-denominator branch and runs on, also into the band.
 #[test]
 fn paradox_is_resolved_and_reported() {

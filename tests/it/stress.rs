@@ -64,7 +64,7 @@ fn stiff_sliding_near_critical_mu() {
     }
 }
 
-/// The stuck pendulum started at the bottom with angular velocity v (PHYSICS.md energy
+/// The stuck pendulum started at the bottom with angular velocity v (docs/physics.md energy
 /// integral l w^2 = l v^2 - 2 g (1 - sin theta)): the largest friction ratio |c| / |b| over
 /// the swing, and where it is reached (equal masses). Independent of the simulator.
 fn max_ratio_on_swing(rig: &Rig<f64>, v: f64) -> (f64, f64) {

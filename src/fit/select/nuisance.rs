@@ -8,7 +8,7 @@ use crate::model::FrictionLaw;
 /// ([`Nuisance::carries_friction_alone`]) is pinned at its bound 0: no coefficient was measured.
 pub const MU_PINNED: f64 = 1e-3;
 
-/// A departure from the ideal rig or camera that a candidate model adds (PHYSICS.md, "Real
+/// A departure from the ideal rig or camera that a candidate model adds (docs/physics.md, "Real
 /// rigs" and "What a camera adds").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
 pub enum Nuisance {
@@ -38,7 +38,7 @@ pub enum Nuisance {
     /// A time lag between the two markers' tracks.
     Lag,
     /// A rigid pendulum (a rod with mass, a bob with size) whose build the rig file does not
-    /// give: its equivalent length and mass ratio free (PHYSICS.md, "Rigid pendulum").
+    /// give: its equivalent length and mass ratio free (docs/physics.md, "The rigid pendulum").
     RigidPendulum,
 }
 

@@ -1,4 +1,4 @@
-//! Deciding the next mode: the transition rules of PHYSICS.md applied at a located guard
+//! Deciding the next mode: the transition rules of docs/physics.md applied at a located guard
 //! crossing (or at the start), the impulsive stop that ends an impossible slide, and the
 //! event recorded for the decision.
 
@@ -20,7 +20,7 @@ pub(super) enum Reset {
     None,
     /// x' is set to exactly zero (it crossed zero at the event).
     ZeroVelocity,
-    /// An impulsive stop: x' -> 0 and theta' jumps (PHYSICS.md, tangential impact).
+    /// An impulsive stop: x' -> 0 and theta' jumps (docs/physics.md, tangential impact).
     Impulsive,
 }
 
@@ -45,7 +45,7 @@ impl Switch {
     }
 }
 
-/// The impulsive stop of PHYSICS.md (tangential impact at the bilateral contact): x' -> 0,
+/// The impulsive stop of docs/physics.md (tangential impact at the bilateral contact): x' -> 0,
 /// theta' jumps by sin(theta) (0 - x') / l. Returns the new state and, in real parts, the
 /// normal impulse a dx', the friction impulse D dx' and the energy lost D x'^2 / 2.
 pub fn impulsive_stop<T: Scalar>(rig: &Rig<T>, y: &[T]) -> (State<T>, Impulse) {
@@ -184,7 +184,7 @@ pub(super) fn from_rest(
     }
 }
 
-/// Apply the transition rules of PHYSICS.md at a located crossing of `guard`.
+/// Apply the transition rules of docs/physics.md at a located crossing of `guard`.
 pub(super) fn decide(
     rig: &Rig<f64>,
     rule: RestRule,

@@ -1,5 +1,5 @@
 //! Unit tests of the loop's steps, each against an oracle of its own: closed forms of
-//! PHYSICS.md (the slip angle of a released pendulum, the normal force's sign change, the
+//! docs/physics.md (the slip angle of a released pendulum, the normal force's sign change, the
 //! paradox band's edge, the impulsive stop), the jump condition of forward sensitivities
 //! written out, and synthetic guard curves whose roots are known.
 
@@ -190,7 +190,7 @@ fn guard_value(rig: &Rig<f64>, guard: Guard, y: &State<f64>, mode: Mode, sigma: 
 
 /// The slip angle of the paper's rig released from rest with the rod horizontal: with
 /// w^2 = 2 (g / l) sin(theta), |c| / |b| = 3 sin cos / (1 + 3 sin^2) = 3 tan / (1 + 4 tan^2)
-/// = mu, the smaller root of 4 mu tan^2 - 3 tan + mu = 0 (PHYSICS.md: the ratio peaks at
+/// = mu, the smaller root of 4 mu tan^2 - 3 tan + mu = 0 (docs/physics.md: the ratio peaks at
 /// 0.75, at tan = 1/2).
 fn slip_angle(mu: f64) -> f64 {
     ((3.0 - (9.0 - 16.0 * mu * mu).sqrt()) / (8.0 * mu)).atan()
@@ -325,7 +325,7 @@ fn the_stick_margin_crossing_slips_the_way_c_points() {
 
 #[test]
 fn a_sudden_stop_is_an_impulsive_stop_with_the_closed_form_jump() {
-    // PHYSICS.md, tangential impact: w+ = w- - sin(theta) x'- / l, energy lost D x'^2 / 2.
+    // docs/physics.md, tangential impact: w+ = w- - sin(theta) x'- / l, energy lost D x'^2 / 2.
     let rig = Rig::paper(3.0);
     let y = [0.0, 0.8, 0.05, -0.4];
     let d = decide_here(
