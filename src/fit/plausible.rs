@@ -48,10 +48,43 @@ pub fn check_rod_length(
     Err(SceneError::Invalid {
         path: rig_path.to_owned(),
         message: format!(
-            "rig.rod_length must be within {} % of the median slider-bob marker distance of {} ({median} m over {} frames), from {lo} to {hi} m: the rod runs from the pivot to the bob's centre, where its marker is, and a camera's scale and the markers' offsets explain a few percent, not more; got {rod:?}",
+            "rig.rod_length must be within {} % of the median slider-bob marker distance of {} ({} m over {} frames), from {} to {} m: the rod runs from the pivot to the bob's centre, where its marker is, and a camera's scale and the markers' offsets explain a few percent, not more; got {rod:?}{}",
             ROD_LENGTH_TOLERANCE * 100.0,
             sources.join(" + "),
+            significant(median),
             geometry.frames,
+            significant(lo),
+            significant(hi),
+            unit_slip(rod, median),
         ),
+    })
+}
+
+/// `v` to four significant digits: the median is a measurement, and the range's ends carry
+/// no more digits than it does (0.2008, not 0.20080000000000006).
+fn significant(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let decimals = (3 - v.abs().log10().floor() as i32).max(0) as usize;
+    format!("{v:.decimals$}")
+}
+
+/// A hint when `rod` is the markers' `median` in another unit: the rig file takes metres, and
+/// a rod typed in centimetres, millimetres or inches is the commonest slip.
+fn unit_slip(rod: f64, median: f64) -> String {
+    let ratio = rod / median;
+    [
+        ("centimetres", 100.0),
+        ("millimetres", 1000.0),
+        ("inches", 1.0 / 0.0254),
+    ]
+    .into_iter()
+    .find(|(_, f)| (ratio / f - 1.0).abs() < ROD_LENGTH_TOLERANCE)
+    .map_or(String::new(), |(unit, f)| {
+        format!(
+            " (a length in {unit}? the rig file takes metres: {} m)",
+            significant(rod / f)
+        )
     })
 }

@@ -213,3 +213,37 @@ fn convert_usage_names_inputs_then_the_output() {
     let out = appell(&["convert", csv.to_str().unwrap()]);
     assert_eq!(out.status.code(), Some(2), "one path is not enough");
 }
+
+/// A rod typed in centimetres (30 for the example's 0.30 m) is refused with exit code 2, the
+/// range at the precision the markers give it (no 0.20080000000000006), and the slip named.
+#[test]
+fn a_rod_length_in_centimetres_is_named_as_such() {
+    let d = scratch("rod-cm");
+    let text = std::fs::read_to_string(path("configs/rig_example.toml")).unwrap();
+    let rig = d.join("rig.toml");
+    std::fs::write(&rig, text.replace("rod_length = 0.30 ", "rod_length = 30 ")).unwrap();
+    let out = appell(&[
+        "fit",
+        &path("data/example_recording.mcap"),
+        "--rig",
+        &rig.display().to_string(),
+    ]);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("a length in centimetres? the rig file takes metres: 0.3000 m"),
+        "{err}"
+    );
+    // Every number of the range at four significant digits.
+    let range = err
+        .split("from ")
+        .nth(1)
+        .unwrap()
+        .split(" m:")
+        .next()
+        .unwrap();
+    for v in range.split(" to ") {
+        let digits = v.trim_start_matches("0.").len();
+        assert!(digits <= 4 && v.parse::<f64>().is_ok(), "{range}: {err}");
+    }
+}
