@@ -175,11 +175,15 @@ pub fn write_atomic(
         .prefix(&prefix)
         .suffix(".tmp")
         .make_in(&dir, |p| {
+            // Created and listed under the list's lock: the signal handler takes the lock
+            // first, so a signal between the creation and the listing (a killed `synth` left
+            // its temporary once in seven loaded test runs) waits for the listing and removes it.
+            let mut list = TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
             let f = std::fs::OpenOptions::new()
                 .write(true)
                 .create_new(true)
                 .open(p)?;
-            register(p, true);
+            list.push(p.to_owned());
             Ok(f)
         })?;
     let tmp_path = tmp.path().to_owned();
@@ -245,9 +249,12 @@ impl TempDir {
     /// A new directory named `PREFIX` and random characters.
     pub fn new(prefix: &str) -> std::io::Result<TempDir> {
         install_handler_if_wanted();
+        // Created and listed under the list's lock, as a file in [`write_atomic`].
+        let mut list = TEMPORARIES.lock().unwrap_or_else(|e| e.into_inner());
         let dir = tempfile::Builder::new().prefix(prefix).tempdir()?;
         let path = dir.path().to_owned();
-        register(&path, true);
+        list.push(path.clone());
+        drop(list);
         Ok(TempDir {
             dir: Some(dir),
             path,
