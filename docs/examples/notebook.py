@@ -126,8 +126,8 @@ dlc.friction_plot(OUTDIR / "friction_dlc.svg")
 figures += [OUTDIR / "fit_dlc.svg", OUTDIR / "friction_dlc.svg"]
 
 # %% [markdown]
-# In Jupyter, `dlc` alone in a cell shows the answer, the parameters, the report (folded) and
-# the figure inline (run as a script, the cell below does nothing). `dlc.report()` is the
+# In Jupyter, `dlc` alone in a cell shows the answer, the parameters with their units, the
+# report (folded) and the figure inline (run as a script, the cell below does nothing). `dlc.report()` is the
 # text `appell fit` prints; `dlc.to_dict()` is its `--json`.
 
 # %%
@@ -148,7 +148,7 @@ CAMPAIGN_RIG = "data/campaign/rig_measured.toml"
 joint = appell.fit_joint(CAMPAIGN, CAMPAIGN_RIG)
 print(joint.answer)
 print(joint.to_dict()["sentence"])
-shared = joint.to_dict()["shared"]
+shared = joint.parameters  # the values every release shares, mu_kinetic first
 show(
     [[name, p["value"], p["stderr"], *p["ci95"], p.get("unit", "")] for name, p in shared.items()],
     ["shared parameter", "value", "stderr", "95 % low", "95 % high", "unit"],
@@ -171,7 +171,7 @@ show(
 )
 joint.plot(OUTDIR / "joint_campaign.svg")
 figures.append(OUTDIR / "joint_campaign.svg")
-joint  # in Jupyter: the answer, the report and the figure
+joint  # in Jupyter: the answer, the shared values and the releases as tables, the report, the figure
 
 # %% [markdown]
 # "own mu" is each release's mu inside the joint fit (the tilt and pendulum shared), "z" how

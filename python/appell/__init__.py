@@ -20,6 +20,7 @@ import html
 import json
 import math
 import os
+import warnings
 from typing import Any, Iterable, Mapping, Optional, Sequence, Union
 
 import numpy as np
@@ -46,6 +47,7 @@ __all__ = [
     "regions",
     "READ_OPTIONS",
     "FIT_OPTIONS",
+    "NO_UNIT",
 ]
 
 __version__ = "0.1.0"
@@ -205,7 +207,17 @@ def read_recording(path: Union[PathLike, Sequence[PathLike]], **options) -> Reco
     HDF5, Tracker, Motive, Qualisys, Kinovea...). A Tracker pair is a list of two files.
     Options: ``READ_OPTIONS`` (``fps=``, ``scale=``, ``rod_length=``, ``rail_frame=``...)."""
     read, _ = _split(options, "read_recording", fit_ok=False)
-    return Recording._from_rust(_appell.read_recording_py(_paths(path), read))
+    d = _appell.read_recording_py(_paths(path), read)
+    _warn_fps([d.get("fps_note")])
+    return Recording._from_rust(d)
+
+
+def _warn_fps(notes: Iterable[Optional[str]]) -> None:
+    """Say that ``fps`` was given to files with their own frame times, which were read instead
+    (the reader ignores it there): a ``UserWarning`` per file, as a note is printed per file."""
+    for note in notes:
+        if note:
+            warnings.warn(note, UserWarning, stacklevel=3)
 
 
 class Inspection:
@@ -284,6 +296,9 @@ def _rig(rig: Union[Rig, PathLike]) -> Rig:
 class _Result:
     """What fit results share: mu, the JSON, the text report, the figure."""
 
+    #: What the figure shows, for the notebook's image.
+    _figure_alt = "the fit's figure"
+
     def __init__(self, inner):
         self._inner = inner
         self._parsed = None
@@ -336,8 +351,14 @@ class _Result:
         """Write the figure, SVG or PNG by the extension (never over an input)."""
         self._inner.plot(os.fspath(path))
 
+    @property
+    def parameters(self) -> dict:
+        """Every fitted value: name to ``value``, ``stderr``, ``ci95``, ``interval`` (how it
+        was computed) and ``unit``."""
+        return {}
+
     def _table_rows(self) -> list:
-        return []
+        return _parameter_rows(self.parameters)
 
     def _repr_html_(self) -> str:
         rows = "".join(
@@ -345,13 +366,13 @@ class _Result:
             for r in self._table_rows()
         )
         table = (
-            "<table><tr><th>parameter</th><th>value</th><th>stderr</th><th>95 %</th></tr>"
-            f"{rows}</table>"
+            "<table><tr><th>parameter</th><th>value</th><th>stderr</th><th>95 %</th>"
+            f"<th>unit</th></tr>{rows}</table>"
             if rows
             else ""
         )
         try:
-            figure = _svg_img(self.svg())
+            figure = _svg_img(self.svg(), self._figure_alt)
         except (RuntimeError, ValueError) as e:
             figure = f"<p>(no figure: {html.escape(str(e))})</p>"
         return (
@@ -361,11 +382,14 @@ class _Result:
         )
 
 
-def _svg_img(svg: str) -> str:
+def _svg_img(svg: str, alt: str = "the figure") -> str:
     """An SVG figure as an image that shrinks to the notebook's width (an inline <svg> keeps
-    its 1000 px and is cut off)."""
+    its 1000 px and is cut off), with `alt` saying what it shows."""
     data = base64.b64encode(svg.encode()).decode()
-    return f"<img style='max-width:100%;height:auto' src='data:image/svg+xml;base64,{data}'/>"
+    return (
+        f"<img alt='{html.escape(alt, quote=True)}' style='max-width:100%;height:auto' "
+        f"src='data:image/svg+xml;base64,{data}'/>"
+    )
 
 
 def _interval(entry: Mapping[str, Any]):
@@ -373,11 +397,44 @@ def _interval(entry: Mapping[str, Any]):
     return (ci[0], ci[1])
 
 
+#: How a parameter without a unit (mu, a mass ratio) shows in the tables' unit column.
+NO_UNIT = "dimensionless"
+
+
+def _digits(stderr: Any):
+    """How to print a value and its standard error: to two digits of the error, as the
+    command's tables do (six significant digits when there is no error)."""
+    if isinstance(stderr, (int, float)) and math.isfinite(stderr) and stderr > 0:
+        d = max(0, 1 - math.floor(math.log10(stderr)))
+        return lambda v: f"{v:.{d}f}"
+    return lambda v: f"{v:.6g}"
+
+
+def _parameter_rows(parameters: Mapping[str, Any]) -> list:
+    """Table rows (name, value, stderr, 95 % interval, unit) of fitted values, each to the
+    digits its standard error gives."""
+    rows = []
+    for name, p in parameters.items():
+        if not (isinstance(p, dict) and "value" in p):
+            continue
+        lo, hi = _interval(p)
+        se = p.get("stderr")
+        fmt = _digits(se)
+        unit = p.get("unit")
+        rows.append(
+            [name, fmt(p["value"]), fmt(se) if se is not None else "",
+             f"{fmt(lo)} to {fmt(hi)}" if lo is not None else "",
+             unit if unit else NO_UNIT]
+        )
+    return rows
+
+
 class FitResult(_Result):
     """One recording's fit. ``mu``, ``interval``, ``stderr``; ``parameters`` (every fitted
     value), ``models`` (the models compared), ``to_dict()`` (``appell fit --json``),
     ``report()`` (its text), ``answer``, ``svg()``/``plot(path)``/``friction_plot(path)``."""
 
+    _figure_alt = "the fit: data and model, residuals and the slides' mu over time"
 
     @property
     def parts(self) -> dict:
@@ -386,7 +443,7 @@ class FitResult(_Result):
 
     @property
     def parameters(self) -> dict:
-        """Every fitted parameter: value, stderr, ci95, interval kind."""
+        """Every fitted parameter: value, stderr, ci95, interval kind, unit."""
         out = {}
         for name in ("mu_kinetic", "mu_static"):
             if isinstance(self._dict.get(name), dict):
@@ -417,35 +474,63 @@ class FitResult(_Result):
         """Write the friction figure: each slide's |F|/|N| against its speed, with the laws."""
         self._inner.friction_plot(os.fspath(path))
 
-    def _table_rows(self) -> list:
-        rows = []
-        for name, p in self.parameters.items():
-            if isinstance(p, dict) and "value" in p:
-                lo, hi = _interval(p)
-                se = p.get("stderr")
-                # Digits from the error, as the command's table: two of the standard error.
-                if isinstance(se, (int, float)) and math.isfinite(se) and se > 0:
-                    d = max(0, 1 - math.floor(math.log10(se)))
-                    fmt = lambda v: f"{v:.{d}f}"  # noqa: E731
-                else:
-                    fmt = lambda v: f"{v:.6g}"  # noqa: E731
-                rows.append(
-                    [name, fmt(p["value"]), fmt(se) if se is not None else "",
-                     f"{fmt(lo)} to {fmt(hi)}" if lo is not None else ""]
-                )
-        return rows
-
     def __repr__(self) -> str:
         return f"<FitResult {self.answer}>"
 
 
 class JointResult(_Result):
-    """Releases of one rig fitted together (``appell fit --joint``)."""
+    """Releases of one rig fitted together (``appell fit --joint``). ``mu``, ``interval``,
+    ``stderr``; ``parameters`` (the values every release shares), ``releases`` (one row per
+    release), ``to_dict()`` (``appell fit --joint --json``), ``report()``, ``answer``,
+    ``svg()``/``plot(path)``. In Jupyter it shows the answer, the shared values and the
+    releases as tables, the report and the figure."""
 
+    _figure_alt = "each release's own mu with its 95 % bar, and the joint value"
 
     @property
     def failed(self) -> Optional[str]:
+        """Why the joint fit gave no value (None: it gave one)."""
         return self._inner.failed()
+
+    @property
+    def parameters(self) -> dict:
+        """The values every release shares (mu_kinetic first, the friction law's, the rail's
+        tilt, the pendulum's): value, stderr, ci95, interval kind, unit."""
+        shared = self._dict.get("shared") or {}
+        first = [k for k in ("mu_kinetic", "mu_static") if k in shared]
+        return {k: shared[k] for k in first + [k for k in shared if k not in first]}
+
+    def _release_rows(self) -> list:
+        rows = []
+        set_aside = self._dict.get("set_aside") or []
+        for r in self.releases + set_aside:
+            own = r.get("own_mu") or {}
+            z = r.get("z")
+            fmt = _digits(own.get("stderr"))
+            rows.append([
+                r.get("name", ""),
+                r.get("frames", ""),
+                f"{fmt(own['value'])} +- {fmt(own['stderr'])}" if "stderr" in own else "",
+                f"{z:.2f}" if isinstance(z, (int, float)) else "",
+                "set aside" if r in set_aside else "yes" if r.get("agrees") else "no",
+            ])
+        return rows
+
+    def _repr_html_(self) -> str:
+        page = super()._repr_html_()
+        rows = self._release_rows()
+        if not rows:
+            return page
+        body = "".join(
+            "<tr>" + "".join(f"<td>{html.escape(str(c))}</td>" for c in r) + "</tr>"
+            for r in rows
+        )
+        releases = (
+            "<table><tr><th>release</th><th>frames</th><th>own mu +- stderr</th>"
+            f"<th>z</th><th>agrees</th></tr>{body}</table>"
+        )
+        # After the shared table, before the report.
+        return page.replace("<details>", releases + "<details>", 1)
 
     @property
     def releases(self) -> list:
@@ -482,6 +567,7 @@ def fit(
         read, fit_opts = _split(options, "fit")
         inner = _appell.fit_py(_paths(recording), None, r.text, r.label, read, fit_opts, threads)
     result = FitResult(inner)
+    _warn_fps([inner.fps_note()])
     if plot is not None:
         result.plot(plot)
     if friction_plot is not None:
@@ -514,6 +600,7 @@ def fit_joint(
         threads,
     )
     result = JointResult(inner)
+    _warn_fps(inner.fps_notes())
     if plot is not None:
         result.plot(plot)
     return result
@@ -566,6 +653,8 @@ def simulate(scene: PathLike, *, frame_rate: Optional[float] = None) -> Simulati
 
 
 class _Figure:
+    #: What the figure shows, for the notebook's image.
+    _figure_alt = "the figure"
     _json: str
     _text: str
     _svg: str
@@ -580,11 +669,14 @@ class _Figure:
         return self._svg
 
     def _repr_html_(self) -> str:
-        return f"<div><pre>{html.escape(self._text)}</pre>{_svg_img(self._svg)}</div>"
+        figure = _svg_img(self._svg, self._figure_alt)
+        return f"<div><pre>{html.escape(self._text)}</pre>{figure}</div>"
 
 
 class Plan(_Figure):
     """Ranked releases that make the wanted transitions observable (``appell plan``)."""
+
+    _figure_alt = "the proposed releases in the (theta, theta') plane over the stick region"
 
     def __init__(self, parts):
         self._json, self._text, self._svg = parts
@@ -658,6 +750,8 @@ def _number(text: str):
 class Regions(_Figure):
     """The stick and sliding regions, the paradox band and phase portraits (``appell
     regions``)."""
+
+    _figure_alt = "the stick and sliding regions, the paradox band and phase portraits"
 
     def __init__(self, parts):
         self._json, self._text, self._svg = parts

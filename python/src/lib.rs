@@ -179,6 +179,51 @@ fn setup(rig_text: &str, rig_label: &str, fit: FitKw, scale: Option<f64>) -> PyR
     FitSetup::from_text(rig_text, Path::new(rig_label), &fit.args()?, scale).map_err(input)
 }
 
+/// `x` to four significant digits, without trailing zeros (1000, 29.97, 120).
+fn four_digits(x: f64) -> String {
+    let decimals = (3 - x.abs().log10().floor() as i32).clamp(0, 12) as usize;
+    let text = format!("{x:.decimals$}");
+    match text.contains('.') {
+        true => text.trim_end_matches('0').trim_end_matches('.').to_owned(),
+        false => text,
+    }
+}
+
+/// The note for a frame rate given to files that hold their own frame times: read with `fps`
+/// and without it, the same times, so `fps` changed nothing (the readers use it only for files
+/// of frame numbers, or, for Kinovea spreadsheets, to number the rows, which the comparison
+/// sees). `None` when no `fps` was given, when the files need it, or when it was used.
+fn fps_unused(paths: &[PathBuf], opts: &ReadOptions) -> Option<String> {
+    let fps = opts.fps?;
+    let own = read_recording(
+        paths,
+        &ReadOptions {
+            fps: None,
+            ..opts.clone()
+        },
+    )
+    .ok()?;
+    let given = read_recording(paths, opts).ok()?;
+    if own.times != given.times {
+        return None;
+    }
+    let mut steps: Vec<f64> = own.times.windows(2).map(|w| w[1] - w[0]).collect();
+    steps.sort_by(f64::total_cmp);
+    let rate = match steps.get(steps.len() / 2) {
+        Some(&step) if step > 0.0 => format!(", a median rate of {} Hz", four_digits(1.0 / step)),
+        _ => String::new(),
+    };
+    let files: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
+    let (files, hold) = match files.len() {
+        1 => (files[0].clone(), "holds"),
+        _ => (files.join(" and "), "hold"),
+    };
+    Some(format!(
+        "fps={fps} is not used: {files} {hold} its own frame times ({} frames{rate}), which are read instead; leave fps out for such files",
+        own.times.len()
+    ))
+}
+
 fn floats(bytes: &Bound<'_, PyBytes>, what: &str) -> PyResult<Vec<f64>> {
     let b = bytes.as_bytes();
     if b.len() % 8 != 0 {
@@ -268,7 +313,9 @@ fn read_recording_py<'py>(
     let rec = py
         .detach(|| read_recording(&paths, &opts))
         .map_err(|e| input(e.into()))?;
-    recording_dict(py, &rec)
+    let d = recording_dict(py, &rec)?;
+    d.set_item("fps_note", py.detach(|| fps_unused(&paths, &opts)))?;
+    Ok(d)
 }
 
 /// What a recording holds (`appell inspect`): its JSON and its text report.
@@ -293,6 +340,8 @@ struct Fit {
     rig_label: PathBuf,
     settings: FitSettings,
     notes: Vec<String>,
+    /// The note that `fps` was given to files with their own frame times (also in `notes`).
+    fps_note: Option<String>,
     seconds: f64,
 }
 
@@ -321,9 +370,15 @@ impl Fit {
         answer(&self.report)
     }
 
-    /// Notes the CLI prints on stderr (frame times joined).
+    /// Notes the CLI prints on stderr (frame times joined), and the `fps` note.
     fn notes(&self) -> Vec<String> {
         self.notes.clone()
+    }
+
+    /// That `fps` was given to files with their own frame times, which were read instead
+    /// (`None`: it was not given, or was used).
+    fn fps_note(&self) -> Option<String> {
+        self.fps_note.clone()
     }
 
     /// The fit figure (data, model, residuals, modes) as SVG text.
@@ -410,6 +465,10 @@ fn fit_py(
             .map_err(failure)?
         }
     };
+    let seconds = started.elapsed().as_secs_f64();
+    let mut notes = notes;
+    let fps_note = py.detach(|| fps_unused(&paths, &opts));
+    notes.extend(fps_note.iter().map(|n| format!("note: {n}")));
     Ok(Fit {
         report,
         obs,
@@ -417,7 +476,8 @@ fn fit_py(
         rig_label: setup.rig_path.clone(),
         settings: setup.settings,
         notes,
-        seconds: started.elapsed().as_secs_f64(),
+        fps_note,
+        seconds,
     })
 }
 
@@ -428,6 +488,8 @@ struct Joint {
     inputs: Vec<PathBuf>,
     rig_label: PathBuf,
     notes: Vec<String>,
+    /// The notes that `fps` was given to releases with their own frame times (also in `notes`).
+    fps_notes: Vec<String>,
 }
 
 #[pymethods]
@@ -452,6 +514,11 @@ impl Joint {
     /// Notes and left-out releases the CLI prints on stderr.
     fn notes(&self) -> Vec<String> {
         self.notes.clone()
+    }
+
+    /// That `fps` was given to releases with their own frame times, one note per release.
+    fn fps_notes(&self) -> Vec<String> {
+        self.fps_notes.clone()
     }
 
     /// Why the joint fit failed (`None`: it did not).
@@ -519,11 +586,15 @@ fn fit_joint_py(
         })?
         .map_err(failure)?;
     notes.extend(fit_notes);
+    let fps_notes: Vec<String> =
+        py.detach(|| paths.iter().filter_map(|r| fps_unused(r, &opts)).collect());
+    notes.extend(fps_notes.iter().map(|n| format!("note: {n}")));
     Ok(Joint {
         report,
         inputs: paths.into_iter().flatten().collect(),
         rig_label: setup.rig_path.clone(),
         notes,
+        fps_notes,
     })
 }
 

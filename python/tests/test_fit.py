@@ -135,3 +135,66 @@ def test_inspect_is_the_cli(cli_json, cli):
     assert code == 0 and ins.report() == out
     with pytest.raises(ValueError, match="nope.csv"):
         appell.inspect("nope.csv")
+
+
+def _html_table(page, first_header):
+    """The rows of the HTML table whose first header cell is `first_header`, as lists of cells."""
+    import re
+
+    for table in re.findall(r"<table>(.*?)</table>", page, flags=re.S):
+        rows = re.findall(r"<tr>(.*?)</tr>", table, flags=re.S)
+        cells = [re.findall(r"<t[hd]>(.*?)</t[hd]>", r, flags=re.S) for r in rows]
+        if cells and cells[0][0] == first_header:
+            return cells
+    raise AssertionError(f"no table headed {first_header!r}")
+
+
+def test_html_table_has_each_parameters_unit():
+    result = appell.fit(*EXAMPLE, no_profile=True)
+    rows = _html_table(result._repr_html_(), "parameter")
+    assert rows[0] == ["parameter", "value", "stderr", "95 %", "unit"]
+    by_name = {r[0]: r for r in rows[1:]}
+    # Every fitted value is a row, with the unit the JSON gives it (none: dimensionless).
+    values = {k: p for k, p in result.parameters.items() if "value" in p}
+    assert set(by_name) == set(values)
+    for name, p in values.items():
+        assert by_name[name][4] == (p.get("unit") or appell.NO_UNIT)
+    assert by_name["rod_length"][4] == "m" and by_name["theta"][4] == "rad"
+
+
+def test_joint_html_shows_the_shared_values_and_the_releases():
+    joint = appell.fit_joint("data/campaign", "data/campaign/rig_measured.toml", no_profile=True)
+    page = joint._repr_html_()
+    shared = _html_table(page, "parameter")
+    names = [r[0] for r in shared[1:]]
+    assert names[0] == "mu_kinetic" and set(names) == set(joint.to_dict()["shared"])
+    units = {r[0]: r[4] for r in shared[1:]}
+    assert units["rail_tilt"] == "rad" and units["mu_kinetic"] == appell.NO_UNIT
+    # The table's mu is the headline's, to the digits of its error.
+    assert float(shared[1][1]) == pytest.approx(joint.mu, abs=joint.stderr)
+    releases = _html_table(page, "release")
+    assert [r[0] for r in releases[1:]] == [r["name"] for r in joint.releases]
+    # The tables come before the folded report.
+    assert page.index("<th>release</th>") < page.index("<details>")
+
+
+def test_fps_given_to_a_file_with_times_is_said_not_used():
+    timed = "data/campaign/release_01.csv"  # a wide CSV with a time column
+    with pytest.warns(UserWarning, match=r"fps=100 is not used: data/campaign/release_01\.csv holds its own frame times"):
+        result = appell.fit(timed, "data/campaign/rig_measured.toml", fps=100, plain=True, no_profile=True)
+    assert any("fps=100 is not used" in n for n in result.notes)
+    # The fit is the one without fps: the file's times were read.
+    plain = appell.fit(timed, "data/campaign/rig_measured.toml", plain=True, no_profile=True)
+    assert result.to_dict()["mu_kinetic"] == plain.to_dict()["mu_kinetic"]
+    with pytest.warns(UserWarning, match="fps=100 is not used"):
+        appell.read_recording(timed, fps=100)
+
+
+def test_fps_used_by_the_file_gives_no_warning():
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        result = appell.fit(SHOWCASE_DLC, SHOWCASE_RIG, no_profile=True, **DLC_OPTS)
+        appell.read_recording(SHOWCASE_DLC, **DLC_OPTS)
+    assert not any("is not used" in n for n in result.notes)

@@ -10,7 +10,12 @@ python3 -m venv .venv
 # The binary `cargo test --release` builds (a no-op after it; plain `cargo build` would
 # compile the library again, its dependencies unified without the dev-dependencies).
 cargo test --release --no-run --quiet
-APPELL_BIN="$PWD/target/release/appell" .venv/bin/python -m pytest -q -p no:cacheprovider python/tests
+# In cargo's target directory: target/, or CARGO_TARGET_DIR when set (pip's build of the wheel
+# above used it too).
+target_dir=$(cargo metadata --format-version 1 --no-deps |
+    python3 -c 'import json, sys; print(json.load(sys.stdin)["target_directory"])')
+APPELL_BIN="${APPELL_BIN:-$target_dir/release/appell}" \
+    .venv/bin/python -m pytest -q -p no:cacheprovider python/tests
 out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 .venv/bin/python docs/examples/notebook.py "$out"
