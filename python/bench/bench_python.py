@@ -1,4 +1,5 @@
-"""Benchmarks of the Python package (issue 39's targets; outside CI, numbers in the README).
+"""Benchmarks of the Python package (issue 39's targets; outside CI, numbers in
+docs/performance.md and docs/python.md).
 
     .venv/bin/python python/bench/bench_python.py [--recordings 1000] [--repeats 21]
 
