@@ -207,6 +207,7 @@ pub fn joint_text(rep: &JointReport) -> String {
     for w in &rep.warnings {
         let _ = writeln!(s, "warning: {w}");
     }
+    let _ = writeln!(s, "{}", crate::report::fit::TERMS);
     s
 }
 

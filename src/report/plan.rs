@@ -269,6 +269,7 @@ pub fn plan_table(report: &PlanReport) -> String {
             );
         }
     }
+    let _ = writeln!(s, "{}", crate::report::fit::TERMS);
     s
 }
 

@@ -239,17 +239,32 @@ pub fn side_legend_height(entries: &[(Swatch, String)], notes: &[String], wrap: 
 }
 
 /// Split `s` into lines of at most `width` characters at spaces (a longer word stays whole).
+/// `value +- error` is never split: an error read on the next line reads as a value of its
+/// own.
 pub fn wrap_words(s: &str, width: usize) -> Vec<String> {
+    // Words, with `+-` joined to the words on either side.
+    let mut words: Vec<String> = Vec::new();
+    let mut glue = false;
+    for word in s.split_whitespace() {
+        match words.last_mut() {
+            Some(last) if glue || word == "+-" => {
+                last.push(' ');
+                last.push_str(word);
+            }
+            _ => words.push(word.to_owned()),
+        }
+        glue = word == "+-";
+    }
     let mut out = Vec::new();
     let mut line = String::new();
-    for word in s.split_whitespace() {
+    for word in words {
         if !line.is_empty() && line.len() + 1 + word.len() > width {
             out.push(std::mem::take(&mut line));
         }
         if !line.is_empty() {
             line.push(' ');
         }
-        line.push_str(word);
+        line.push_str(&word);
     }
     if !line.is_empty() {
         out.push(line);
@@ -610,6 +625,18 @@ mod tests {
         // Within the budget everything distinct is drawn, a pixel once.
         let few = [(1, 1), (2, 2), (1, 1), (3, 3)];
         assert_eq!(thin_points(&few, &[0.0; 4], 10, 10), vec![0, 1, 3]);
+    }
+
+    /// A wrapped line never ends or starts at `+-`: a value and its error stay together.
+    #[test]
+    fn wrap_keeps_a_value_with_its_error() {
+        let lines = wrap_words("mu_kinetic_positive = 0.23999 +- 1.9e-5 (95 %)", 34);
+        assert_eq!(
+            lines,
+            vec!["mu_kinetic_positive =", "0.23999 +- 1.9e-5 (95 %)"],
+            "{lines:?}"
+        );
+        assert_eq!(wrap_words("a b c", 3), vec!["a b", "c"]);
     }
 
     #[test]

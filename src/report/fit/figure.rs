@@ -54,6 +54,12 @@ const LEFT_OUT: RGBColor = RGBColor(110, 110, 110);
 /// The whole fit's mu_kinetic in the windows' panel.
 const WHOLE: RGBColor = RGBColor(204, 121, 167);
 
+/// The names of the direction law's whole-fit intervals in the windows' panel.
+const WHOLE_TEXT: RGBColor = RGBColor(150, 60, 110);
+
+/// A window that slides both ways under the direction law: its mean, not a direction's.
+const MIXED: RGBColor = RGBColor(120, 120, 120);
+
 /// One drawn point: time (s), value (mm) and residual (fitted - observed, mm).
 type Point = (f64, f64, f64);
 
@@ -89,28 +95,36 @@ impl FitFigure<'_> {
         let mut notes = Vec::new();
         match &rep.mu_kinetic {
             Some(mu) => notes.push(format!(
-                "mu_kinetic = {:.6} +- {:.2e}, 95% [{:.6}, {:.6}] ({})",
-                mu.value, mu.stderr, mu.ci95[0], mu.ci95[1], mu.interval
+                "mu_kinetic = {} [{}]",
+                super::with_interval(mu),
+                mu.interval
             )),
             None => notes.push("mu_kinetic: not identifiable (no slide)".into()),
         }
-        match &rep.mu_static {
-            StaticResult::Estimated(e) => notes.push(format!(
-                "mu_static = {:.6}, 95% [{:.6}, {:.6}]",
-                e.value, e.ci95[0], e.ci95[1]
-            )),
-            StaticResult::LowerBound(b) => notes.push(format!("mu_static >= {b:.4}")),
-            StaticResult::NotIdentifiable => {}
+        notes.extend(self.direction_notes());
+        if let Some(n) = self.static_note() {
+            notes.push(n);
         }
-        let model = if rep.nuisances.is_empty() {
-            "plain".to_owned()
-        } else {
-            rep.nuisances
-                .iter()
-                .map(|n| n.name())
-                .collect::<Vec<_>>()
-                .join(" + ")
-        };
+        if let Some(n) = self.theta_note() {
+            notes.push(n);
+        }
+        // The chosen model by the name the report's table gives it.
+        let model = rep
+            .models
+            .iter()
+            .find(|m| m.chosen)
+            .map(|m| m.name.clone())
+            .unwrap_or_else(|| {
+                if rep.nuisances.is_empty() {
+                    "base".to_owned()
+                } else {
+                    rep.nuisances
+                        .iter()
+                        .map(|n| n.name())
+                        .collect::<Vec<_>>()
+                        .join("+")
+                }
+            });
         notes.push(format!("model: {model}"));
         let a = &rep.adequacy;
         notes.push(format!(
@@ -141,6 +155,99 @@ impl FitFigure<'_> {
             ));
         }
         notes
+    }
+}
+
+impl FitFigure<'_> {
+    /// Under the direction law, each direction's coefficient (mu_kinetic is their mean).
+    fn direction_notes(&self) -> Vec<String> {
+        self.per_direction()
+            .map(|[p, m]| {
+                vec![
+                    format!("toward +x: {}", super::with_interval(&p)),
+                    format!("toward -x: {}", super::with_interval(&m)),
+                ]
+            })
+            .unwrap_or_default()
+    }
+
+    /// Each direction's coefficient (+x, then -x) as an estimate, under the direction law.
+    fn per_direction(&self) -> Option<[Estimate; 2]> {
+        let f = self.report.friction.as_ref()?;
+        if !f.chosen.starts_with("direction") {
+            return None;
+        }
+        let get = |name: &str| {
+            f.parameters
+                .iter()
+                .find(|p| p.name == name)
+                .map(|p| Estimate {
+                    value: p.value,
+                    stderr: p.stderr,
+                    ci95: p.ci95,
+                    interval: "",
+                })
+        };
+        Some([get("mu_kinetic_positive")?, get("mu_kinetic_negative")?])
+    }
+
+    /// mu_static at the precision its error gives; tied at its bound mu_kinetic, the
+    /// one-sided bound said as such.
+    fn static_note(&self) -> Option<String> {
+        let rep = self.report;
+        let free = rep
+            .params
+            .iter()
+            .any(|(p, _)| *p == crate::fit::Param::MuStatic);
+        match &rep.mu_static {
+            StaticResult::Estimated(e) if free => Some(format!(
+                "mu_static = {} [{}]",
+                super::with_interval(e),
+                e.interval
+            )),
+            StaticResult::Estimated(e) => {
+                let d = rep
+                    .mu_kinetic
+                    .and_then(|m| crate::report::two_digit_decimals(m.stderr))
+                    .map_or(6, |d| d.min(12));
+                Some(format!(
+                    "mu_static: at its bound mu_kinetic; one-sided 95 %: at most {:.d$}",
+                    e.ci95[1]
+                ))
+            }
+            StaticResult::LowerBound(b) => Some(format!("mu_static >= {b:.4}")),
+            StaticResult::NotIdentifiable => None,
+        }
+    }
+
+    /// The release angle with its convention: theta runs from the rail's +x direction with y
+    /// down (docs/physics.md), so the bob hangs at pi/2.
+    fn theta_note(&self) -> Option<String> {
+        let rep = self.report;
+        let se = rep
+            .params
+            .iter()
+            .find(|(p, _)| *p == crate::fit::Param::Theta)
+            .map_or(f64::NAN, |(_, e)| e.stderr);
+        let theta = super::get(rep, crate::fit::Param::Theta);
+        let d = crate::report::two_digit_decimals(se).map_or(4, |d| d.clamp(2, 8));
+        theta.is_finite().then(|| {
+            // Never "-0.0000": a theta within its last decimal of zero reads as 0.
+            let shown = format!("{theta:.d$}");
+            let shown = if shown
+                .trim_start_matches('-')
+                .trim_matches(['0', '.'])
+                .is_empty()
+            {
+                shown.trim_start_matches('-').to_owned()
+            } else {
+                shown
+            };
+            format!(
+                "released at theta = {shown} rad {}",
+                super::from_hanging(theta, se)
+            )
+        })
     }
 }
 
@@ -455,33 +562,85 @@ impl FitFigure<'_> {
         Ok((drawn, total))
     }
 
+    /// The direction (+1 toward +x, -1 toward -x) in which the fitted motion slides for at
+    /// least 90 % of its sliding frames between `t0` and `t1` (times from the first frame);
+    /// `None` for a window that slides both ways.
+    fn window_direction(tr: &Traces, t0: f64, t1: f64) -> Option<f64> {
+        let (mut plus, mut minus) = (0usize, 0usize);
+        for (t, _, mode) in &tr.pred {
+            if *t < t0 || *t > t1 {
+                continue;
+            }
+            match mode {
+                Mode::Slide(crate::model::Direction::Positive) => plus += 1,
+                Mode::Slide(crate::model::Direction::Negative) => minus += 1,
+                Mode::Stick => {}
+            }
+        }
+        let n = (plus + minus) as f64;
+        if n > 0.0 && plus as f64 >= 0.9 * n {
+            Some(1.0)
+        } else if n > 0.0 && minus as f64 >= 0.9 * n {
+            Some(-1.0)
+        } else {
+            None
+        }
+    }
+
     /// The windows: mu_kinetic fitted on each stretch against the whole fit's interval `mu`.
+    /// Under the direction law each window's fit holds the split at the whole fit's, so its
+    /// own coefficient is its mean plus the split toward its direction: drawn against that
+    /// direction's whole-fit interval (a window sliding both ways at its mean, in grey).
     fn windows_panel<DB: DrawingBackend>(
         &self,
         area: &DrawingArea<DB, Shift>,
         mu: Estimate,
-        t_end: f64,
+        tr: &Traces,
     ) -> Result<(), PlotError> {
         let rep = self.report;
-        let ys = rep
+        let t_end = tr.t_end;
+        let t_first = self.obs.times[0];
+        let split = self.per_direction().map(|_| rep.rig.kinetic_split);
+        // Each window's span (from the first frame), value and colour.
+        let marks: Vec<(f64, f64, f64, f64, RGBColor)> = rep
             .windows
             .iter()
-            .flat_map(|w| {
-                [
-                    w.mu_kinetic - 1.96 * w.stderr,
-                    w.mu_kinetic + 1.96 * w.stderr,
-                ]
+            .map(|w| {
+                let (t0w, t1w) = (w.t_start - t_first, w.t_end - t_first);
+                let (value, colour) = match split {
+                    Some(split) => match Self::window_direction(tr, t0w, t1w) {
+                        Some(s) => (w.mu_kinetic + split * s, BLACK),
+                        None => (w.mu_kinetic, MIXED),
+                    },
+                    None => (w.mu_kinetic, BLACK),
+                };
+                (t0w, t1w, value, 1.96 * w.stderr, colour)
             })
-            .chain(mu.ci95);
+            .collect();
+        // The whole fit's intervals: one, or one per direction with its name.
+        let wholes: Vec<(Estimate, &str)> = match self.per_direction() {
+            Some([p, m]) => vec![(p, "toward +x"), (m, "toward -x")],
+            None => vec![(mu, "")],
+        };
+        let ys = marks
+            .iter()
+            .flat_map(|m| [m.2 - m.3, m.2 + m.3])
+            .chain(wholes.iter().flat_map(|(e, _)| e.ci95));
         let yr = data_range(ys, 0.15);
         let span = yr.end - yr.start;
+        let what = if split.is_some() {
+            "mu_kinetic toward +x and -x"
+        } else {
+            "mu_kinetic"
+        };
         let title = match rep.window_cut {
             Some(cut) => format!(
-                "mu_kinetic per {} ({}), 95% bars, against the whole fit's 95% interval",
+                "{what} per {} ({}), 95% bars, against the whole fit's 95% interval{}",
                 cut.per(),
-                cut.how()
+                cut.how(),
+                if split.is_some() { "s" } else { "" }
             ),
-            None => "mu_kinetic of the whole fit (95% interval; no window fitted)".to_owned(),
+            None => format!("{what} of the whole fit (95% interval; no window fitted)"),
         };
         let mut chart = ChartBuilder::on(area)
             .caption(title, ("sans-serif", 16))
@@ -498,28 +657,45 @@ impl FitFigure<'_> {
             .x_label_formatter(&|v| tick_label(*v, t_end))
             .label_style(("sans-serif", 13))
             .draw()?;
-        chart.draw_series(std::iter::once(Rectangle::new(
-            [(0.0, mu.ci95[0]), (t_end, mu.ci95[1])],
-            WHOLE.mix(0.25).filled(),
-        )))?;
-        chart.draw_series(LineSeries::new(
-            [(0.0, mu.value), (t_end, mu.value)],
-            WHOLE.stroke_width(2),
-        ))?;
-        for w in &rep.windows {
-            let (t0w, t1w) = (w.t_start, w.t_end);
-            let mid = 0.5 * (t0w + t1w);
-            let lo = w.mu_kinetic - 1.96 * w.stderr;
-            let hi = w.mu_kinetic + 1.96 * w.stderr;
+        for (e, name) in &wholes {
+            chart.draw_series(std::iter::once(Rectangle::new(
+                [(0.0, e.ci95[0]), (t_end, e.ci95[1])],
+                WHOLE.mix(0.25).filled(),
+            )))?;
             chart.draw_series(LineSeries::new(
-                [(t0w, w.mu_kinetic), (t1w, w.mu_kinetic)],
-                BLACK.stroke_width(2),
+                [(0.0, e.value), (t_end, e.value)],
+                WHOLE.stroke_width(2),
             ))?;
-            chart.draw_series(LineSeries::new([(mid, lo), (mid, hi)], BLACK))?;
+            if !name.is_empty() {
+                chart.draw_series(std::iter::once(
+                    EmptyElement::at((0.0, e.value))
+                        + Text::new(
+                            format!(
+                                "{name} {:.d$}",
+                                e.value,
+                                d = crate::report::two_digit_decimals(e.stderr)
+                                    .map_or(5, |d| d.min(12))
+                            ),
+                            (6, -18),
+                            ("sans-serif", 14).into_font().color(&WHOLE_TEXT),
+                        ),
+                ))?;
+            }
+        }
+        for &(t0w, t1w, value, half, colour) in &marks {
+            let mid = 0.5 * (t0w + t1w);
+            chart.draw_series(LineSeries::new(
+                [(t0w, value), (t1w, value)],
+                colour.stroke_width(2),
+            ))?;
+            chart.draw_series(LineSeries::new(
+                [(mid, value - half), (mid, value + half)],
+                colour,
+            ))?;
             chart.draw_series(std::iter::once(Circle::new(
-                (mid, w.mu_kinetic),
+                (mid, value),
                 4,
-                BLACK.filled(),
+                colour.filled(),
             )))?;
         }
         Ok(())
@@ -556,12 +732,27 @@ impl FitFigure<'_> {
             Swatch::Fill(mode_color(Mode::Slide(crate::model::Direction::Negative))),
             "fitted: sliding -x".into(),
         ));
-        entries.push((
-            Swatch::Line(WHOLE, 2),
-            "mu_kinetic, whole fit (band: 95%)".into(),
-        ));
         let one = self.report.window_cut.map_or("window", |c| c.per());
-        entries.push((Swatch::Line(BLACK, 2), format!("mu_kinetic, one {one}")));
+        if self.per_direction().is_some() {
+            entries.push((
+                Swatch::Line(WHOLE, 2),
+                "mu_kinetic toward +x and toward -x, whole fit (bands: 95%)".into(),
+            ));
+            entries.push((
+                Swatch::Line(BLACK, 2),
+                format!("mu_kinetic, one {one} (in its direction)"),
+            ));
+            entries.push((
+                Swatch::Line(MIXED, 2),
+                format!("mu_kinetic, one {one} sliding both ways (their mean)"),
+            ));
+        } else {
+            entries.push((
+                Swatch::Line(WHOLE, 2),
+                "mu_kinetic, whole fit (band: 95%)".into(),
+            ));
+            entries.push((Swatch::Line(BLACK, 2), format!("mu_kinetic, one {one}")));
+        }
         entries
     }
 }
@@ -590,7 +781,7 @@ impl Figure for FitFigure<'_> {
             thinned = (thinned.0 + drawn, thinned.1 + total);
         }
         if let Some(mu) = self.report.mu_kinetic {
-            self.windows_panel(&windows_area, mu, traces.t_end)?;
+            self.windows_panel(&windows_area, mu, &traces)?;
         }
         let notes = self.notes(&traces, thinned);
         draw_side_legend(&side, "Fit", &self.legend_entries(), &notes, 30)?;

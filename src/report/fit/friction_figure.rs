@@ -21,6 +21,29 @@ const RELEASES: [RGBColor; 6] = [
     RGBColor(90, 90, 90),
 ];
 
+/// The compared laws' dashed lines and names: dark enough to show over the chosen law's band.
+const COMPARED: RGBColor = RGBColor(80, 80, 80);
+
+/// `c` mixed with white, `share` of it kept: the chosen law drawn as a pale band, so that a
+/// slide's speed range and error bar in the full colour show on it.
+fn pale(c: RGBColor, share: f64) -> RGBColor {
+    let mix = |v: u8| (255.0 - share * (255.0 - v as f64)).round() as u8;
+    RGBColor(mix(c.0), mix(c.1), mix(c.2))
+}
+
+/// Width in pixels of the chosen law's band.
+const LAW_WIDTH: u32 = 6;
+
+/// Half-length in pixels of the caps on the error bars and the speed ranges.
+const CAP: i32 = 5;
+
+/// Radius in pixels of a slide's dot.
+const DOT: i32 = 5;
+
+/// A compared law's value as the figure shows it: its name, its model's mu_kinetic and where
+/// it stands against the axis (`None` drawn, else "above" or "below").
+type Compared<'a> = (&'a str, f64, Option<&'static str>);
+
 /// The friction figure.
 pub struct FrictionFigure<'a> {
     /// The fitted rig (its law and coefficients draw the curves).
@@ -56,12 +79,13 @@ impl FrictionFigure<'_> {
         }
     }
 
-    fn entries(&self) -> Vec<(Swatch, String)> {
+    /// The legend's entries; the compared laws' dashed line only when one is drawn.
+    fn entries(&self, compared_drawn: bool) -> Vec<(Swatch, String)> {
         let mut out = Vec::new();
         if self.releases.len() == 1 {
             out.push((
                 Swatch::Dot(PLUS),
-                "slides toward +x (each its own Coulomb fit, 95 % bars; speed range)".into(),
+                "slides toward +x (each its own Coulomb fit, 95 % bars; speed range as |-|)".into(),
             ));
             out.push((Swatch::Dot(MINUS), "slides toward -x".into()));
         } else {
@@ -81,16 +105,16 @@ impl FrictionFigure<'_> {
         };
         if self.symmetric() {
             out.push((
-                Swatch::Line(BLACK, 3),
+                Swatch::Line(pale(BLACK, 0.35), LAW_WIDTH),
                 format!("{law} law (chosen){at}, both directions"),
             ));
         } else {
             out.push((
-                Swatch::Line(PLUS, 3),
+                Swatch::Line(pale(PLUS, 0.45), LAW_WIDTH),
                 format!("{law} law (chosen), sliding toward +x"),
             ));
             out.push((
-                Swatch::Line(MINUS, 3),
+                Swatch::Line(pale(MINUS, 0.45), LAW_WIDTH),
                 format!("{law} law (chosen), sliding toward -x"),
             ));
         }
@@ -98,22 +122,41 @@ impl FrictionFigure<'_> {
             Swatch::Square(BLACK),
             "the chosen law's value: the same fit on the law's own motion".into(),
         ));
-        out.push((
-            Swatch::Dashed(RGBColor(120, 120, 120)),
-            "compared laws (their models' mu_kinetic)".into(),
-        ));
+        if compared_drawn {
+            out.push((
+                Swatch::Dashed(COMPARED),
+                "compared laws (their models' mu_kinetic)".into(),
+            ));
+        }
         out
     }
 
-    fn notes(&self) -> Vec<String> {
+    /// The side panel's numbers: the law, its parameters at the precision their errors give,
+    /// each compared law's mu_kinetic and BIC (said off the axis when it is not drawn), and
+    /// how many error bars hide under their dots.
+    fn notes(&self, compared: &[Compared], hidden_bars: (usize, usize, f64)) -> Vec<String> {
         let mut notes = vec![format!("law chosen: {}", self.law.chosen)];
         for p in &self.law.parameters {
-            notes.push(format!("{} = {:.5} +- {:.1e}", p.name, p.value, p.stderr));
+            notes.push(format!(
+                "{} = {}",
+                p.name,
+                super::value_pm(p.value, p.stderr)
+            ));
         }
         for l in self.law.laws.iter().filter(|l| l.status == "fitted") {
-            if let Some(d) = l.delta_bic {
-                notes.push(format!("{}: BIC {:+.1} against the chosen", l.law, d));
-            }
+            let Some(d) = l.delta_bic else { continue };
+            let mu = match compared.iter().find(|c| c.0 == l.law) {
+                Some((_, m, None)) => format!("mu_kinetic {m:.5} (dashed)"),
+                Some((_, m, Some(side))) => format!("mu_kinetic {m:.5} ({side} the axis)"),
+                None => "no mu_kinetic".to_owned(),
+            };
+            notes.push(format!("{}: {mu}, BIC {d:+.1} against the chosen", l.law));
+        }
+        let (hidden, total, widest) = hidden_bars;
+        if hidden > 0 {
+            notes.push(format!(
+                "{hidden} of {total} slides' 95 % bars are shorter than their dot (half-widths up to {widest:.1e})"
+            ));
         }
         notes
     }
@@ -133,7 +176,7 @@ impl Figure for FrictionFigure<'_> {
             .fold(0.0, f64::max)
             .max(1e-3)
             * 1.1;
-        let compared: Vec<(&str, f64)> = self
+        let fitted: Vec<(&str, f64)> = self
             .law
             .laws
             .iter()
@@ -154,11 +197,26 @@ impl Figure for FrictionFigure<'_> {
             .collect();
         ys.extend(curve(1.0).iter().chain(curve(-1.0).iter()).map(|p| p.1));
         // Compared laws far off the data (a model that failed to describe it) would squash
-        // the axis: only those within the data's span are drawn.
+        // the axis: only those within the data's span are drawn, the others said in the side
+        // panel with their values.
         let core = data_range(ys.iter().copied(), 0.15);
-        let shown: Vec<(&str, f64)> = compared
+        let compared: Vec<Compared> = fitted
             .into_iter()
-            .filter(|(_, m)| core.contains(m))
+            .map(|(name, m)| {
+                let side = if core.contains(&m) {
+                    None
+                } else if m > core.end {
+                    Some("above")
+                } else {
+                    Some("below")
+                };
+                (name, m, side)
+            })
+            .collect();
+        let shown: Vec<(&str, f64)> = compared
+            .iter()
+            .filter(|c| c.2.is_none())
+            .map(|c| (c.0, c.1))
             .collect();
         let y = data_range(ys.into_iter().chain(shown.iter().map(|c| c.1)), 0.1);
         let mut chart = ChartBuilder::on(&chart_area)
@@ -175,27 +233,37 @@ impl Figure for FrictionFigure<'_> {
             .label_style(("sans-serif", 14))
             .axis_desc_style(("sans-serif", 16))
             .draw()?;
+        // The chosen law first, as a pale band: what is drawn over it shows.
+        if self.symmetric() {
+            chart.draw_series(LineSeries::new(
+                curve(1.0),
+                pale(BLACK, 0.35).stroke_width(LAW_WIDTH),
+            ))?;
+        } else {
+            for (s, c) in [(1.0, PLUS), (-1.0, MINUS)] {
+                chart.draw_series(LineSeries::new(
+                    curve(s),
+                    pale(c, 0.45).stroke_width(LAW_WIDTH),
+                ))?;
+            }
+        }
+        // The compared laws over the chosen one: a law that gives the same value shows as
+        // dashes on its band.
         for (k, (name, m)) in shown.iter().enumerate() {
             chart.draw_series(DashedLineSeries::new(
                 [(0.0, *m), (v_max * 1e3, *m)],
-                6,
-                4,
-                RGBColor(120, 120, 120).stroke_width(1),
+                8,
+                5,
+                COMPARED.stroke_width(2),
             ))?;
             chart.draw_series(std::iter::once(Text::new(
                 name.to_string(),
                 // Staggered, so that the names of laws with close values stay legible.
                 (v_max * 1e3 * (0.88 - 0.14 * (k % 5) as f64), *m),
-                ("sans-serif", 13).into_font().color(&RGBColor(90, 90, 90)),
+                ("sans-serif", 13).into_font().color(&COMPARED),
             )))?;
         }
-        if self.symmetric() {
-            chart.draw_series(LineSeries::new(curve(1.0), BLACK.stroke_width(3)))?;
-        } else {
-            for (s, c) in [(1.0, PLUS), (-1.0, MINUS)] {
-                chart.draw_series(LineSeries::new(curve(s), c.stroke_width(3)))?;
-            }
-        }
+        let mut hidden = (0, 0, 0.0_f64);
         for (i, (_, pts)) in self.releases.iter().enumerate() {
             for p in pts {
                 // The law's square first, so that the slide's own dot shows inside it.
@@ -205,22 +273,49 @@ impl Figure for FrictionFigure<'_> {
                 ))?;
                 let c = self.colour(i, p.direction);
                 let x = p.speed[0] * 1e3;
-                let (lo, hi) = (p.mu - 1.96 * p.stderr, p.mu + 1.96 * p.stderr);
-                chart.draw_series(LineSeries::new([(x, lo), (x, hi)], c.stroke_width(2)))?;
-                chart.draw_series(LineSeries::new(
-                    [(p.speed[1] * 1e3, p.mu), (p.speed[2] * 1e3, p.mu)],
-                    c.mix(0.6).stroke_width(1),
-                ))?;
+                let half = 1.96 * p.stderr;
+                let (lo, hi) = (p.mu - half, p.mu + half);
+                // The speed range: a line with end caps, in the full colour over the band.
+                let (v0, v1) = (p.speed[1] * 1e3, p.speed[2] * 1e3);
+                chart.draw_series(LineSeries::new([(v0, p.mu), (v1, p.mu)], c.stroke_width(2)))?;
+                for v in [v0, v1] {
+                    chart.draw_series(std::iter::once(
+                        EmptyElement::at((v, p.mu))
+                            + PathElement::new(vec![(0, -CAP), (0, CAP)], c.stroke_width(2)),
+                    ))?;
+                }
+                // The 95 % bar, wide and capped.
+                chart.draw_series(LineSeries::new([(x, lo), (x, hi)], c.stroke_width(3)))?;
+                for v in [lo, hi] {
+                    chart.draw_series(std::iter::once(
+                        EmptyElement::at((x, v))
+                            + PathElement::new(vec![(-CAP, 0), (CAP, 0)], c.stroke_width(2)),
+                    ))?;
+                }
+                let bar_px =
+                    (chart.backend_coord(&(x, lo)).1 - chart.backend_coord(&(x, hi)).1).abs();
+                hidden.1 += 1;
+                if bar_px < 2 * DOT {
+                    hidden.0 += 1;
+                    hidden.2 = hidden.2.max(half);
+                }
                 let filled = self.releases.len() == 1 || p.direction > 0.0;
                 let style = if filled {
                     c.filled()
                 } else {
                     c.stroke_width(2)
                 };
-                chart.draw_series(std::iter::once(Circle::new((x, p.mu), 5, style)))?;
+                chart.draw_series(std::iter::once(Circle::new((x, p.mu), DOT, style)))?;
             }
         }
-        draw_side_legend(&side, "Friction law", &self.entries(), &self.notes(), 32)?;
+        let notes = self.notes(&compared, hidden);
+        draw_side_legend(
+            &side,
+            "Friction law",
+            &self.entries(!shown.is_empty()),
+            &notes,
+            44,
+        )?;
         Ok(())
     }
 }

@@ -11,7 +11,7 @@ mod text;
 pub use answer::{answer, limited_sentence, models_widening, value_pm, with_interval};
 pub use figure::FitFigure;
 pub use friction_figure::FrictionFigure;
-pub use text::{fit_text, friction_law_text};
+pub use text::{fit_text, friction_law_text, from_hanging, TERMS};
 
 use crate::fit::{Estimate, FitReport, Param, StaticResult};
 use serde_json::{json, Value};

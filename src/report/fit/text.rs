@@ -58,7 +58,32 @@ pub fn fit_text(rep: &FitReport) -> String {
     for w in &rep.warnings {
         let _ = writeln!(s, "warning: {w}");
     }
+    let _ = writeln!(s, "{TERMS}");
     s
+}
+
+/// The report's last line: where its words are explained (a text report cannot link).
+pub const TERMS: &str = "terms: docs/glossary.md (what each word and heading of this report means)";
+
+/// The release angle read from hanging, for a lab that measures its angle from the vertical:
+/// the model's theta (docs/physics.md) runs from the rail's +x direction with y down, so the
+/// bob hangs at pi/2 and `theta 0.4707 rad` is 1.1 rad from hanging, toward +x. Decimals
+/// follow the standard error `se` (four without one).
+pub fn from_hanging(theta: f64, se: f64) -> String {
+    let phi = theta - std::f64::consts::FRAC_PI_2;
+    let d = crate::report::two_digit_decimals(se).map_or(4, |d| d.clamp(2, 8));
+    let side = if phi < 0.0 { "+x" } else { "-x" };
+    if format!("{:.d$}", phi.abs())
+        .trim_matches(['0', '.'])
+        .is_empty()
+    {
+        "(hanging straight down; theta = pi/2 hangs)".to_owned()
+    } else {
+        format!(
+            "({:.d$} rad from hanging, toward {side}; theta = pi/2 hangs)",
+            phi.abs()
+        )
+    }
 }
 
 /// [[Uncertainty of mu_kinetic]]: its standard error in parts, and [[Rig as measured]]: the
@@ -157,7 +182,7 @@ fn variables(s: &mut String, rep: &FitReport) {
             .map_or(f64::NAN, |(_, v)| *v);
         let _ = writeln!(
             s,
-            "    {:<20} {:>14.8} +- {:<10.3e} ({:>8}) [{:.8}, {:.8}] [{}] start {:.6} {}",
+            "    {:<20} {:>14.8} +- {:<10.3e} ({:>8}) [{:.8}, {:.8}] [{}] start {:.6} {}{}",
             p.name(),
             e.value,
             e.stderr,
@@ -166,7 +191,12 @@ fn variables(s: &mut String, rep: &FitReport) {
             e.ci95[1],
             e.interval,
             start,
-            crate::report::unit_of(*p, e.value)
+            crate::report::unit_of(*p, e.value),
+            if *p == Param::Theta {
+                format!(" {}", from_hanging(e.value, e.stderr))
+            } else {
+                String::new()
+            }
         );
     }
     // mu_static tied to mu_kinetic is said once, below, with what the data allow.
