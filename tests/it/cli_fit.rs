@@ -261,6 +261,39 @@ fn the_report_opens_with_a_one_line_answer() {
         if !adequate {
             assert!(first.contains("needs rail_tilt"), "{file}: {first}");
         }
+        // theta is said from hanging (docs/physics.md: theta = pi/2 hangs), at the value the
+        // JSON gives and on the side the bob is.
+        let theta = v["initial"]["theta"].as_f64().unwrap();
+        let line = text
+            .lines()
+            .find(|l| l.trim_start().starts_with("theta "))
+            .unwrap();
+        let said = line
+            .split(" (")
+            .nth(1)
+            .unwrap_or_else(|| panic!("{file}: {line}"));
+        let (from_hanging, rest) = said.split_once(" rad from hanging, toward ").unwrap();
+        let from_hanging: f64 = from_hanging.parse().unwrap();
+        assert!(
+            (from_hanging - (theta - std::f64::consts::FRAC_PI_2).abs()).abs() < 1e-3,
+            "{file}: {line}"
+        );
+        let side = if theta < std::f64::consts::FRAC_PI_2 {
+            "+x"
+        } else {
+            "-x"
+        };
+        assert!(
+            rest.starts_with(&format!("{side}; theta = pi/2 hangs)")),
+            "{file}: {line}"
+        );
+        // The report ends by saying where its words are explained, a file the repository has.
+        let last = text.lines().rev().find(|l| !l.trim().is_empty()).unwrap();
+        assert!(
+            last.starts_with("terms: docs/glossary.md"),
+            "{file}: {last}"
+        );
+        assert!(std::path::Path::new(&path("docs/glossary.md")).is_file());
     }
 }
 

@@ -121,6 +121,7 @@ fn fit_figure_draws_data_over_the_model_and_tells_the_residuals_apart() {
     let tmp = tempfile::tempdir().unwrap();
     let svg_path = tmp.path().join("fit.svg");
     let png_path = tmp.path().join("fit.png");
+    let mut chosen = String::new();
     for p in [&svg_path, &png_path] {
         let report = fit_with_plot(
             &[&path("data/example_recording.mcap")],
@@ -129,9 +130,15 @@ fn fit_figure_draws_data_over_the_model_and_tells_the_residuals_apart() {
         );
         // The report's windows are slides (README, [[Windows]]).
         assert!(report.contains("[[Windows]] mu_kinetic per slide"));
+        chosen = chosen_model(&report);
     }
     let svg = std::fs::read_to_string(&svg_path).unwrap();
     let text = svg_text(&svg);
+    // One name per model: the figure's is the report's.
+    assert!(
+        text.contains(&format!("model: {chosen}")),
+        "{chosen}: {text}"
+    );
     let all = circles(&svg);
 
     // Four residual series, four distinct fill colours, each named in the legend with a
@@ -307,4 +314,261 @@ fn joint_figure_has_a_key() {
     ] {
         assert!(text.contains(want), "{want}: {text}");
     }
+}
+
+/// The chosen model's name in a fit report's `[[Models compared]]` (the row marked `*`).
+fn chosen_model(report: &str) -> String {
+    report
+        .lines()
+        .find_map(|l| l.strip_prefix("  * "))
+        .and_then(|l| l.split_whitespace().next())
+        .unwrap_or_else(|| panic!("a chosen model: {report}"))
+        .to_owned()
+}
+
+/// Every text element's content, in document order.
+fn texts(svg: &str) -> Vec<String> {
+    elements(svg, "text")
+        .into_iter()
+        .map(|(i, _)| {
+            let body = svg[i..].split('>').nth(1).unwrap();
+            body.trim_end_matches("</text").trim().to_owned()
+        })
+        .collect()
+}
+
+/// A two-point polyline: its offset, stroke, width and end points (pixels).
+struct Segment<'a> {
+    offset: usize,
+    stroke: &'a str,
+    width: f64,
+    a: (f64, f64),
+    b: (f64, f64),
+}
+
+fn segments(svg: &str) -> Vec<Segment<'_>> {
+    elements(svg, "polyline")
+        .into_iter()
+        .filter_map(|(offset, e)| {
+            let pts: Vec<(f64, f64)> = attr(e, "points")?
+                .split_whitespace()
+                .map(|p| {
+                    let (x, y) = p.split_once(',').unwrap();
+                    (x.parse().unwrap(), y.parse().unwrap())
+                })
+                .collect();
+            (pts.len() == 2).then(|| Segment {
+                offset,
+                stroke: attr(e, "stroke").unwrap_or("none"),
+                width: attr(e, "stroke-width").map_or(1.0, |w| w.parse().unwrap()),
+                a: pts[0],
+                b: pts[1],
+            })
+        })
+        .collect()
+}
+
+/// `appell fit REC --rig RIG --plot FIT --friction-plot FRICTION` (the whole fit, profiles
+/// included): its report and the two SVGs.
+fn fit_both_figures(rec: &str, rig: &str, dir: &Path) -> (String, String, String) {
+    fit_both_figures_with(rec, rig, &[], dir)
+}
+
+/// [`fit_both_figures`] with more options.
+fn fit_both_figures_with(
+    rec: &str,
+    rig: &str,
+    more: &[&str],
+    dir: &Path,
+) -> (String, String, String) {
+    let (fit, friction) = (dir.join("fit.svg"), dir.join("friction.svg"));
+    let (rec, rig) = (path(rec), path(rig));
+    let mut args = vec![
+        "fit",
+        &rec,
+        "--rig",
+        &rig,
+        "--plot",
+        fit.to_str().unwrap(),
+        "--friction-plot",
+        friction.to_str().unwrap(),
+    ];
+    args.extend_from_slice(more);
+    let report = appell(&args);
+    (
+        report,
+        std::fs::read_to_string(fit).unwrap(),
+        std::fs::read_to_string(friction).unwrap(),
+    )
+}
+
+/// Colours of the friction figure: a slide toward +x and -x, and the compared laws' dashes.
+const PLUS: &str = "#D75F00";
+const MINUS: &str = "#005AC8";
+const COMPARED: &str = "#505050";
+
+/// The friction figure draws what its legend lists, bars and speed ranges that can be seen,
+/// and a side panel that keeps each value with its error: on a Coulomb rail (compared laws
+/// within the data's span) and a direction-dependent one (most compared laws far off, each
+/// slide's bar shorter than its dot).
+#[test]
+fn friction_figure_draws_what_it_lists() {
+    let tmp = tempfile::tempdir().unwrap();
+    let equal = "tests/data/friction/rigs/equal.toml";
+    for (rec, more) in [
+        ("tests/data/friction/coulomb_equal_s1.csv", &[][..]),
+        ("tests/data/friction/direction_equal_s1.csv", &[]),
+        // The plain model: no other law is fitted, none is drawn or listed.
+        ("tests/data/friction/coulomb_equal_s1.csv", &["--plain"]),
+    ] {
+        let (report, _, svg) = fit_both_figures_with(rec, equal, more, tmp.path());
+        let text = texts(&svg);
+        let all = text.join(" ");
+        let segs = segments(&svg);
+        // Compared laws: listed in the legend exactly when a dashed line is drawn, and every
+        // law the report fitted is in the side panel, dashed or said off the axis.
+        let dashes = segs.iter().filter(|s| s.stroke == COMPARED).count();
+        assert_eq!(
+            all.contains("compared laws (their models"),
+            dashes > 0,
+            "{rec}: {dashes} dashes; {all}"
+        );
+        let fitted: Vec<&str> = report
+            .lines()
+            .filter(|l| l.contains("its best model's BIC"))
+            .map(|l| l.split_whitespace().next().unwrap())
+            .collect();
+        assert_eq!(fitted.is_empty(), !more.is_empty(), "{rec}: {report}");
+        for law in &fitted {
+            let said = format!("{law}: mu_kinetic ");
+            let at = all
+                .find(&said)
+                .unwrap_or_else(|| panic!("{rec}: {law}: {all}"));
+            let note = &all[at..];
+            assert!(
+                note.contains("(dashed)") || note.contains("the axis)"),
+                "{rec}: {law}: {note}"
+            );
+            if all[at..].split(',').next().unwrap().contains("(dashed)") {
+                assert!(
+                    text.iter().any(|t| t == law),
+                    "{rec}: {law} labels its line"
+                );
+            }
+        }
+        // A value and its error stay on one line of the side panel.
+        for t in &text {
+            assert!(!t.ends_with("+-") && !t.starts_with("+-"), "{rec}: {t:?}");
+        }
+        // The 95 % bars: vertical, 3 px wide, each with a cap at both ends.
+        let bars: Vec<&Segment> = segs
+            .iter()
+            .filter(|s| (s.stroke == PLUS || s.stroke == MINUS) && s.a.0 == s.b.0 && s.width >= 3.0)
+            .collect();
+        assert!(bars.len() >= 2, "{rec}: {} bars", bars.len());
+        for bar in &bars {
+            for y in [bar.a.1, bar.b.1] {
+                assert!(
+                    segs.iter().any(|c| c.stroke == bar.stroke
+                        && c.a.1 == y
+                        && c.b.1 == y
+                        && (c.a.0 - bar.a.0).abs() >= 4.0
+                        && (c.b.0 - bar.a.0).abs() >= 4.0
+                        && c.a.0.min(c.b.0) < bar.a.0
+                        && c.a.0.max(c.b.0) > bar.a.0),
+                    "{rec}: a cap at {y} on the bar at {}",
+                    bar.a.0
+                );
+            }
+        }
+        // Bars shorter than their dot (10 px) are said in the side panel, and only then.
+        let short = bars.iter().filter(|b| (b.a.1 - b.b.1).abs() < 10.0).count();
+        assert_eq!(
+            all.contains("bars are shorter than their dot"),
+            short > 0,
+            "{rec}: {short} short bars; {all}"
+        );
+        // The chosen law is a wide pale band drawn first; each slide's speed range (a
+        // horizontal line of the slide's colour) comes after it, in a colour of its own.
+        let band = elements(&svg, "polyline")
+            .into_iter()
+            .find(|(_, e)| attr(e, "stroke-width") == Some("6"))
+            .map(|(i, e)| (i, attr(e, "stroke").unwrap()));
+        let (band_at, band_colour) = band.unwrap_or_else(|| panic!("{rec}: the law's band"));
+        let ranges: Vec<&Segment> = segs
+            .iter()
+            .filter(|s| (s.stroke == PLUS || s.stroke == MINUS) && s.a.1 == s.b.1 && s.width == 2.0)
+            .filter(|s| (s.b.0 - s.a.0).abs() > 10.0)
+            .collect();
+        assert!(ranges.len() >= bars.len(), "{rec}: a speed range a slide");
+        for r in &ranges {
+            assert!(r.offset > band_at, "{rec}: the range is drawn over the law");
+            assert_ne!(r.stroke, band_colour, "{rec}");
+        }
+        if rec.contains("direction") {
+            assert!(all.contains("coulomb: mu_kinetic"), "{all}");
+            assert!(all.contains("(above the axis)"), "{all}");
+        }
+    }
+}
+
+/// Under the direction law the fit figure shows the law's own coefficients: each window's
+/// value in its direction on that direction's whole-fit line (not the mean of the two), both
+/// coefficients in the side panel, mu_static at its bound as a one-sided bound, the release
+/// angle with its convention, and the model by the report's name.
+#[test]
+fn direction_law_fit_figure_shows_each_direction() {
+    let tmp = tempfile::tempdir().unwrap();
+    let (report, svg, _) = fit_both_figures(
+        "tests/data/friction/direction_equal_s1.csv",
+        "tests/data/friction/rigs/equal.toml",
+        tmp.path(),
+    );
+    assert!(report.contains("[[Friction law]] direction"), "{report}");
+    let all = texts(&svg).join(" ");
+    // The whole fit's lines across the windows' panel (the legend's swatch is short).
+    const WHOLE: &str = "#CC79A7";
+    let lines: Vec<f64> = segments(&svg)
+        .iter()
+        .filter(|s| s.stroke == WHOLE && s.a.1 == s.b.1 && (s.b.0 - s.a.0).abs() > 500.0)
+        .map(|s| s.a.1)
+        .collect();
+    assert_eq!(lines.len(), 2, "one line a direction: {lines:?}");
+    assert!((lines[0] - lines[1]).abs() > 50.0, "{lines:?}");
+    for want in [
+        "toward +x 0.",
+        "toward -x 0.",
+        "toward +x: 0.",
+        "toward -x: 0.",
+    ] {
+        assert!(all.contains(want), "{want}: {all}");
+    }
+    // Each window's dot on one of the two lines, both lines with windows.
+    let all_circles = circles(&svg);
+    let windows: Vec<&Circle> = all_circles
+        .iter()
+        .filter(|c| c.fill == "#000000" && c.r == 4.0)
+        .collect();
+    assert!(windows.len() >= 2, "{}", windows.len());
+    let mut on = [0; 2];
+    for w in &windows {
+        let k = if (w.cy - lines[0]).abs() < (w.cy - lines[1]).abs() {
+            0
+        } else {
+            1
+        };
+        assert!((w.cy - lines[k]).abs() <= 3.0, "a window at {} px", w.cy);
+        on[k] += 1;
+    }
+    assert!(on[0] > 0 && on[1] > 0, "{on:?}");
+    // mu_static tied at its bound: a one-sided bound, not a two-sided interval.
+    if report.contains("mu_static            at its bound mu_kinetic") {
+        assert!(all.contains("one-sided 95 %"), "{all}");
+        assert!(!all.contains("mu_static = "), "{all}");
+    }
+    assert!(all.contains("theta = pi/2 hangs"), "{all}");
+    assert!(
+        all.contains(&format!("model: {}", chosen_model(&report))),
+        "{all}"
+    );
 }
