@@ -239,15 +239,21 @@ pub fn side_legend_height(entries: &[(Swatch, String)], notes: &[String], wrap: 
 }
 
 /// Split `s` into lines of at most `width` characters at spaces (a longer word stays whole).
-/// `value +- error` is never split: an error read on the next line reads as a value of its
-/// own.
+/// `value +- error` is never split, nor a signed number from the word before it (`BIC +9.0`),
+/// nor `%` from its number: an error or a difference read on the next line reads as a value
+/// of its own.
 pub fn wrap_words(s: &str, width: usize) -> Vec<String> {
-    // Words, with `+-` joined to the words on either side.
+    // Words, with `+-` joined to the words on either side and a signed number to the one
+    // before.
+    let signed = |w: &str| {
+        let mut c = w.chars();
+        matches!(c.next(), Some('+' | '-')) && c.next().is_some_and(|d| d.is_ascii_digit())
+    };
     let mut words: Vec<String> = Vec::new();
     let mut glue = false;
     for word in s.split_whitespace() {
         match words.last_mut() {
-            Some(last) if glue || word == "+-" => {
+            Some(last) if glue || word == "+-" || signed(word) || word.starts_with('%') => {
                 last.push(' ');
                 last.push_str(word);
             }
@@ -637,6 +643,10 @@ mod tests {
             "{lines:?}"
         );
         assert_eq!(wrap_words("a b c", 3), vec!["a b", "c"]);
+        assert_eq!(
+            wrap_words("static: mu 0.25311, BIC +11477372.4 against", 24),
+            vec!["static: mu 0.25311,", "BIC +11477372.4 against"]
+        );
     }
 
     #[test]

@@ -136,7 +136,8 @@ fn fit_figure_draws_data_over_the_model_and_tells_the_residuals_apart() {
     let text = svg_text(&svg);
     // One name per model: the figure's is the report's.
     assert!(
-        text.contains(&format!("model: {chosen}")),
+        text.replace(" + ", "+")
+            .contains(&format!("model: {chosen}")),
         "{chosen}: {text}"
     );
     let all = circles(&svg);
@@ -568,7 +569,8 @@ fn direction_law_fit_figure_shows_each_direction() {
     }
     assert!(all.contains("theta = pi/2 hangs"), "{all}");
     assert!(
-        all.contains(&format!("model: {}", chosen_model(&report))),
+        all.replace(" + ", "+")
+            .contains(&format!("model: {}", chosen_model(&report))),
         "{all}"
     );
 }

@@ -108,7 +108,8 @@ impl FitFigure<'_> {
         if let Some(n) = self.theta_note() {
             notes.push(n);
         }
-        // The chosen model by the name the report's table gives it.
+        // The chosen model by the name the report's table gives it (spaced at its `+`, so
+        // that a long one wraps in the panel).
         let model = rep
             .models
             .iter()
@@ -125,7 +126,7 @@ impl FitFigure<'_> {
                         .join("+")
                 }
             });
-        notes.push(format!("model: {model}"));
+        notes.push(format!("model: {}", model.replace('+', " + ")));
         let a = &rep.adequacy;
         notes.push(format!(
             "chi2 = {:.1} for {:.0} dof (reduced {:.3}, {})",
@@ -703,7 +704,7 @@ impl FitFigure<'_> {
 
     /// The legend's entries: the coordinates' colours, the fit, what was left out, the noise
     /// band, the fitted modes and the windows' marks.
-    fn legend_entries(&self) -> Vec<(Swatch, String)> {
+    fn legend_entries(&self, tr: &Traces) -> Vec<(Swatch, String)> {
         let mut entries: Vec<(Swatch, String)> = COORDS
             .iter()
             .map(|(name, c)| (Swatch::Dot(*c), (*name).to_owned()))
@@ -742,10 +743,16 @@ impl FitFigure<'_> {
                 Swatch::Line(BLACK, 2),
                 format!("mu_kinetic, one {one} (in its direction)"),
             ));
-            entries.push((
-                Swatch::Line(MIXED, 2),
-                format!("mu_kinetic, one {one} sliding both ways (their mean)"),
-            ));
+            let t_first = self.obs.times[0];
+            let mixed = self.report.windows.iter().any(|w| {
+                Self::window_direction(tr, w.t_start - t_first, w.t_end - t_first).is_none()
+            });
+            if mixed {
+                entries.push((
+                    Swatch::Line(MIXED, 2),
+                    format!("mu_kinetic, one {one} sliding both ways (their mean)"),
+                ));
+            }
         } else {
             entries.push((
                 Swatch::Line(WHOLE, 2),
@@ -784,7 +791,7 @@ impl Figure for FitFigure<'_> {
             self.windows_panel(&windows_area, mu, &traces)?;
         }
         let notes = self.notes(&traces, thinned);
-        draw_side_legend(&side, "Fit", &self.legend_entries(), &notes, 30)?;
+        draw_side_legend(&side, "Fit", &self.legend_entries(&traces), &notes, 30)?;
         Ok(())
     }
 }

@@ -108,6 +108,12 @@ impl FrictionFigure<'_> {
                 Swatch::Line(pale(BLACK, 0.35), LAW_WIDTH),
                 format!("{law} law (chosen){at}, both directions"),
             ));
+        } else if self.releases.len() > 1 {
+            // The releases have the colours: the two directions' bands are grey, named.
+            out.push((
+                Swatch::Line(pale(BLACK, 0.35), LAW_WIDTH),
+                format!("{law} law (chosen), a band a direction (named at its end)"),
+            ));
         } else {
             out.push((
                 Swatch::Line(pale(PLUS, 0.45), LAW_WIDTH),
@@ -240,11 +246,25 @@ impl Figure for FrictionFigure<'_> {
                 pale(BLACK, 0.35).stroke_width(LAW_WIDTH),
             ))?;
         } else {
-            for (s, c) in [(1.0, PLUS), (-1.0, MINUS)] {
-                chart.draw_series(LineSeries::new(
-                    curve(s),
-                    pale(c, 0.45).stroke_width(LAW_WIDTH),
-                ))?;
+            let joint = self.releases.len() > 1;
+            for (s, c, name) in [(1.0, PLUS, "toward +x"), (-1.0, MINUS, "toward -x")] {
+                let band = if joint {
+                    pale(BLACK, 0.35)
+                } else {
+                    pale(c, 0.45)
+                };
+                let line = curve(s);
+                chart.draw_series(LineSeries::new(line.clone(), band.stroke_width(LAW_WIDTH)))?;
+                if let (true, Some(&end)) = (joint, line.last()) {
+                    chart.draw_series(std::iter::once(
+                        EmptyElement::at(end)
+                            + Text::new(
+                                name,
+                                (-70, -22),
+                                ("sans-serif", 13).into_font().color(&COMPARED),
+                            ),
+                    ))?;
+                }
             }
         }
         // The compared laws over the chosen one: a law that gives the same value shows as
