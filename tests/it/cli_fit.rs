@@ -268,11 +268,10 @@ fn the_report_opens_with_a_one_line_answer() {
             .lines()
             .find(|l| l.trim_start().starts_with("theta "))
             .unwrap();
-        let said = line
-            .split(" (")
-            .nth(1)
+        let said = line.rsplit(" (").next().unwrap();
+        let (from_hanging, rest) = said
+            .split_once(" rad from hanging, toward ")
             .unwrap_or_else(|| panic!("{file}: {line}"));
-        let (from_hanging, rest) = said.split_once(" rad from hanging, toward ").unwrap();
         let from_hanging: f64 = from_hanging.parse().unwrap();
         assert!(
             (from_hanging - (theta - std::f64::consts::FRAC_PI_2).abs()).abs() < 1e-3,
