@@ -224,6 +224,27 @@ fn limit_part(part: &LimitPart) -> String {
     )
 }
 
+/// The release angle read from hanging, for a lab that measures its angle from the vertical:
+/// the model's theta (docs/physics.md) runs from the rail's +x direction with y down, so the
+/// bob hangs at pi/2 and `theta 0.4707 rad` is 1.1 rad from hanging, toward +x. Decimals
+/// follow the standard error `se` (four without one).
+pub fn from_hanging(theta: f64, se: f64) -> String {
+    let phi = theta - std::f64::consts::FRAC_PI_2;
+    let d = crate::report::two_digit_decimals(se).map_or(4, |d| d.clamp(2, 8));
+    let side = if phi < 0.0 { "+x" } else { "-x" };
+    if format!("{:.d$}", phi.abs())
+        .trim_matches(['0', '.'])
+        .is_empty()
+    {
+        "(hanging straight down; theta = pi/2 hangs)".to_owned()
+    } else {
+        format!(
+            "({:.d$} rad from hanging, toward {side}; theta = pi/2 hangs)",
+            phi.abs()
+        )
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -96,7 +96,7 @@ impl FitFigure<'_> {
         match &rep.mu_kinetic {
             Some(mu) => notes.push(format!(
                 "mu_kinetic = {} [{}]",
-                super::with_interval(mu),
+                super::answer::with_interval(mu),
                 mu.interval
             )),
             None => notes.push("mu_kinetic: not identifiable (no slide)".into()),
@@ -165,8 +165,8 @@ impl FitFigure<'_> {
         self.per_direction()
             .map(|[p, m]| {
                 vec![
-                    format!("toward +x: {}", super::with_interval(&p)),
-                    format!("toward -x: {}", super::with_interval(&m)),
+                    format!("toward +x: {}", super::answer::with_interval(&p)),
+                    format!("toward -x: {}", super::answer::with_interval(&m)),
                 ]
             })
             .unwrap_or_default()
@@ -203,7 +203,7 @@ impl FitFigure<'_> {
         match &rep.mu_static {
             StaticResult::Estimated(e) if free => Some(format!(
                 "mu_static = {} [{}]",
-                super::with_interval(e),
+                super::answer::with_interval(e),
                 e.interval
             )),
             StaticResult::Estimated(e) => {
@@ -230,7 +230,18 @@ impl FitFigure<'_> {
             .iter()
             .find(|(p, _)| *p == crate::fit::Param::Theta)
             .map_or(f64::NAN, |(_, e)| e.stderr);
-        let theta = super::get(rep, crate::fit::Param::Theta);
+        let theta = rep
+            .params
+            .iter()
+            .find(|(p, _)| *p == crate::fit::Param::Theta)
+            .map(|(_, e)| e.value)
+            .or_else(|| {
+                rep.fixed
+                    .iter()
+                    .find(|(p, _)| *p == crate::fit::Param::Theta)
+                    .map(|(_, v)| *v)
+            })
+            .unwrap_or(f64::NAN);
         let d = crate::report::two_digit_decimals(se).map_or(4, |d| d.clamp(2, 8));
         theta.is_finite().then(|| {
             // Never "-0.0000": a theta within its last decimal of zero reads as 0.
@@ -246,7 +257,7 @@ impl FitFigure<'_> {
             };
             format!(
                 "released at theta = {shown} rad {}",
-                super::from_hanging(theta, se)
+                super::answer::from_hanging(theta, se)
             )
         })
     }

@@ -146,7 +146,7 @@ impl FrictionFigure<'_> {
             notes.push(format!(
                 "{} = {}",
                 p.name,
-                super::value_pm(p.value, p.stderr)
+                super::answer::value_pm(p.value, p.stderr)
             ));
         }
         for l in self.law.laws.iter().filter(|l| l.status == "fitted") {

@@ -8,10 +8,12 @@ mod figure;
 mod friction_figure;
 mod text;
 
-pub use answer::{answer, limited_sentence, models_widening, value_pm, with_interval};
+pub use answer::{
+    answer, from_hanging, limited_sentence, models_widening, value_pm, with_interval,
+};
 pub use figure::FitFigure;
 pub use friction_figure::FrictionFigure;
-pub use text::{fit_text, friction_law_text, from_hanging, TERMS};
+pub use text::{fit_text, friction_law_text, TERMS};
 
 use crate::fit::{Estimate, FitReport, Param, StaticResult};
 use serde_json::{json, Value};

@@ -65,27 +65,6 @@ pub fn fit_text(rep: &FitReport) -> String {
 /// The report's last line: where its words are explained (a text report cannot link).
 pub const TERMS: &str = "terms: docs/glossary.md (what each word and heading of this report means)";
 
-/// The release angle read from hanging, for a lab that measures its angle from the vertical:
-/// the model's theta (docs/physics.md) runs from the rail's +x direction with y down, so the
-/// bob hangs at pi/2 and `theta 0.4707 rad` is 1.1 rad from hanging, toward +x. Decimals
-/// follow the standard error `se` (four without one).
-pub fn from_hanging(theta: f64, se: f64) -> String {
-    let phi = theta - std::f64::consts::FRAC_PI_2;
-    let d = crate::report::two_digit_decimals(se).map_or(4, |d| d.clamp(2, 8));
-    let side = if phi < 0.0 { "+x" } else { "-x" };
-    if format!("{:.d$}", phi.abs())
-        .trim_matches(['0', '.'])
-        .is_empty()
-    {
-        "(hanging straight down; theta = pi/2 hangs)".to_owned()
-    } else {
-        format!(
-            "({:.d$} rad from hanging, toward {side}; theta = pi/2 hangs)",
-            phi.abs()
-        )
-    }
-}
-
 /// [[Uncertainty of mu_kinetic]]: its standard error in parts, and [[Rig as measured]]: the
 /// rig file's measured values with their deviations, and what the recording made of them.
 fn uncertainty(s: &mut String, rep: &FitReport) {
@@ -193,7 +172,7 @@ fn variables(s: &mut String, rep: &FitReport) {
             start,
             crate::report::unit_of(*p, e.value),
             if *p == Param::Theta {
-                format!(" {}", from_hanging(e.value, e.stderr))
+                format!(" {}", super::answer::from_hanging(e.value, e.stderr))
             } else {
                 String::new()
             }
