@@ -440,8 +440,74 @@ pub fn parse_toml<F: serde::de::DeserializeOwned>(
 ) -> Result<F, SceneError> {
     toml::from_str(text).map_err(|e| SceneError::Parse {
         path: path.to_owned(),
-        message: e.to_string().trim_end().to_owned(),
+        message: match placeholder(text) {
+            // The parser's own words ("invalid string") do not say what to do.
+            Some((line, key, value)) => format!(
+                "line {line}: {key} = {value} is a template's placeholder, still to fill in: {}",
+                placeholder_fix(&value)
+            ),
+            None => e.to_string().trim_end().to_owned(),
+        },
     })
+}
+
+/// The placeholders a rig template (`appell inspect FILE --rig-template RIG.toml`) leaves for
+/// the lab to fill in, with what each asks for: upper case, as in the commands `inspect`
+/// prints. They are not TOML values, so a file still holding one is refused, naming it.
+pub const RIG_PLACEHOLDERS: [(&str, &str); 3] = [
+    (
+        "SLIDER_KG",
+        "the slider's mass in kilograms, with its pivot and whatever rides on it, as weighed (306 g is 0.306)",
+    ),
+    (
+        "BOB_KG",
+        "the bob's mass in kilograms, as weighed (147 g is 0.147)",
+    ),
+    (
+        "METRES",
+        "the rod's length in metres, from the pivot's axis to the bob's centre, as measured (25.1 cm is 0.251)",
+    ),
+];
+
+/// What a placeholder asks for.
+fn placeholder_fix(value: &str) -> String {
+    RIG_PLACEHOLDERS
+        .iter()
+        .find(|(name, _)| *name == value)
+        .map_or("write a number in its place".to_owned(), |(_, what)| {
+            format!("write {what}")
+        })
+}
+
+/// The first line holding `key = PLACEHOLDER` (an upper-case word, which no TOML value is), as
+/// its line number, key and word.
+fn placeholder(text: &str) -> Option<(usize, String, String)> {
+    text.lines().enumerate().find_map(|(i, line)| {
+        let code = line.split('#').next().unwrap_or("");
+        let (key, value) = code.split_once('=')?;
+        let (key, value) = (key.trim(), value.trim());
+        let word = value.starts_with(|c: char| c.is_ascii_uppercase())
+            && value
+                .chars()
+                .all(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || c == '_');
+        word.then(|| (i + 1, key.to_owned(), value.to_owned()))
+    })
+}
+
+/// A rig file's keys written before any section (the `[rig]` line left out): the parser would
+/// call the first one an unknown section. The key and its line.
+fn missing_rig_header(text: &str) -> Option<(usize, String)> {
+    let table: toml::Table = toml::from_str(text).ok()?;
+    if table.contains_key("rig") {
+        return None;
+    }
+    let key = table.iter().find(|(_, v)| !v.is_table())?.0;
+    let line = text.lines().position(|l| {
+        l.trim_start()
+            .strip_prefix(key.as_str())
+            .is_some_and(|rest| rest.trim_start().starts_with('='))
+    })?;
+    Some((line + 1, key.clone()))
 }
 
 impl Scene {
@@ -1056,6 +1122,19 @@ pub struct RigFile {
 }
 
 impl RigFile {
+    /// Parse a rig file's text, a missing `[rig]` line said as such.
+    fn from_text(text: &str, path: &Path) -> Result<RigFile, SceneError> {
+        parse_toml(text, path).map_err(|e| match missing_rig_header(text) {
+            Some((line, key)) => SceneError::Parse {
+                path: path.to_owned(),
+                message: format!(
+                    "line {line}: {key} comes before any section: a rig file's keys go under a [rig] line (add one above them; appell inspect RECORDING --rig-template RIG.toml writes a rig file to fill in)"
+                ),
+            },
+            None => e,
+        })
+    }
+
     /// Read and validate a rig file; errors name the file and the key at fault.
     pub fn load(path: &Path) -> Result<Rig<f64>, SceneError> {
         Self::parse(&read_text(path, MAX_TOML_BYTES)?, path)
@@ -1092,7 +1171,7 @@ impl RigFile {
         mu_guess: f64,
         site: Option<(f64, f64)>,
     ) -> Result<(Rig<f64>, RigSpec, Option<String>), SceneError> {
-        let file: RigFile = parse_toml(text, path)?;
+        let file = RigFile::from_text(text, path)?;
         let mut measured = file.rig;
         // Gravity is a measured value like the rod and the masses: the fit takes it with a
         // prior of this deviation, and the recording (its swings) pins it far better.
@@ -1123,7 +1202,7 @@ impl RigFile {
 
     /// Parse and validate rig-file text, its time scale included; `path` only labels errors.
     pub fn parse(text: &str, path: &Path) -> Result<Rig<f64>, SceneError> {
-        let file: RigFile = parse_toml(text, path)?;
+        let file = RigFile::from_text(text, path)?;
         let rig = file.rig.checked(path)?;
         check_time_scale(path, &rig, RigOrigin::File { friction: "rig" })?;
         Ok(rig)

@@ -6,8 +6,8 @@ use anyhow::anyhow;
 use appell::data::inspect::inspect;
 use appell::data::{detect, Format, ReadOptions};
 use appell::pipeline::RecordingArgs;
-use appell::report::inspect::{inspect_json, inspect_text};
-use std::path::PathBuf;
+use appell::report::inspect::{inspect_json, inspect_text, rig_template};
+use std::path::{Path, PathBuf};
 
 /// Arguments of `appell inspect`.
 #[derive(Debug, clap::Args)]
@@ -19,6 +19,11 @@ pub struct Args {
     /// Print one JSON object per recording (one a line), for scripts.
     #[arg(long)]
     json: bool,
+    /// Write a rig file for the recording to this path (the one the text shows under "rig
+    /// file"): the `[rig]` keys a lab measures, with what the file tells filled in and upper-case
+    /// placeholders for the rest. An existing file is not overwritten.
+    #[arg(long, value_name = "RIG.toml")]
+    rig_template: Option<PathBuf>,
     /// Recording flags already known (`--fps 100`, `--slider NAME`): used in the reading and
     /// carried into the suggested commands.
     #[command(flatten)]
@@ -39,9 +44,27 @@ pub fn run(args: Args) -> Result<(), Failure> {
         }
     }
     let groups = recordings(&files, &opts);
+    if let Some(out) = &args.rig_template {
+        super::refuse_input(Some(out), &files)?;
+        if out.symlink_metadata().is_ok() {
+            return Err(Failure::Input(anyhow!(
+                "{}: exists, not overwritten (a rig file holds the lab's measurements): remove it or give another name",
+                out.display()
+            )));
+        }
+        if groups.len() != 1 {
+            return Err(Failure::Input(anyhow!(
+                "--rig-template writes the rig file of one recording; {} were given",
+                groups.len()
+            )));
+        }
+    }
     if let [one] = groups.as_slice() {
         let ins = inspect(one, &opts).map_err(|e| Failure::Input(e.into()))?;
         print(&ins, args.json);
+        if let Some(out) = &args.rig_template {
+            write_template(&ins, out)?;
+        }
         return Ok(());
     }
     let mut failed = 0;
@@ -63,6 +86,26 @@ pub fn run(args: Args) -> Result<(), Failure> {
             groups.len()
         )));
     }
+    Ok(())
+}
+
+/// Write the recording's rig file to `out`, never over an existing file: a rig file holds a
+/// lab's measurements.
+fn write_template(ins: &appell::data::inspect::Inspection, out: &Path) -> Result<(), Failure> {
+    if !ins.rig.looks_like_rig {
+        return Err(Failure::Input(anyhow!(
+            "{}: no rig file written: no pair of markers moves like a slider and a bob ({})",
+            out.display(),
+            ins.rig.why
+        )));
+    }
+    let text = rig_template(ins);
+    appell::output::write_atomic(out, |w| w.write_all(text.as_bytes()))
+        .map_err(|e| Failure::Run(anyhow!("{}: cannot write: {e}", out.display())))?;
+    note!(
+        "wrote {}: replace its upper-case values with the rig's masses and rod length as measured, then run the fit command above",
+        out.display()
+    );
     Ok(())
 }
 

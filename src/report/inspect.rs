@@ -2,14 +2,71 @@
 //! the bob, the options still missing and the commands to run, as text or one JSON object.
 
 use crate::data::inspect::{sig, Inspection, Need};
+use crate::fit::priors::{DEFAULT_BOB_MASS_REL, DEFAULT_ROD_LENGTH_SD, DEFAULT_SLIDER_MASS_REL};
+use crate::scene::RIG_PLACEHOLDERS;
 use serde_json::Value;
 
 /// The pairs the text lists (the JSON lists every pair compared).
 pub const PAIRS_SHOWN: usize = 8;
 
-/// The inspection as one JSON object.
+/// The inspection as one JSON object, with the rig file to fill in (`rig_template`) when the
+/// file holds a rig.
 pub fn inspect_json(ins: &Inspection) -> Value {
-    serde_json::to_value(ins).expect("an inspection serializes")
+    let mut v = serde_json::to_value(ins).expect("an inspection serializes");
+    if ins.rig.looks_like_rig {
+        v["rig_template"] = Value::String(rig_template(ins));
+    }
+    v
+}
+
+/// A rig file for the recording: the `[rig]` section with every key a lab measures, its unit
+/// and how it is measured; what the recording or its flags tell (the rod's length) filled in,
+/// the rest upper-case placeholders ([`RIG_PLACEHOLDERS`]) that the fit refuses, naming them,
+/// until they are replaced; the measurement errors' defaults as comments.
+pub fn rig_template(ins: &Inspection) -> String {
+    let files: Vec<String> = ins.files.iter().map(|f| f.display().to_string()).collect();
+    let key = |key: &str, value: &str, comment: &str| {
+        format!("{:<26}# {comment}\n", format!("{key} = {value}"))
+    };
+    let (rod, rod_from) = match &ins.rod_length {
+        Some(l) => (
+            sig(l.metres, 4),
+            format!("m, pivot axis to the bob's centre: {}", l.from),
+        ),
+        None => (
+            RIG_PLACEHOLDERS[2].0.to_owned(),
+            "m, pivot axis to the bob's centre (its marker), as measured".to_owned(),
+        ),
+    };
+    let mut s = format!(
+        "# The rig of {}, from `appell inspect`.\n# Replace the upper-case values with what the lab measured (upper case left in is refused).\n[rig]\n",
+        files.join(" + ")
+    );
+    s += &key(
+        "slider_mass",
+        RIG_PLACEHOLDERS[0].0,
+        "kg, the slider with its pivot and what rides on it, as weighed",
+    );
+    s += &key("bob_mass", RIG_PLACEHOLDERS[1].0, "kg, as weighed");
+    s += &key("rod_length", &rod, &rod_from);
+    s += &key(
+        "# gravity",
+        "9.81",
+        "m/s^2; left out, 9.81 +- 0.015 is fitted (or give --latitude)",
+    );
+    s += &key(
+        "# rod_length_sd",
+        &DEFAULT_ROD_LENGTH_SD.to_string(),
+        "m, 1 sd, the default (a ruler); 0 holds a value exact",
+    );
+    s += &format!(
+        "# slider_mass_sd, bob_mass_sd: 1 sd in kg; left out, {} % and {} % of the masses (a scale)\n",
+        DEFAULT_SLIDER_MASS_REL * 100.0,
+        DEFAULT_BOB_MASS_REL * 100.0
+    );
+    s += "# A rigid pendulum (a rod with mass, a bob of some size): rod_mass (kg), bob_radius (m).\n";
+    s += "# mu and the friction law are what the fit finds; docs/simulation.md lists every key.\n";
+    s
 }
 
 /// The inspection as text, one item per line.
@@ -77,6 +134,12 @@ pub fn inspect_text(ins: &Inspection) -> String {
     s += &format!("  run        {}\n", ins.convert_command);
     s += &format!("             {}\n", ins.fit_command);
     s += &format!("             ({})\n", placeholders(ins));
+    if ins.rig.looks_like_rig {
+        s += "  rig file   RIG.toml for the fit, to fill in (`--rig-template RIG.toml` writes it):\n";
+        for line in rig_template(ins).lines() {
+            s += &format!("    {line}\n");
+        }
+    }
     for n in &ins.left_out {
         s += &format!("  note: {n}\n");
     }
@@ -240,7 +303,7 @@ fn placeholders(ins: &Inspection) -> String {
         ("SLIDER", "SLIDER and BOB the markers' names"),
         (
             "RIG.toml",
-            "RIG.toml your rig file (the [rig] section of a scene)",
+            "RIG.toml your rig file (below, with what the file tells filled in)",
         ),
         ("OUT.csv", "OUT.csv the canonical CSV to write"),
     ] {

@@ -3,7 +3,7 @@
 //! and a bob), the plane, the rail frame, the y axis; and the command lines built from them.
 
 use super::pairs::{pair_as_named, Look, Pair, LINE_NOISE, LINE_SHARE, MAX_LEAN_DEG};
-use super::{sig, Inspection, RigChoice};
+use super::{sig, Inspection, RigChoice, RodLength};
 use crate::data::calibrate::fit_rail;
 use crate::data::{align, paths_label, select, DataError, Parsed, ReadOptions, Recording, Series};
 use serde::Serialize;
@@ -118,6 +118,21 @@ pub(super) fn advise(ins: &mut Inspection, parsed: &Parsed, paths: &[PathBuf], o
         ));
     }
     let pair = rig.pair.as_ref();
+    ins.rod_length = match (opts.rod_length, ins.units.metres_per_unit, pair) {
+        (Some(l), _, _) => Some(RodLength {
+            metres: l,
+            from: "as given with --rod-length".into(),
+        }),
+        // The pairs' lengths are in metres once the file's units are known.
+        (None, Some(_), Some(p)) if rig.choice.looks_like_rig => Some(RodLength {
+            metres: p.median,
+            from: format!(
+                "the markers' median in {} frames (a ruler's is better)",
+                p.frames
+            ),
+        }),
+        _ => None,
+    };
     if ins.units.metres_per_unit.is_none() {
         match opts.rod_length {
             None => out.push(Suggestion::one(

@@ -71,6 +71,19 @@ pub struct Inspection {
     pub warnings: Vec<String>,
     /// Key-value metadata stored in the file.
     pub metadata: BTreeMap<String, String>,
+    /// The rod's length in metres, when the file's scale or `--rod-length` tells it: the value
+    /// a rig file for the recording starts from.
+    pub rod_length: Option<RodLength>,
+}
+
+/// The rod's length as a recording or its flags tell it.
+#[derive(Debug, Clone, Serialize)]
+pub struct RodLength {
+    /// Metres.
+    pub metres: f64,
+    /// Where it comes from: `--rod-length`, or the median slider-bob marker distance of a
+    /// file in metric units.
+    pub from: String,
 }
 
 /// Frame times: from the file, or frame numbers only.
@@ -212,6 +225,7 @@ pub fn inspect(paths: &[PathBuf], opts: &ReadOptions) -> Result<Inspection, Data
         suggestions: Vec::new(),
         convert_command: String::new(),
         fit_command: String::new(),
+        rod_length: None,
         notes,
         warnings: read.parsed.warnings.clone(),
         metadata: read.parsed.metadata.clone(),
