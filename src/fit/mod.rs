@@ -69,7 +69,7 @@ pub use estimate::{Estimate, MuParts, RigValue};
 pub use noise::NoiseEstimate;
 pub use outcome::{Adequacy, FitReport, StartOutcome, StaticResult, Work};
 pub use pendulum::{PendulumFound, ValueSe};
-pub use plausible::{check_rod_length, ROD_LENGTH_TOLERANCE};
+pub use plausible::{check_masses, check_rod_length, MASS_MAX_KG, ROD_LENGTH_TOLERANCE};
 pub use problem::{Counters, Observations, Param, TrajectoryProblem, MAX_FREE};
 pub use select::{ModelRow, Nuisance};
 pub use settings::{FitSettings, Loss, StaticMode, PREFIX_FRAMES};

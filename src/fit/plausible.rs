@@ -60,6 +60,41 @@ pub fn check_rod_length(
     })
 }
 
+/// The most a bench rig's slider or bob weighs here, in kg: a Painleve-Appell rig's parts weigh
+/// grams to a few kilograms (a cart of 0.05-2 kg, a bob of 0.02-1 kg), so a mass above this
+/// is a mass in grams far more often than a rig this heavy. The dynamics see only the masses'
+/// ratio, so grams for both would fit the same mu while every force the report gives came out
+/// a thousand times too large; grams for one would fit nonsense.
+pub const MASS_MAX_KG: f64 = 20.0;
+
+/// Refuse a rig file whose slider or bob weighs more than [`MASS_MAX_KG`], naming the key, its
+/// value and, when it reads as grams, the value in kilograms.
+pub fn check_masses(rig_path: &Path, rig: &Rig<f64>) -> Result<(), SceneError> {
+    for (key, mass) in [
+        ("rig.slider_mass", rig.slider_mass),
+        ("rig.bob_mass", rig.bob_mass),
+    ] {
+        if mass > MASS_MAX_KG {
+            let grams = if mass / 1000.0 >= 1e-3 {
+                format!(
+                    ": a mass in grams? the rig file takes kilograms: {} kg",
+                    significant(mass / 1000.0)
+                )
+            } else {
+                String::new()
+            };
+            return Err(SceneError::Invalid {
+                path: rig_path.to_owned(),
+                message: format!(
+                    "{key} = {} kg is more than a bench rig's slider or bob weighs (at most {MASS_MAX_KG} kg){grams}",
+                    significant(mass)
+                ),
+            });
+        }
+    }
+    Ok(())
+}
+
 /// `v` to four significant digits: the median is a measurement, and the range's ends carry
 /// no more digits than it does (0.2008, not 0.20080000000000006).
 fn significant(v: f64) -> String {

@@ -13,7 +13,9 @@ pub use recording_args::{RecordingArgs, FORMAT_NAMES};
 
 use crate::data::{read_recording, ReadOptions, Recording};
 use crate::fit::joint::{fit_joint, JointError, JointReport, JointSettings, Release};
-use crate::fit::{check_recording, check_rod_length, fit, FitReport, FitSettings, Observations};
+use crate::fit::{
+    check_masses, check_recording, check_rod_length, fit, FitReport, FitSettings, Observations,
+};
 use crate::model::Rig;
 use crate::scene::RigFile;
 use std::path::{Path, PathBuf};
@@ -38,7 +40,18 @@ impl FitSetup {
     /// Load the rig file at `rig_path` and check `args` (bad input: the file and key, or the
     /// flag, at fault). `scale` is the recording's `--scale`, for noise given in pixels.
     pub fn new(rig_path: &Path, args: &FitArgs, scale: Option<f64>) -> anyhow::Result<FitSetup> {
-        let text = crate::scene::read_text(rig_path, crate::scene::MAX_TOML_BYTES)?;
+        let text = match crate::scene::read_text(rig_path, crate::scene::MAX_TOML_BYTES) {
+            // A lab's first fit: say where a rig file comes from.
+            Err(crate::scene::SceneError::Io { source, .. })
+                if source.kind() == std::io::ErrorKind::NotFound =>
+            {
+                anyhow::bail!(
+                    "{}: no such rig file: `appell inspect RECORDING --rig-template RIG.toml` writes one for the recording, to fill in with the rig's masses and rod length as measured",
+                    rig_path.display()
+                )
+            }
+            r => r?,
+        };
         Self::from_text(&text, rig_path, args, scale)
     }
 
@@ -136,6 +149,7 @@ pub fn observations_for_rig(
 /// The checks of [`read_for_rig`].
 fn check_for_rig(rec: &Recording, rig_path: &Path, rig: &Rig<f64>) -> anyhow::Result<()> {
     check_recording(rec)?;
+    check_masses(rig_path, rig)?;
     check_rod_length(rig_path, rig, rec)?;
     // Before any integration: a rig too stiff to fit in minutes is refused, naming its key.
     crate::scene::check_time_scale(

@@ -247,3 +247,49 @@ fn a_rod_length_in_centimetres_is_named_as_such() {
         assert!(digits <= 4 && v.parse::<f64>().is_ok(), "{range}: {err}");
     }
 }
+
+/// A rig file's mistakes of a first hour each get one error naming the fix, exit code 2: the
+/// `[rig]` line left out (the parser would call the first key an unknown section), masses
+/// typed in grams (the dynamics see only their ratio, so grams for both would fit the same mu
+/// with every force a thousand times off), and a rig file that does not exist yet.
+#[test]
+fn a_first_hour_rig_file_gets_errors_naming_the_fix() {
+    let d = scratch("rig-first-hour");
+    let text = std::fs::read_to_string(path("configs/rig_example.toml")).unwrap();
+    let fit = |rig: &std::path::Path| {
+        appell(&[
+            "fit",
+            &path("data/example_recording.mcap"),
+            "--rig",
+            &rig.display().to_string(),
+        ])
+    };
+    let headless = d.join("headless.toml");
+    std::fs::write(&headless, text.replace("[rig]\n", "")).unwrap();
+    let out = fit(&headless);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("comes before any section") && err.contains("[rig] line"),
+        "{err}"
+    );
+    let grams = d.join("grams.toml");
+    let heavy = text.replace("slider_mass = 0.5", "slider_mass = 500");
+    assert_ne!(
+        heavy, text,
+        "the example's slider mass moved: update this test"
+    );
+    std::fs::write(&grams, heavy).unwrap();
+    let out = fit(&grams);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("rig.slider_mass = 500.0 kg")
+            && err.contains("a mass in grams? the rig file takes kilograms: 0.5000 kg"),
+        "{err}"
+    );
+    let out = fit(&d.join("missing.toml"));
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(err.contains("--rig-template"), "{err}");
+}
