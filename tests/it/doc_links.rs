@@ -204,10 +204,12 @@ fn the_checks_find_what_they_look_for() {
 }
 
 /// Folders the repository-wide check does not read: build output, version control, and the
-/// fuzzer's corpus and its own build (outside the workspace).
-const NOT_READ: [&str; 5] = [
+/// fuzzer's corpus and its own build (outside the workspace), and the virtual environment
+/// `scripts/checks/test_python.sh` makes (its packages are not the repository's).
+const NOT_READ: [&str; 6] = [
     "target",
     ".git",
+    ".venv",
     "fuzz/target",
     "fuzz/corpus",
     "fuzz/artifacts",
