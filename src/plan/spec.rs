@@ -304,6 +304,19 @@ impl Uncertain {
 impl fmt::Display for Uncertain {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
+            // A fit's mean to its deviation's second digit (0.17998 +- 0.00032), not an f64's
+            // seventeen digits; a typed value as typed.
+            Uncertain::Normal { mean, sd } if sd > 0.0 && sd.is_finite() && mean.is_finite() => {
+                let decimals = (1 - sd.log10().floor() as i32).clamp(0, 17) as usize;
+                let mean = format!("{mean:.decimals$}");
+                let typed = format!("{}", mean.parse::<f64>().unwrap_or(f64::NAN));
+                let mean = if typed.len() < mean.len() {
+                    typed
+                } else {
+                    mean
+                };
+                write!(f, "{mean} +- {} (sd)", crate::data::inspect::sig(sd, 2))
+            }
             Uncertain::Normal { mean, sd } => write!(f, "{mean} +- {sd} (sd)"),
             Uncertain::Uniform { lo, hi } => write!(f, "[{lo}, {hi}]"),
         }
@@ -928,6 +941,20 @@ impl PlanSpec {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_prior_prints_at_its_deviation_s_precision() {
+        let fit = Uncertain::Normal {
+            mean: 0.17997509399217101,
+            sd: 0.00031744466801361996,
+        };
+        assert_eq!(fit.to_string(), "0.17998 +- 0.00032 (sd)");
+        let typed = Uncertain::Normal {
+            mean: 0.25,
+            sd: 0.05,
+        };
+        assert_eq!(typed.to_string(), "0.25 +- 0.050 (sd)");
+    }
 
     const GOOD: &str = r#"
 [rig]
