@@ -7,7 +7,7 @@ event and the integration is restarted there in the new mode. The script times t
 (median of repeats) and prints the event timeline; with `--appell BIN` it also runs
 `BIN simulate SCENE --json` and prints the differences of the event times.
 
-Outside CI. Setup (see README, "Work-precision"):
+Outside CI. Setup (see docs/performance.md, "Against scipy"):
     python3 -m venv .venv && .venv/bin/pip install scipy numpy
     .venv/bin/python scripts/bench/compare_scipy.py --appell target/release/appell
 """

@@ -128,7 +128,7 @@ fn fit_figure_draws_data_over_the_model_and_tells_the_residuals_apart() {
             &path("configs/rig_example.toml"),
             p,
         );
-        // The report's windows are slides (README, [[Windows]]).
+        // The report's windows are slides (docs/glossary.md, [[Windows]]).
         assert!(report.contains("[[Windows]] mu_kinetic per slide"));
         chosen = chosen_model(&report);
     }

@@ -314,7 +314,7 @@ impl Traces<'_> {
     }
 
     /// The observed points of coordinate `k` with their residuals (fitted minus observed, as
-    /// the fit and the README define them): those the fit used, or those it `left_out`.
+    /// docs/fit.md and docs/glossary.md define them): those the fit used, or those it `left_out`.
     fn points(&self, k: usize, left_out: bool) -> Vec<Point> {
         (0..self.times.len().min(self.pred.len()))
             .filter(|&i| self.left_out[i][k / 2] == left_out)
