@@ -2,6 +2,7 @@
 //! contradict (a unit slip, a typo such as 1e-9) is otherwise fitted for minutes to a
 //! meaningless answer.
 
+use crate::data::inspect::sig;
 use crate::data::Recording;
 use crate::model::Rig;
 use crate::scene::SceneError;
@@ -51,10 +52,10 @@ pub fn check_rod_length(
             "rig.rod_length must be within {} % of the median slider-bob marker distance of {} ({} m over {} frames), from {} to {} m: the rod runs from the pivot to the bob's centre, where its marker is, and a camera's scale and the markers' offsets explain a few percent, not more; got {rod:?}{}",
             ROD_LENGTH_TOLERANCE * 100.0,
             sources.join(" + "),
-            significant(median),
+            sig4(median),
             geometry.frames,
-            significant(lo),
-            significant(hi),
+            sig4(lo),
+            sig4(hi),
             unit_slip(rod, median),
         ),
     })
@@ -78,7 +79,7 @@ pub fn check_masses(rig_path: &Path, rig: &Rig<f64>) -> Result<(), SceneError> {
             let grams = if mass / 1000.0 >= 1e-3 {
                 format!(
                     ": a mass in grams? the rig file takes kilograms: {} kg",
-                    significant(mass / 1000.0)
+                    sig4(mass / 1000.0)
                 )
             } else {
                 String::new()
@@ -87,22 +88,12 @@ pub fn check_masses(rig_path: &Path, rig: &Rig<f64>) -> Result<(), SceneError> {
                 path: rig_path.to_owned(),
                 message: format!(
                     "{key} = {} kg is more than a bench rig's slider or bob weighs (at most {MASS_MAX_KG} kg){grams}",
-                    significant(mass)
+                    sig4(mass)
                 ),
             });
         }
     }
     Ok(())
-}
-
-/// `v` to four significant digits: the median is a measurement, and the range's ends carry
-/// no more digits than it does (0.2008, not 0.20080000000000006).
-fn significant(v: f64) -> String {
-    if v == 0.0 || !v.is_finite() {
-        return format!("{v}");
-    }
-    let decimals = (3 - v.abs().log10().floor() as i32).max(0) as usize;
-    format!("{v:.decimals$}")
 }
 
 /// A hint when `rod` is the markers' `median` in another unit: the rig file takes metres, and
@@ -119,7 +110,13 @@ fn unit_slip(rod: f64, median: f64) -> String {
     .map_or(String::new(), |(unit, f)| {
         format!(
             " (a length in {unit}? the rig file takes metres: {} m)",
-            significant(rod / f)
+            sig4(rod / f)
         )
     })
+}
+
+/// `v` to four significant digits ([`sig`]): the median is a measurement, and the range's ends
+/// carry no more digits than it does (0.2008, not 0.20080000000000006).
+fn sig4(v: f64) -> String {
+    sig(v, 4)
 }
