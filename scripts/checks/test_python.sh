@@ -7,8 +7,8 @@ cd "$(dirname "$0")/../.."
 python3 -m venv .venv
 .venv/bin/pip install --quiet --upgrade pip
 .venv/bin/pip install --quiet './python[test]'
-# The binary `cargo test --release` builds (a no-op after it; plain `cargo build` would
-# compile the library again, its dependencies unified without the dev-dependencies).
+# The binary `cargo test --release` builds (a no-op after it; Cargo.toml asks for the tests' and
+# the bindings' features, so the wheel above reused this library too).
 cargo test --release --no-run --quiet
 # In cargo's target directory: target/, or CARGO_TARGET_DIR when set (pip's build of the wheel
 # above used it too).
