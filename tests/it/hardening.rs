@@ -580,3 +580,41 @@ fn mcap_chunk_with_a_wrong_crc_is_reported_with_its_offset() {
         "{text}"
     );
 }
+
+/// Issue 59, class K: a marker's columns given twice in a wide CSV (the second copy different)
+/// were read from the first without a word; convert, inspect and fit now refuse the header,
+/// naming the column and both places.
+#[test]
+fn a_wide_csv_with_a_marker_column_named_twice_is_refused_naming_both_columns() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut text = String::from("t,slider_x,slider_y,bob_x,bob_y,bob_x,bob_y\n");
+    for k in 0..50 {
+        let t = k as f64 * 0.01;
+        text += &format!("{t},0,0,{},-0.25,{},-0.25\n", 0.1 * t.sin(), 0.3 * t.sin());
+    }
+    let p = write(dir.path(), "twice.csv", &text);
+    let rig = write(
+        dir.path(),
+        "rig.toml",
+        "[rig]\nslider_mass = 0.3\nbob_mass = 0.15\nrod_length = 0.25\n",
+    );
+    let out = dir.path().join("out.csv");
+    let path = p.to_str().unwrap();
+    for args in [
+        vec!["convert", path, out.to_str().unwrap()],
+        vec!["inspect", path],
+        vec!["fit", path, "--rig", rig.to_str().unwrap()],
+    ] {
+        let o = appell(&args);
+        let e = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {e}");
+        assert!(
+            e.contains("twice.csv")
+                && e.contains("\"bob_x\"")
+                && e.contains("column 4")
+                && e.contains("column 6"),
+            "{args:?}: {e}"
+        );
+    }
+    assert!(!out.exists());
+}

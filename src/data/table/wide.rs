@@ -32,6 +32,21 @@ pub(crate) fn wide_markers(header: &[String]) -> Vec<(String, usize, usize, Opti
     out
 }
 
+/// The first non-empty lower-cased column name that appears twice, with both 1-based columns.
+fn repeated_column(low: &[String]) -> Option<(&str, usize, usize)> {
+    let mut seen = std::collections::HashMap::with_capacity(low.len());
+    for (i, name) in low.iter().enumerate() {
+        let name = name.trim();
+        if name.is_empty() {
+            continue;
+        }
+        if let Some(first) = seen.insert(name, i) {
+            return Some((name, first + 1, i + 1));
+        }
+    }
+    None
+}
+
 /// Read a wide CSV: a time column (or `--fps` to number the rows) and `NAME_x,NAME_y[,NAME_z]`
 /// or `xN,yN` column pairs, one series per marker.
 pub(super) fn read_wide(
@@ -42,6 +57,15 @@ pub(super) fn read_wide(
     let mut rows = Rows::new(input, path, b',');
     let header = rows.header("a header t,slider_x,slider_y,bob_x,bob_y")?;
     let low = lower(&header);
+    // A column named twice (a marker exported twice, a pasted block) was read from its first
+    // occurrence without a word: which copy holds the marker is the lab's to say.
+    if let Some((name, first, second)) = repeated_column(&low) {
+        return Err(rows.err(
+            "header",
+            "each column named once (delete or rename the copy)",
+            format!("{name:?} as column {first} and again as column {second}"),
+        ));
+    }
     let time = time_column(&low);
     let pairs = wide_markers(&header);
     if pairs.is_empty() {
