@@ -966,9 +966,15 @@ pub fn check_rig_range(path: &Path, r: &RigSpec) -> Result<(), SceneError> {
             )?;
         }
     }
+    // Every friction key the file can hold, each under its own name: the direction law's
+    // means would name `mu_kinetic`, a key its file lacks, and let one direction past 1e9.
     for (key, mu) in [
         ("rig.mu_kinetic", r.mu_kinetic),
         ("rig.mu_static", r.mu_static),
+        ("rig.mu_kinetic_positive", r.mu_kinetic_positive),
+        ("rig.mu_kinetic_negative", r.mu_kinetic_negative),
+        ("rig.mu_static_positive", r.mu_static_positive),
+        ("rig.mu_static_negative", r.mu_static_negative),
     ] {
         if let Some(mu) = mu {
             check(

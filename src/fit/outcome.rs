@@ -166,7 +166,7 @@ pub struct FitReport {
     pub mu_parts: Option<MuParts>,
     /// The rig file's measured keys: key, value, standard deviation, whether the file stated
     /// it (`false`: the default).
-    pub rig_keys: Vec<(&'static str, f64, f64, bool)>,
+    pub rig_keys: Vec<(&'static str, f64, f64, &'static str)>,
     /// The rig values fitted as measurements.
     pub rig_values: Vec<RigValue>,
     /// The chosen model's values no real rig has, a sentence each (the fit is then flagged).

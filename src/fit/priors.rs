@@ -61,12 +61,29 @@ pub struct RigMeasurement {
     pub gravity: (f64, f64),
     /// Each measured key with its value, standard deviation and whether the file stated the
     /// deviation (`false`: the default), for the report.
-    pub keys: Vec<(&'static str, f64, f64, bool)>,
+    pub keys: Vec<(&'static str, f64, f64, &'static str)>,
     /// What the fit reports about the rig file besides its values (a gravity it did not give).
     pub notes: Vec<String>,
 }
 
+/// Where a measured value's deviation came from: the file, or the default.
+fn stated_or_default(sd: Option<f64>) -> &'static str {
+    if sd.is_some() {
+        "stated"
+    } else {
+        "default"
+    }
+}
+
 impl RigMeasurement {
+    /// Record that gravity came from `source` (`"--latitude"` or `"default"`), not the rig
+    /// file: the file left it out and the fit filled it in.
+    pub fn gravity_from(&mut self, source: &'static str) {
+        for k in self.keys.iter_mut().filter(|k| k.0 == "gravity") {
+            k.3 = source;
+        }
+    }
+
     /// The measurement a rig file's `[rig]` describes: its `*_sd` keys, or the defaults of a
     /// ruler and a kitchen scale.
     pub fn from_spec(spec: &RigSpec) -> RigMeasurement {
@@ -74,7 +91,7 @@ impl RigMeasurement {
         let mut keys = Vec::new();
         let mut key = |name: &'static str, v: Option<f64>, sd: Option<f64>, default: f64| {
             let v = v?;
-            keys.push((name, v, sd.unwrap_or(default), sd.is_some()));
+            keys.push((name, v, sd.unwrap_or(default), stated_or_default(sd)));
             Some(sd.unwrap_or(default))
         };
         let rod_sd = key(
@@ -120,8 +137,12 @@ impl RigMeasurement {
         // is the default 9.81 +- 0.015 it is, not a measurement the file states.
         let gravity_sd = spec.gravity_sd.unwrap_or(DEFAULT_GRAVITY_SD);
         if gravity_sd > 0.0 {
-            let stated = spec.gravity.is_some() && spec.gravity_sd.is_some();
-            keys.push(("gravity", spec.gravity(), gravity_sd, stated));
+            let source = if spec.gravity.is_some() && spec.gravity_sd.is_some() {
+                "stated"
+            } else {
+                "default"
+            };
+            keys.push(("gravity", spec.gravity(), gravity_sd, source));
         }
         // The mass ratio the dynamics use, and its deviation by the delta method (central
         // differences through the same rig builder the fit's rig came from).
@@ -356,7 +377,7 @@ mod tests {
         assert_eq!(d.rod_length, (0.3, DEFAULT_ROD_LENGTH_SD));
         let want = 3.5 * (DEFAULT_SLIDER_MASS_REL.powi(2) + DEFAULT_BOB_MASS_REL.powi(2)).sqrt();
         assert!((d.mass_ratio.1 - want).abs() < 2e-3 * want);
-        assert!(d.keys.iter().all(|k| !k.3));
+        assert!(d.keys.iter().all(|k| k.3 == "default"));
         let exact = RigMeasurement::from_spec(&spec("[rig]\nslider_mass = 0.35\nslider_mass_sd = 0\nbob_mass = 0.1\nbob_mass_sd = 0\nrod_length = 0.3\nrod_length_sd = 0\ngravity = 9.81\ngravity_sd = 0\n"));
         assert!(exact.priors().is_empty());
     }

@@ -66,6 +66,13 @@ impl FitSetup {
         let (rig, spec, gravity_note) = RigFile::parse_on_earth(text, rig_path, MU_GUESS, site)?;
         let mut settings = args.settings(scale).map_err(anyhow::Error::msg)?;
         let mut measured = crate::fit::priors::RigMeasurement::from_spec(&spec);
+        if gravity_note.is_some() {
+            measured.gravity_from(if site.is_some() {
+                "--latitude"
+            } else {
+                "default"
+            });
+        }
         measured.notes.extend(gravity_note);
         settings.measured = Some(measured);
         Ok(FitSetup {

@@ -293,3 +293,66 @@ fn a_first_hour_rig_file_gets_errors_naming_the_fix() {
     assert_eq!(out.status.code(), Some(2), "{err}");
     assert!(err.contains("--rig-template"), "{err}");
 }
+
+/// Issue 59, class I: gravity the rig file leaves out is reported as where it came from, the
+/// default or `--latitude`, never as stated by the file (text and JSON).
+#[test]
+fn gravity_left_out_is_not_reported_as_stated() {
+    let dir = scratch("gravity");
+    let measured = path("tests/data/rigid/rigid_paper_measured.toml");
+    let text = std::fs::read_to_string(measured).unwrap();
+    let left_out: String = text
+        .lines()
+        .filter(|l| !l.trim_start().starts_with("gravity"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let rig = dir.join("no_gravity.toml").display().to_string();
+    std::fs::write(&rig, left_out).unwrap();
+    let rec = path("tests/data/rigid/rigid_paper.csv");
+    for (extra, source) in [
+        (&[][..], "default"),
+        (&["--latitude", "45"][..], "--latitude"),
+    ] {
+        let mut args = vec!["fit", &rec, "--rig", &rig];
+        args.extend_from_slice(extra);
+        let out = appell(&args);
+        let stdout = String::from_utf8_lossy(&out.stdout);
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        // The rig-as-measured line: "gravity  value +- sd (source)".
+        let line = stdout
+            .lines()
+            .find(|l| l.trim_start().starts_with("gravity") && l.trim_end().ends_with(')'))
+            .unwrap_or_else(|| panic!("no gravity line in {stdout}"));
+        assert!(line.ends_with(&format!("({source})")), "{line}");
+        args.push("--json");
+        let out = appell(&args);
+        assert!(out.status.success());
+        let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+        let mut keys = Vec::new();
+        find_keys(&v, &mut keys);
+        let g = keys
+            .iter()
+            .find(|k| k["key"] == "gravity")
+            .unwrap_or_else(|| panic!("no gravity key in {v}"));
+        assert_eq!(g["source"], source, "{g}");
+        assert_eq!(g["stated"], false, "{g}");
+    }
+}
+
+/// Every object with a `key` and a `stated` field in `v`, wherever the JSON nests them.
+fn find_keys(v: &serde_json::Value, out: &mut Vec<serde_json::Value>) {
+    match v {
+        serde_json::Value::Object(m) => {
+            if m.contains_key("key") && m.contains_key("stated") {
+                out.push(v.clone());
+            }
+            m.values().for_each(|x| find_keys(x, out));
+        }
+        serde_json::Value::Array(a) => a.iter().for_each(|x| find_keys(x, out)),
+        _ => {}
+    }
+}

@@ -514,3 +514,52 @@ fn tolerances_outside_their_ranges_are_refused() {
     let tight = final_x("1e-10", "1e-12");
     assert!((loose - tight).abs() < 5e-3, "{loose} against {tight}");
 }
+
+/// Issue 59, class B: a direction-law key out of range is named as the file holds it (it was
+/// reported as `rig.mu_kinetic`, a key the file lacks, with the mean's value), and each
+/// direction meets the 1e9 bound of `mu_kinetic` (1.9e9 beside 0.2 passed as a mean under it).
+/// The same in a scene (`simulate`) and in a rig file for `fit`; a valid direction rig runs.
+#[test]
+fn direction_law_keys_are_named_and_bounded() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let direction = |name: &str, from: &str, edits: &[(&str, Option<&str>)]| {
+        let mut all = vec![
+            ("mu_kinetic", None),
+            ("mu_static", None),
+            ("friction_law", Some("\"direction\"")),
+            ("mu_kinetic_positive", Some("0.24")),
+            ("mu_kinetic_negative", Some("0.20")),
+        ];
+        all.extend_from_slice(edits);
+        edited(from, d, name, &all, "[rig]")
+    };
+    let scene = "configs/rigid_rig.toml";
+    let rig = "tests/data/rigid/rigid_paper_measured.toml";
+    let rec = root("tests/data/rigid/rigid_paper.csv");
+    let cases: [(&str, &str); 4] = [
+        ("mu_kinetic_positive", "1e10"),
+        ("mu_kinetic_negative", "1.9e9"),
+        ("mu_static_positive", "1e10"),
+        ("mu_static_negative", "1.9e9"),
+    ];
+    for (i, (key, value)) in cases.into_iter().enumerate() {
+        let field = format!("rig.{key}");
+        // The value as typed, not a mean of two keys.
+        let got = format!("got {:?}", value.parse::<f64>().unwrap());
+        let p = direction(&format!("s{i}.toml"), scene, &[(key, Some(value))]);
+        let q = direction(&format!("r{i}.toml"), rig, &[(key, Some(value))]);
+        for args in [
+            vec!["simulate".to_owned(), s(&p)],
+            vec!["fit".to_owned(), s(&rec), "--rig".into(), s(&q)],
+        ] {
+            let (out, _) = appell(&args);
+            let err = String::from_utf8_lossy(&out.stderr);
+            assert!(!err.contains("rig.mu_kinetic "), "{err}");
+            let file = if args[0] == "fit" { s(&q) } else { s(&p) };
+            refused(&args, &[&file, &field, "at most 1e9", &got]);
+        }
+    }
+    let ok = direction("ok.toml", scene, &[]);
+    accepted(&["simulate".to_owned(), s(&ok)]);
+}

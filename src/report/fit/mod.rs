@@ -149,7 +149,7 @@ pub fn fit_json(rep: &FitReport) -> Value {
         "pendulum": rep.pendulum,
         "implausible": rep.implausible,
         "rig_measured": {
-            "keys": rep.rig_keys.iter().map(|(k, v, sd, stated)| json!({"key": k, "value": v, "sd": sd, "stated": stated})).collect::<Vec<_>>(),
+            "keys": rep.rig_keys.iter().map(|(k, v, sd, source)| json!({"key": k, "value": v, "sd": sd, "stated": *source == "stated", "source": source})).collect::<Vec<_>>(),
             "fitted": rep.rig_values,
         },
     });

@@ -82,12 +82,8 @@ fn uncertainty(s: &mut String, rep: &FitReport) {
         s,
         "[[Rig as measured]] value +- standard deviation (stated in the rig file, or the default of a ruler and a kitchen scale)"
     );
-    for (key, v, sd, stated) in &rep.rig_keys {
-        let _ = writeln!(
-            s,
-            "    {key:<20} {v:>12.6} +- {sd:.2e} ({})",
-            if *stated { "stated" } else { "default" }
-        );
+    for (key, v, sd, source) in &rep.rig_keys {
+        let _ = writeln!(s, "    {key:<20} {v:>12.6} +- {sd:.2e} ({source})");
     }
     for r in &rep.rig_values {
         let _ = writeln!(
