@@ -10,6 +10,8 @@
 //! - [`refuse_input`] is the one check that an output names none of the command's inputs: the
 //!   same file through a symbolic link, `..`, a hard link or another letter case on a
 //!   case-insensitive file system counts as the same file.
+//! - [`refuse_same_output`] is the one check that no two outputs of a command name one file,
+//!   by the same rule.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -37,6 +39,38 @@ pub fn refuse_input<P: AsRef<Path>>(output: &Path, inputs: &[P]) -> Result<(), O
             return Err(OutputIsInput {
                 output: output.to_owned(),
                 input: input.as_ref().to_owned(),
+            });
+        }
+    }
+    Ok(())
+}
+
+/// Two outputs of one command that name the same file.
+#[derive(Debug, thiserror::Error)]
+#[error("{first} {} and {second} {} name the same file: give each output its own file", first_path.display(), second_path.display())]
+pub struct SameOutput {
+    /// The first output's flag (`--plot`).
+    pub first: String,
+    /// The first output's path as given.
+    pub first_path: PathBuf,
+    /// The second output's flag.
+    pub second: String,
+    /// The second output's path as given.
+    pub second_path: PathBuf,
+}
+
+/// Refuse two outputs of one command that name the same file (by [`refuse_input`]'s rule:
+/// links, `..`, letter case), each given as its flag and path: one would silently replace the
+/// other. Called by a command before it reads or computes anything, with every output it
+/// will write.
+pub fn refuse_same_output(outputs: &[(&str, &Path)]) -> Result<(), SameOutput> {
+    for (i, (first, a)) in outputs.iter().enumerate() {
+        if let Some((second, b)) = outputs[i + 1..].iter().find(|(_, b)| same_file(a, b)) {
+            return Err(SameOutput {
+                first: (*first).to_owned(),
+                first_path: a.to_path_buf(),
+                second: (*second).to_owned(),
+                second_path: b.to_path_buf(),
             });
         }
     }

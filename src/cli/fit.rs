@@ -125,6 +125,15 @@ fn fit_inputs(args: &Args) -> Vec<PathBuf> {
 pub fn run(args: Args) -> Result<(), Failure> {
     super::refuse_input(args.plot.as_deref(), &fit_inputs(&args))?;
     super::refuse_input(args.friction_plot.as_deref(), &fit_inputs(&args))?;
+    // Every file the command writes: two naming one file would leave one of them, both said written.
+    let outputs: Vec<(&str, &Path)> = [
+        ("--plot", &args.plot),
+        ("--friction-plot", &args.friction_plot),
+    ]
+    .into_iter()
+    .filter_map(|(flag, p)| Some((flag, p.as_deref()?)))
+    .collect();
+    appell::output::refuse_same_output(&outputs).map_err(|e| Failure::Input(e.into()))?;
     let opts = args
         .recording
         .resolve()

@@ -186,3 +186,45 @@ fn an_interrupted_synth_leaves_no_temporary_file() {
     assert!(caught, "the write finished before it could be interrupted");
     assert!(!out.exists(), "an interrupted write left an output");
 }
+
+/// `fit --plot k.svg --friction-plot k.svg` (or another spelling of one file) wrote both
+/// figures to one file and said both were written: two outputs of one command naming one file
+/// are refused with exit 2 before any work, naming both flags, and nothing is written.
+#[test]
+fn two_outputs_of_one_fit_naming_one_file_are_refused() {
+    let dir = scratch();
+    let d = dir.path();
+    let p = |n: &str| d.join(n).display().to_string();
+    let k = p("k.svg");
+    for other in [
+        k.clone(),
+        p("sub/../k.svg"),
+        format!("{}/./k.svg", d.display()),
+    ] {
+        let before = snapshot(d);
+        let o = appell(&[
+            "fit",
+            &p("slider.txt"),
+            &p("bob.txt"),
+            "--rig",
+            &p("markers.toml"),
+            "--plot",
+            &k,
+            "--friction-plot",
+            &other,
+        ]);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{other}: {err}");
+        assert!(
+            err.contains("--plot") && err.contains("--friction-plot") && err.contains("same file"),
+            "{other}: {err}"
+        );
+        // Refused before any work: no report on stdout, no file written.
+        assert!(
+            o.stdout.is_empty(),
+            "{}",
+            String::from_utf8_lossy(&o.stdout)
+        );
+        assert_eq!(snapshot(d), before, "{other}: a file was written");
+    }
+}
