@@ -80,7 +80,7 @@ fn uncertainty(s: &mut String, rep: &FitReport) {
     }
     let _ = writeln!(
         s,
-        "[[Rig as measured]] value +- standard deviation (stated in the rig file, or the default of a ruler and a kitchen scale)"
+        "[[Rig as measured]] value +- standard deviation (stated in the rig file, from --latitude, or the default of a ruler and a kitchen scale)"
     );
     for (key, v, sd, source) in &rep.rig_keys {
         let _ = writeln!(s, "    {key:<20} {v:>12.6} +- {sd:.2e} ({source})");
@@ -88,7 +88,7 @@ fn uncertainty(s: &mut String, rep: &FitReport) {
     for r in &rep.rig_values {
         let _ = writeln!(
             s,
-            "    fitted {:<20} {:>12.6} +- {:.2e}, {:+.1} deviations from the file's {:.6}",
+            "    fitted {:<20} {:>12.6} +- {:.2e}, {:+.1} deviations from the measured {:.6}",
             r.param, r.value, r.stderr, r.z, r.file
         );
     }
