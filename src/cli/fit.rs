@@ -123,9 +123,8 @@ fn fit_inputs(args: &Args) -> Vec<PathBuf> {
 }
 
 pub fn run(args: Args) -> Result<(), Failure> {
-    super::refuse_input(args.plot.as_deref(), &fit_inputs(&args))?;
-    super::refuse_input(args.friction_plot.as_deref(), &fit_inputs(&args))?;
-    // Every file the command writes: two naming one file would leave one of them, both said written.
+    // Every file the command writes: none may be an input, and two naming one file would leave
+    // one of them, both said written.
     let outputs: Vec<(&str, &Path)> = [
         ("--plot", &args.plot),
         ("--friction-plot", &args.friction_plot),
@@ -133,6 +132,10 @@ pub fn run(args: Args) -> Result<(), Failure> {
     .into_iter()
     .filter_map(|(flag, p)| Some((flag, p.as_deref()?)))
     .collect();
+    let inputs = fit_inputs(&args);
+    for (_, out) in &outputs {
+        super::refuse_input(Some(out), &inputs)?;
+    }
     appell::output::refuse_same_output(&outputs).map_err(|e| Failure::Input(e.into()))?;
     let opts = args
         .recording

@@ -164,8 +164,8 @@ pub struct FitReport {
     pub problem: TrajectoryProblem,
     /// mu_kinetic's standard error in parts (noise, rig, model).
     pub mu_parts: Option<MuParts>,
-    /// The rig file's measured keys: key, value, standard deviation, whether the file stated
-    /// it (`false`: the default).
+    /// The rig file's measured keys: key, value, standard deviation, where it came from
+    /// (`"stated"`, `"default"` or `"--latitude"`).
     pub rig_keys: Vec<(&'static str, f64, f64, &'static str)>,
     /// The rig values fitted as measurements.
     pub rig_values: Vec<RigValue>,

@@ -59,14 +59,14 @@ pub struct RigMeasurement {
     pub mass_ratio: (f64, f64),
     /// Gravity (m/s^2) and its standard deviation.
     pub gravity: (f64, f64),
-    /// Each measured key with its value, standard deviation and whether the file stated the
-    /// deviation (`false`: the default), for the report.
+    /// Each measured key with its value, standard deviation and where the deviation came from
+    /// (`"stated"` in the file, `"default"`, or `"--latitude"` for gravity), for the report.
     pub keys: Vec<(&'static str, f64, f64, &'static str)>,
     /// What the fit reports about the rig file besides its values (a gravity it did not give).
     pub notes: Vec<String>,
 }
 
-/// Where a measured value's deviation came from: the file, or the default.
+/// Where a measured value's deviation came from: the file (`Some`), or the default.
 fn stated_or_default(sd: Option<f64>) -> &'static str {
     if sd.is_some() {
         "stated"
@@ -137,11 +137,7 @@ impl RigMeasurement {
         // is the default 9.81 +- 0.015 it is, not a measurement the file states.
         let gravity_sd = spec.gravity_sd.unwrap_or(DEFAULT_GRAVITY_SD);
         if gravity_sd > 0.0 {
-            let source = if spec.gravity.is_some() && spec.gravity_sd.is_some() {
-                "stated"
-            } else {
-                "default"
-            };
+            let source = stated_or_default(spec.gravity.and(spec.gravity_sd));
             keys.push(("gravity", spec.gravity(), gravity_sd, source));
         }
         // The mass ratio the dynamics use, and its deviation by the delta method (central
