@@ -47,6 +47,18 @@ pub const DEFAULT_BOB_RADIUS_SD: f64 = 5e-4;
 /// another path through the nuisances (a direction law and a gravity no lab has in place of
 /// the tilt, an interval 600 times narrower), so a lab asks for it.
 pub const DEFAULT_GRAVITY_SD: f64 = 0.0;
+/// A stated deviation below this fraction of its value is held exact, as `_sd = 0` is: a
+/// nanometre on a metre, finer than any ruler, scale or gravimeter a lab types and a thousand
+/// times below what a recording pins (a rod to about a micrometre). A prior that much tighter
+/// than the data adds nothing but ruins the solve's conditioning (`rod_length_sd = 1e-300`
+/// stopped the fit at its start with every standard error 0).
+pub const RESOLVABLE_REL: f64 = 1e-9;
+
+/// Whether a deviation `sd` of a value `v` is one the fit can use as a prior (finite, above
+/// [`RESOLVABLE_REL`] of the value); otherwise the value is held exact.
+fn resolvable(v: f64, sd: f64) -> bool {
+    v.is_finite() && sd.is_finite() && sd > RESOLVABLE_REL * v.abs()
+}
 
 /// The measured rig: the standard deviation of each measured value (stated in the rig file or
 /// the default), and the priors they give the fit.
@@ -89,6 +101,30 @@ impl RigMeasurement {
     pub fn from_spec(spec: &RigSpec) -> RigMeasurement {
         let mass_sd = |v: f64, rel: f64| (v * rel).max(DEFAULT_MASS_FLOOR.min(0.5 * v));
         let mut keys = Vec::new();
+        let mut notes = Vec::new();
+        // A stated deviation too small to resolve is the exact value (one rule for every key,
+        // gravity's too): held as `_sd = 0` holds it, and said so.
+        let mut exact_below = |name: &str, v: f64, sd: Option<f64>| {
+            sd.map(|sd| {
+                if sd > 0.0 && !resolvable(v, sd) {
+                    notes.push(format!(
+                        "rig.{name}_sd = {sd:e} is below {RESOLVABLE_REL:e} of the value \
+                         ({v}), finer than any measurement: the value is held exact, as \
+                         {name}_sd = 0 holds it"
+                    ));
+                    0.0
+                } else {
+                    sd
+                }
+            })
+        };
+        let rod_length_sd = exact_below("rod_length", spec.rod_length, spec.rod_length_sd);
+        let slider_mass_sd = exact_below("slider_mass", spec.slider_mass, spec.slider_mass_sd);
+        let bob_mass_sd = exact_below("bob_mass", spec.bob_mass.unwrap_or(0.0), spec.bob_mass_sd);
+        let rod_mass_sd = exact_below("rod_mass", spec.rod_mass.unwrap_or(0.0), spec.rod_mass_sd);
+        let bob_radius_sd =
+            exact_below("bob_radius", spec.bob_radius.unwrap_or(0.0), spec.bob_radius_sd);
+        let gravity_sd = exact_below("gravity", spec.gravity(), spec.gravity_sd);
         let mut key = |name: &'static str, v: Option<f64>, sd: Option<f64>, default: f64| {
             let v = v?;
             keys.push((name, v, sd.unwrap_or(default), stated_or_default(sd)));
@@ -97,14 +133,14 @@ impl RigMeasurement {
         let rod_sd = key(
             "rod_length",
             Some(spec.rod_length),
-            spec.rod_length_sd,
+            rod_length_sd,
             DEFAULT_ROD_LENGTH_SD,
         )
         .unwrap_or(DEFAULT_ROD_LENGTH_SD);
         let m1_sd = key(
             "slider_mass",
             Some(spec.slider_mass),
-            spec.slider_mass_sd,
+            slider_mass_sd,
             mass_sd(spec.slider_mass, DEFAULT_SLIDER_MASS_REL),
         )
         .unwrap_or(0.0);
@@ -112,7 +148,7 @@ impl RigMeasurement {
             key(
                 "bob_mass",
                 Some(m),
-                spec.bob_mass_sd,
+                bob_mass_sd,
                 mass_sd(m, DEFAULT_BOB_MASS_REL),
             )
         });
@@ -120,7 +156,7 @@ impl RigMeasurement {
             key(
                 "rod_mass",
                 Some(m),
-                spec.rod_mass_sd,
+                rod_mass_sd,
                 mass_sd(m, DEFAULT_BOB_MASS_REL),
             )
         });
@@ -128,14 +164,14 @@ impl RigMeasurement {
             key(
                 "bob_radius",
                 Some(a),
-                spec.bob_radius_sd,
+                bob_radius_sd,
                 DEFAULT_BOB_RADIUS_SD,
             )
         });
         // Gravity is listed only when it is fitted (held as typed by default).
         // Stated only when the file gives both the value and its deviation: gravity left out
         // is the default 9.81 +- 0.015 it is, not a measurement the file states.
-        let gravity_sd = spec.gravity_sd.unwrap_or(DEFAULT_GRAVITY_SD);
+        let gravity_sd = gravity_sd.unwrap_or(DEFAULT_GRAVITY_SD);
         if gravity_sd > 0.0 {
             let source = stated_or_default(spec.gravity.and(spec.gravity_sd));
             keys.push(("gravity", spec.gravity(), gravity_sd, source));
@@ -189,7 +225,7 @@ impl RigMeasurement {
             mass_ratio: (centre, var.sqrt()),
             gravity: (spec.gravity(), gravity_sd),
             keys,
-            notes: Vec::new(),
+            notes,
         }
     }
 
@@ -205,7 +241,8 @@ impl RigMeasurement {
     }
 
     /// The priors of the rig's measured values: the rod length, the mass ratio and gravity,
-    /// each only when its deviation is above zero (a value stated exact stays fixed).
+    /// each only when its deviation is one the data can use ([`RESOLVABLE_REL`]; a value stated
+    /// exact, or the mass ratio of masses stated exact, stays fixed).
     pub fn priors(&self) -> Vec<Prior> {
         [
             (Param::RodLength, self.rod_length),
@@ -213,7 +250,7 @@ impl RigMeasurement {
             (Param::Gravity, self.gravity),
         ]
         .into_iter()
-        .filter(|(_, (c, sd))| c.is_finite() && sd.is_finite() && *sd > 0.0)
+        .filter(|(_, (c, sd))| resolvable(*c, *sd))
         .map(|(param, (centre, sd))| Prior { param, centre, sd })
         .collect()
     }
@@ -236,6 +273,11 @@ pub struct Plausible {
 /// Plausible rail tilt (rad): 0.6 deg, 10 mm/m, over three times an unlevelled table top's
 /// 1-3 mm/m; a 1 deg tilt is visible by eye (docs/fit.md, "The nuisances' plausible ranges").
 pub const TILT_BOUND: f64 = 0.6 * std::f64::consts::PI / 180.0;
+/// The widest rail tilt (rad) a fit's solver searches, about 17 degrees: a tilt nuisance
+/// stepped beyond it simulates a rail no rig levelled by eye has; and a rig file's tilt
+/// beyond it is refused before a fit (`plausible::check_tilt`): a rail near vertical fitted
+/// for a minute to nonsense (89.9 degrees: 51 s, mu 3073 +- 17000).
+pub const TILT_SEARCH: f64 = 0.3;
 /// Plausible camera scale error: 2 % (a scale from a ruler in view or the rod is good to
 /// 0.1-0.3 %; a pixel scale typed from a short reference, to a percent or two).
 pub const SCALE_BOUND: f64 = 0.02;

@@ -217,6 +217,44 @@ fn a_value_stated_exact_is_held() {
     std::fs::remove_dir_all(&tmp).ok();
 }
 
+/// A deviation far below what any measurement resolves (`rod_length_sd = 1e-300`, the masses'
+/// at 5e-324, `gravity_sd = 1e-20`) is the exact value: held as `_sd = 0` holds it, with a
+/// note, so the fit is the exact rig's to the last digits (issue 59, class A: the prior's
+/// weight swamped the solve, which stopped at its start with every standard error 0).
+#[test]
+fn a_deviation_below_any_measurement_is_held_exact() {
+    let dir = repo("tests/data/measured");
+    let recording = dir.join("equal_s1.csv");
+    let tmp = std::env::temp_dir().join(format!("appell-tiny-sd-{}", std::process::id()));
+    std::fs::create_dir_all(&tmp).unwrap();
+    let rig = "[rig]\nslider_mass = 0.2\nbob_mass = 0.2\nrod_mass = 0.0\nbob_radius = 0.0\nrod_length = 0.3\ngravity = 9.81\n";
+    let (exact, tiny) = (tmp.join("exact.toml"), tmp.join("tiny.toml"));
+    let zero = "rod_length_sd = 0\nslider_mass_sd = 0\nbob_mass_sd = 0\ngravity_sd = 0\n";
+    std::fs::write(&exact, format!("{rig}{zero}")).unwrap();
+    let tiny_sds =
+        "rod_length_sd = 1e-300\nslider_mass_sd = 5e-324\nbob_mass_sd = 1e-12\ngravity_sd = 1e-20\n";
+    std::fs::write(&tiny, format!("{rig}{tiny_sds}")).unwrap();
+    let held = fit_measured(&recording, &exact);
+    let rep = fit_measured(&recording, &tiny);
+    for q in [Param::RodLength, Param::MassRatio, Param::Gravity] {
+        assert!(!rep.params.iter().any(|(p, _)| *p == q), "{q:?} fitted");
+    }
+    let (a, b) = (held.mu_kinetic.unwrap(), rep.mu_kinetic.unwrap());
+    assert!(b.stderr > 0.0, "{b:?}");
+    assert!((a.value - b.value).abs() <= 1e-9 * a.value, "{a:?} {b:?}");
+    assert!((a.stderr - b.stderr).abs() <= 1e-6 * a.stderr, "{a:?} {b:?}");
+    for key in ["rod_length_sd", "slider_mass_sd", "bob_mass_sd", "gravity_sd"] {
+        assert!(
+            rep.warnings
+                .iter()
+                .any(|w| w.contains(key) && w.contains("held exact")),
+            "{key}: {:?}",
+            rep.warnings
+        );
+    }
+    std::fs::remove_dir_all(&tmp).ok();
+}
+
 /// The regression of issue 34: equal masses released from rest on a rail with mu_static 0.28
 /// above mu_kinetic 0.22 (0.3 mm noise, 1 kHz). The base model (one coefficient) misfits, so
 /// the friction candidates are tried although no onset after a stick shows them; mu_static
