@@ -69,7 +69,9 @@ pub use estimate::{Estimate, MuParts, RigValue};
 pub use noise::NoiseEstimate;
 pub use outcome::{Adequacy, FitReport, StartOutcome, StaticResult, Work};
 pub use pendulum::{PendulumFound, ValueSe};
-pub use plausible::{check_masses, check_rod_length, MASS_MAX_KG, ROD_LENGTH_TOLERANCE};
+pub use plausible::{
+    check_masses, check_rod_length, check_tilt, MASS_MAX_KG, ROD_LENGTH_TOLERANCE,
+};
 pub use problem::{Counters, Observations, Param, TrajectoryProblem, MAX_FREE};
 pub use select::{ModelRow, Nuisance};
 pub use settings::{FitSettings, Loss, StaticMode, PREFIX_FRAMES};
@@ -127,7 +129,7 @@ pub fn fit(
     };
     let settled = base.settled.clone().filter(|_| late.dropped == [0, 0]);
     let stop_reason = stages::polish(&mut f, settled, settings);
-    let mut est = stages::estimates(&f, data.noise_dof, slides)?;
+    let mut est = stages::estimates(&mut f, data.noise_dof, slides)?;
     let case = stages::static_case(&f, static_state, slides, &motion, &base);
     // mu_kinetic's profile, the windows and mu_static's one-sided profile only read the fit
     // and its covariances: side by side (each profile's search is sequential).

@@ -258,16 +258,49 @@ pub(super) struct Estimates {
 
 /// Standard errors (Jacobian, block covariance) and Wald intervals; mu_kinetic's profile
 /// interval comes after ([`mu_profile`]).
+///
+/// A parameter the data do not determine (nothing depends on it: a forced law's speed with no
+/// static excess to shape) has no standard error; the pseudo-inverse's 0 would print it as
+/// exact. It is held at its value, not fitted, with a warning saying so, and the rest assessed
+/// again (mu_kinetic is never held: left undetermined, its interval is unbounded).
 pub(super) fn estimates(
-    f: &Fitting,
+    f: &mut Fitting,
     noise_dof: f64,
     identifiable: bool,
 ) -> Result<Estimates, FitError> {
+    let mut a = uncertainty::assess(&f.problem, &f.p, noise_dof).map_err(FitError::NoStart)?;
+    let held: Vec<Param> = a
+        .undetermined
+        .iter()
+        .map(|&i| f.problem.free[i])
+        .filter(|&q| q != Param::MuKinetic)
+        .collect();
+    if !held.is_empty() {
+        for &q in &held {
+            f.warnings.push(format!(
+                "{} is not determined by this recording (nothing the markers show depends on it): held at {} {}, not fitted; a release that shows it would pin it",
+                q.name(),
+                f.problem.get(q),
+                q.unit()
+            ));
+        }
+        f.problem.free.retain(|q| !held.contains(q));
+        f.p = f.problem.values();
+        a = uncertainty::assess(&f.problem, &f.p, noise_dof).map_err(FitError::NoStart)?;
+    }
     let (problem, p) = (&f.problem, &f.p);
-    let a = uncertainty::assess(problem, p, noise_dof).map_err(FitError::NoStart)?;
     let k = p.len();
     let scale = a.reduced_chi2.max(1.0);
-    let se: Vec<f64> = (0..k).map(|i| a.se[i].max(a.se_block[i])).collect();
+    let unbounded = |i: usize| a.undetermined.contains(&i);
+    let se: Vec<f64> = (0..k)
+        .map(|i| {
+            if unbounded(i) {
+                f64::INFINITY
+            } else {
+                a.se[i].max(a.se_block[i])
+            }
+        })
+        .collect();
     let correlation =
         DMatrix::from_fn(k, k, |i, j| a.cov[(i, j)] / (a.se[i] * a.se[j]).max(1e-300));
     let params: Vec<(Param, Estimate)> = problem
@@ -485,7 +518,12 @@ pub(super) fn adequacy(
     // goes first): the failed tests, mu pinned at a bound, every parameter taken, a value no
     // real rig has.
     let mut limited: Vec<LimitPart> = failed_part(a, windows_p, runs_p, mu).into_iter().collect();
-    let failed = pinned_friction(problem, mu);
+    let mu_static = est
+        .params
+        .iter()
+        .find(|(q, _)| *q == Param::MuStatic)
+        .map(|(_, e)| e);
+    let failed = pinned_friction(problem, mu, mu_static);
     if let Some(why) = &failed {
         limited.insert(0, LimitPart::Said(why.clone()));
     }
@@ -833,9 +871,11 @@ fn mu_parts(est: &Estimates) -> Option<MuParts> {
     est.mu_index.map(|i| {
         let total = est.params[i].1.stderr;
         let base = est.se[i].min(total);
+        // A share of 0 is no part at all, also of an unbounded error (inf * 0 would be NaN).
+        let part = |share: f64| if share > 0.0 { base * share.sqrt() } else { 0.0 };
         MuParts {
-            noise: base * (1.0 - est.rig_fraction).sqrt(),
-            rig: base * est.rig_fraction.sqrt(),
+            noise: part(1.0 - est.rig_fraction),
+            rig: part(est.rig_fraction),
             model: (total * total - base * base).max(0.0).sqrt(),
             total,
         }

@@ -34,6 +34,8 @@ pub struct Assessment {
     pub se_block: Vec<f64>,
     /// Frames per block of the block covariance.
     pub block_frames: usize,
+    /// The free parameters (indices) the data do not determine ([`Covariances::undetermined`]).
+    pub undetermined: Vec<usize>,
     /// What the adequacy checks read from the residuals at the optimum, taken while they
     /// were at hand (the residuals are not kept: four numbers a frame, 32 MB for a million
     /// frames, held through the windows' fits).
@@ -108,6 +110,7 @@ pub fn assess(
         se: c.se,
         se_block: c.se_block,
         block_frames: block,
+        undetermined: c.undetermined,
         residuals,
     })
 }
@@ -131,6 +134,45 @@ pub struct Covariances {
     pub se_block: Vec<f64>,
     /// Whether J'J was singular (the covariances then come from its pseudo-inverse).
     pub singular: bool,
+    /// The parameters (indices) nothing in the data depends on, alone or in a combination:
+    /// outside J'J's range, so the pseudo-inverse's 0 for them is no standard error at all
+    /// (a forced Stribeck law whose mu_static sits at mu_kinetic has a speed that shapes
+    /// nothing). Empty unless `singular`.
+    pub undetermined: Vec<usize>,
+}
+
+/// The parameters outside the range of the information matrix `jtj`: a zero row (nothing
+/// depends on the parameter), or a part of a combination nothing depends on. Scaled to unit
+/// diagonal first, so the parameters' units do not decide.
+pub fn undetermined(jtj: &DMatrix<f64>) -> Vec<usize> {
+    let k = jtj.nrows();
+    let diag: Vec<f64> = (0..k).map(|i| jtj[(i, i)]).collect();
+    let top = diag.iter().cloned().fold(0.0, f64::max);
+    let live: Vec<usize> = (0..k)
+        .filter(|&i| diag[i].is_finite() && diag[i] > 1e-300_f64.max(1e-14 * top))
+        .collect();
+    let mut out: Vec<usize> = (0..k).filter(|i| !live.contains(i)).collect();
+    let n = live.len();
+    if n > 0 {
+        let scaled = DMatrix::from_fn(n, n, |a, b| {
+            let (i, j) = (live[a], live[b]);
+            jtj[(i, j)] / (diag[i] * diag[j]).sqrt()
+        });
+        let eig = scaled.symmetric_eigen();
+        let big = eig.eigenvalues.iter().cloned().fold(0.0, f64::max);
+        // The projection onto the range: a parameter that lies in it has a diagonal of 1.
+        for a in 0..n {
+            let in_range: f64 = (0..n)
+                .filter(|&m| eig.eigenvalues[m] > 1e-12 * big)
+                .map(|m| eig.eigenvectors[(a, m)].powi(2))
+                .sum();
+            if in_range < 1.0 - 1e-6 {
+                out.push(live[a]);
+            }
+        }
+    }
+    out.sort_unstable();
+    out
 }
 
 /// Covariances from normal equations summed with their block sums (`normal.meat`) over
@@ -145,6 +187,11 @@ pub fn covariances(normal: Normal, used: usize, n_blocks: f64) -> Covariances {
     let jtj = normal.jtj;
     let inverse = jtj.clone().try_inverse();
     let singular = inverse.is_none();
+    let undetermined = if singular {
+        undetermined(&jtj)
+    } else {
+        Vec::new()
+    };
     let inv = inverse.unwrap_or_else(|| {
         jtj.pseudo_inverse(1e-14)
             .unwrap_or(DMatrix::from_element(k, k, f64::NAN))
@@ -165,6 +212,7 @@ pub fn covariances(normal: Normal, used: usize, n_blocks: f64) -> Covariances {
         block,
         se_block,
         singular,
+        undetermined,
     }
 }
 

@@ -534,3 +534,54 @@ fn a_plan_after_a_fit_simulates_the_law_the_fit_found() {
         }
     }
 }
+
+/// Stribeck's law forced on a Coulomb rail's recording (independent generator): with no
+/// static excess the Stribeck speed shapes nothing the markers show. It was printed as
+/// `stribeck_velocity 0.05 +- 0` beside "model adequate", and `plan --after` refused the JSON
+/// (a variance of 0). Now it is held at its value with a warning saying the recording does not
+/// determine it, no parameter is reported exact, and the planner takes the fit (issue 59,
+/// class D).
+#[test]
+fn a_forced_laws_parameter_the_recording_does_not_pin_is_held_and_said() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = repo("tests/data/friction");
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_appell"))
+        .arg("fit")
+        .arg(data.join("coulomb_equal_s1.csv"))
+        .arg("--rig")
+        .arg(data.join("rigs/equal.toml"))
+        .args(["--friction", "stribeck", "--json"])
+        .output()
+        .unwrap();
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    for (name, p) in v["parameters"].as_object().unwrap() {
+        let se = p["stderr"].as_f64().unwrap_or(f64::INFINITY);
+        assert!(se > 0.0, "{name} reported exact: {p}");
+    }
+    let said = v["warnings"].as_array().unwrap().iter().any(|w| {
+        w.as_str()
+            .is_some_and(|w| w.contains("stribeck_velocity is not determined"))
+    });
+    assert!(said, "{}", v["warnings"]);
+    let fit = dir.path().join("fit.json");
+    std::fs::write(&fit, &out.stdout).unwrap();
+    let plan = std::process::Command::new(env!("CARGO_BIN_EXE_appell"))
+        .arg("plan")
+        .arg(repo("configs/plan_example.toml"))
+        .arg("--after")
+        .arg(&fit)
+        .output()
+        .unwrap();
+    assert_eq!(
+        plan.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&plan.stderr)
+    );
+}
