@@ -80,7 +80,10 @@ pub(super) fn model_uncertainty(
 /// never loses the truth; the value and standard error are left as fitted.
 pub(super) fn within_bounds(q: Param, mut e: Estimate, mu_k_low: f64) -> Estimate {
     let low = match q {
-        Param::MuKinetic | Param::PivotDamping | Param::ViscousFriction => 0.0,
+        Param::MuKinetic
+        | Param::PivotDamping
+        | Param::ViscousFriction
+        | Param::StribeckVelocity => 0.0,
         Param::MuStatic => mu_k_low,
         _ => return e,
     };
@@ -91,19 +94,25 @@ pub(super) fn within_bounds(q: Param, mut e: Estimate, mu_k_low: f64) -> Estimat
 
 /// The fit failed although it ran when mu_kinetic sits at its bound 0 (within two standard
 /// errors of it, and below 1e-3) while Stribeck's law or viscous rail friction carries the
-/// friction (mu_static at 1e-3 or more, or viscous friction worth 1e-3 of the static load at
-/// 0.1 m/s): no Coulomb coefficient was measured, whatever its interval says. Said as such.
+/// friction (mu_static measured at 1e-3 or more, clear of 0 by two standard errors, or
+/// viscous friction worth 1e-3 of the static load at 0.1 m/s): no Coulomb coefficient was
+/// measured, whatever its interval says. Said as such.
 pub(super) fn pinned_friction(
     problem: &TrajectoryProblem,
     mu: Option<&Estimate>,
+    mu_static: Option<&Estimate>,
 ) -> Option<String> {
     let mu = mu?;
     // Only a term that does carry friction: on a frictionless rail the law's terms sit at 0
     // with mu_kinetic, and mu_kinetic = 0 is then the measurement (a tenth of a per mille of
-    // the static load, at a slide's 0.1 m/s for viscous friction).
+    // the static load, at a slide's 0.1 m/s for viscous friction). A mu_static the recording
+    // does not pin (its value anywhere within its error) carries nothing measured either.
     let rig = &problem.rig;
     let load = (rig.slider_mass + rig.bob_mass) * rig.gravity;
-    let carried = if problem.free.contains(&Param::StribeckVelocity) && rig.mu_static >= 1e-3 {
+    let static_measured = mu_static.map_or(rig.mu_static >= 1e-3, |e| {
+        e.value >= 1e-3 && e.value > 2.0 * e.stderr
+    });
+    let carried = if problem.free.contains(&Param::StribeckVelocity) && static_measured {
         "Stribeck's law (mu_static and the Stribeck speed)"
     } else if problem.free.contains(&Param::ViscousFriction)
         && rig.viscous_friction * 0.1 >= 1e-3 * load
@@ -197,18 +206,25 @@ mod tests {
         let mut viscous = problem(vec![Param::MuKinetic, Param::ViscousFriction]);
         let coulomb = problem(vec![Param::MuKinetic, Param::X]);
         let pinned = estimate(0.0, 0.26);
-        assert!(pinned_friction(&stribeck, Some(&pinned)).is_some());
+        assert!(pinned_friction(&stribeck, Some(&pinned), None).is_some());
+        // A mu_static the recording does not pin carries nothing measured (issue 59, class
+        // F: a frictionless rail forced to Stribeck's law was "failed ... likely wrong"); the
+        // same value pinned does carry the friction.
+        let mut loose = stribeck.clone();
+        loose.rig.mu_static = 0.01;
+        assert!(pinned_friction(&loose, Some(&pinned), Some(&estimate(0.01, 0.05))).is_none());
+        assert!(pinned_friction(&loose, Some(&pinned), Some(&estimate(0.01, 0.001))).is_some());
         // A frictionless rail: viscous friction at 0 with mu_kinetic carries nothing, and
         // mu_kinetic = 0 is the measurement; at 0.1 N s/m it carries the friction.
-        assert!(pinned_friction(&viscous, Some(&pinned)).is_none());
+        assert!(pinned_friction(&viscous, Some(&pinned), None).is_none());
         viscous.rig.viscous_friction = 0.1;
-        assert!(pinned_friction(&viscous, Some(&pinned)).is_some());
+        assert!(pinned_friction(&viscous, Some(&pinned), None).is_some());
         let mut frictionless = stribeck.clone();
         frictionless.rig.mu_static = 2e-4;
-        assert!(pinned_friction(&frictionless, Some(&pinned)).is_none());
-        assert!(pinned_friction(&coulomb, Some(&pinned)).is_none());
-        assert!(pinned_friction(&stribeck, Some(&estimate(0.25, 0.01))).is_none());
+        assert!(pinned_friction(&frictionless, Some(&pinned), None).is_none());
+        assert!(pinned_friction(&coulomb, Some(&pinned), None).is_none());
+        assert!(pinned_friction(&stribeck, Some(&estimate(0.25, 0.01)), None).is_none());
         // Clear of zero by many standard errors: a small but measured coefficient.
-        assert!(pinned_friction(&stribeck, Some(&estimate(5e-4, 1e-5))).is_none());
+        assert!(pinned_friction(&stribeck, Some(&estimate(5e-4, 1e-5)), None).is_none());
     }
 }
