@@ -2,6 +2,7 @@
 //! contradict (a unit slip, a typo such as 1e-9) is otherwise fitted for minutes to a
 //! meaningless answer.
 
+use super::priors::TILT_SEARCH;
 use crate::data::inspect::sig;
 use crate::data::Recording;
 use crate::model::Rig;
@@ -94,6 +95,25 @@ pub fn check_masses(rig_path: &Path, rig: &Rig<f64>) -> Result<(), SceneError> {
         }
     }
     Ok(())
+}
+
+/// Refuse a rig file whose rail is tilted beyond [`TILT_SEARCH`] (about 17 degrees) for a
+/// fit: the fit's tilt nuisance searches only that far, so a steeper rail would be stepped
+/// back to it, and a rail near vertical took the fit minutes (issue 59, class C). A lab's rail
+/// is levelled to a fraction of a degree (docs/fit.md); a steep incline is for `simulate`.
+pub fn check_tilt(rig_path: &Path, rig: &Rig<f64>) -> Result<(), SceneError> {
+    if rig.rail_tilt.abs() <= TILT_SEARCH {
+        return Ok(());
+    }
+    let max = TILT_SEARCH.to_degrees();
+    Err(SceneError::Invalid {
+        path: rig_path.to_owned(),
+        message: format!(
+            "rig.rail_tilt_deg must be within {} degrees of level for a fit (the widest tilt the fit searches; a lab's rail is levelled to a fraction of a degree), got {}",
+            sig4(max),
+            sig4(rig.rail_tilt.to_degrees())
+        ),
+    })
 }
 
 /// A hint when `rod` is the markers' `median` in another unit: the rig file takes metres, and

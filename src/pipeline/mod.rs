@@ -14,7 +14,8 @@ pub use recording_args::{RecordingArgs, FORMAT_NAMES};
 use crate::data::{read_recording, ReadOptions, Recording};
 use crate::fit::joint::{fit_joint, JointError, JointReport, JointSettings, Release};
 use crate::fit::{
-    check_masses, check_recording, check_rod_length, fit, FitReport, FitSettings, Observations,
+    check_masses, check_recording, check_rod_length, check_tilt, fit, FitReport, FitSettings,
+    Observations,
 };
 use crate::model::Rig;
 use crate::scene::RigFile;
@@ -157,6 +158,7 @@ pub fn observations_for_rig(
 fn check_for_rig(rec: &Recording, rig_path: &Path, rig: &Rig<f64>) -> anyhow::Result<()> {
     check_recording(rec)?;
     check_masses(rig_path, rig)?;
+    check_tilt(rig_path, rig)?;
     check_rod_length(rig_path, rig, rec)?;
     // Before any integration: a rig too stiff to fit in minutes is refused, naming its key.
     crate::scene::check_time_scale(

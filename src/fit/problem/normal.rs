@@ -373,7 +373,8 @@ impl LeastSquares for TrajectoryProblem {
         // Each direction's coefficient at least 0; an exponent within the rig's range.
         clamp(p, Param::FrictionSplit, -mu_k, mu_k);
         clamp(p, Param::LoadExponent, LOAD_EXPONENT_MIN, LOAD_EXPONENT_MAX);
-        clamp(p, Param::RailTilt, -0.3, 0.3);
+        let tilt = crate::fit::priors::TILT_SEARCH;
+        clamp(p, Param::RailTilt, -tilt, tilt);
         clamp(p, Param::ScaleError, -0.5, 0.5);
         clamp(p, Param::Lag, -0.05, 0.05);
     }
