@@ -618,3 +618,56 @@ fn a_wide_csv_with_a_marker_column_named_twice_is_refused_naming_both_columns() 
     }
     assert!(!out.exists());
 }
+
+/// A recording at 1 kHz with its times in milliseconds (2,001 frames over 0 .. 2000 "s"): one
+/// frame per 1 s against the rig's 1.1 s swing. The fit simulated a thousand times the span for
+/// minutes to nonsense; now it is refused at once, exit 2, naming the file, the time column
+/// and the likely cause (issue 59, class L). The same recording in seconds still fits.
+#[test]
+fn a_recording_with_its_times_in_milliseconds_is_refused_naming_the_cause() {
+    let dir = tempfile::tempdir().unwrap();
+    let data = super::measured::repo("tests/data/measured");
+    let text = std::fs::read_to_string(data.join("equal_s1.csv")).unwrap();
+    let mut lines = text.lines();
+    let mut ms = format!("{}\n", lines.next().unwrap());
+    for line in lines {
+        let (t, rest) = line.split_once(',').unwrap();
+        ms.push_str(&format!("{},{rest}\n", t.parse::<f64>().unwrap() * 1000.0));
+    }
+    let file = write(dir.path(), "ms.csv", ms);
+    let rig = data.join("rigs/equal_true_nosd.toml");
+    let started = Instant::now();
+    let out = appell(&["fit", file.to_str().unwrap(), "--rig", rig.to_str().unwrap()]);
+    let took = started.elapsed();
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(took < Duration::from_secs(20), "{took:?}");
+    for part in ["ms.csv", "milliseconds", "t_ms"] {
+        assert!(err.contains(part), "{part:?} missing: {err}");
+    }
+}
+
+/// A rig file with its rail near vertical (`rail_tilt_deg = 89.9`, and 30: steeper than the
+/// widest tilt the fit searches) fitted the shipped example for a minute to nonsense (mu 3073 +-
+/// 17000); now refused at once, exit 2, naming the key and the range (issue 59, class C).
+#[test]
+fn a_rig_file_with_a_rail_near_vertical_is_refused_for_a_fit() {
+    let dir = tempfile::tempdir().unwrap();
+    let example = super::measured::repo("data/example_recording.mcap");
+    for tilt in ["89.9", "-30"] {
+        let rig = write(
+            dir.path(),
+            "rig.toml",
+            format!("[rig]\nslider_mass = 0.5\nbob_mass = 0.2\nrod_length = 0.30\ngravity = 9.81\nrail_tilt_deg = {tilt}\n"),
+        );
+        let started = Instant::now();
+        let out = appell(&["fit", example.to_str().unwrap(), "--rig", rig.to_str().unwrap()]);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{tilt}: {err}");
+        assert!(started.elapsed() < Duration::from_secs(20));
+        assert!(
+            err.contains("rig.toml") && err.contains("rig.rail_tilt_deg") && err.contains("17.19"),
+            "{err}"
+        );
+    }
+}
