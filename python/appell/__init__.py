@@ -140,10 +140,56 @@ def _fit_kw(fit_opts: dict) -> dict:
     return fit_opts
 
 
-def _paths(recording: Any) -> list:
-    if isinstance(recording, (str, os.PathLike)):
-        return [os.fspath(recording)]
-    return [os.fspath(p) for p in recording]
+def _path(value: Any, name: str) -> str:
+    """A path argument as text: a ``str``, ``bytes`` (decoded as the file system does) or
+    ``os.PathLike``; anything else is a TypeError naming the argument."""
+    if isinstance(value, (str, bytes, os.PathLike)):
+        return os.fsdecode(value)
+    raise TypeError(
+        f"{name} must be a path (str, bytes or os.PathLike), got {type(value).__name__} {value!r}"
+    )
+
+
+def _is_path(value: Any) -> bool:
+    return isinstance(value, (str, bytes, os.PathLike))
+
+
+def _paths(recording: Any, name: str = "recording") -> list:
+    """A recording's files: one path, or a list of them (a Tracker pair)."""
+    if _is_path(recording):
+        return [_path(recording, name)]
+    if not isinstance(recording, Iterable):
+        _path(recording, name)  # the TypeError naming the argument
+    return [_path(p, f"{name}[{i}]") for i, p in enumerate(recording)]
+
+
+def _array(value: Any, name: str, columns: Optional[int]) -> np.ndarray:
+    """``value`` as a C-contiguous float64 array of shape (n,) (``columns`` None) or
+    (n, columns), checked before it is copied: its length against the frames a file may hold,
+    its shape, its type. A ValueError or TypeError names the argument and the fix."""
+    arr = value if isinstance(value, np.ndarray) else np.asarray(value)
+    want = "(n,)" if columns is None else f"(n, {columns})"
+    if columns is None and arr.ndim == 2 and arr.shape[1] == 1:
+        arr = arr[:, 0]
+    if columns is None and arr.ndim != 1:
+        raise ValueError(f"{name}: expected shape {want}, one time per frame, got {arr.shape}")
+    if columns is not None and not (arr.ndim == 2 and arr.shape[1] == columns):
+        turned = f": transpose it ({name}.T)" if arr.ndim == 2 and arr.shape[0] == columns else ""
+        raise ValueError(
+            f"{name}: expected shape {want}, a row of x, y per frame, got {arr.shape}{turned}"
+        )
+    _appell.check_frames_py(arr.shape[0])
+    if arr.dtype.kind in "iuf":
+        return np.ascontiguousarray(arr, dtype=np.float64)
+    try:
+        if arr.dtype.kind not in "OSU":  # bool, complex, dates: not positions nor times
+            raise TypeError
+        return np.ascontiguousarray(arr, dtype=np.float64)
+    except (TypeError, ValueError):
+        raise TypeError(
+            f"{name}: expected real numbers (float64, or a dtype numpy converts to it), got "
+            f"dtype {arr.dtype}"
+        ) from None
 
 
 class Recording:
@@ -155,15 +201,54 @@ class Recording:
     """
 
     def __init__(self, t, slider, bob, metadata: Optional[dict] = None):
-        self.t = np.ascontiguousarray(t, dtype=np.float64).reshape(-1)
-        self.slider = np.ascontiguousarray(slider, dtype=np.float64).reshape(-1, 2)
-        self.bob = np.ascontiguousarray(bob, dtype=np.float64).reshape(-1, 2)
-        if not (len(self.t) == len(self.slider) == len(self.bob)):
-            raise ValueError(
-                f"t, slider and bob must have one row per frame: got {len(self.t)}, "
-                f"{len(self.slider)} and {len(self.bob)}"
-            )
+        self.t = t
+        self.slider = slider
+        self.bob = bob
+        self._arrays()
         self.metadata = dict(metadata or {})
+
+    # Arrays are converted and checked where they are set, and again where they cross into
+    # the library (``_arrays``): a float32 array, a list or a (2, n) array assigned later is
+    # converted or refused, never read by its raw bytes.
+    @property
+    def t(self) -> np.ndarray:
+        """Frame times, seconds, shape (n,)."""
+        return self._t
+
+    @t.setter
+    def t(self, value) -> None:
+        self._t = _array(value, "t", None)
+
+    @property
+    def slider(self) -> np.ndarray:
+        """The slider's track, metres in the rail frame, shape (n, 2), NaN where not seen."""
+        return self._slider
+
+    @slider.setter
+    def slider(self, value) -> None:
+        self._slider = _array(value, "slider", 2)
+
+    @property
+    def bob(self) -> np.ndarray:
+        """The bob's track, metres in the rail frame, shape (n, 2), NaN where not seen."""
+        return self._bob
+
+    @bob.setter
+    def bob(self, value) -> None:
+        self._bob = _array(value, "bob", 2)
+
+    def _arrays(self) -> tuple:
+        """``t``, ``slider`` and ``bob`` checked again as they cross into the library: their
+        shapes, types and one row per frame."""
+        t = _array(self._t, "t", None)
+        slider = _array(self._slider, "slider", 2)
+        bob = _array(self._bob, "bob", 2)
+        if not (len(t) == len(slider) == len(bob)):
+            raise ValueError(
+                f"t, slider and bob must have one row per frame: got {len(t)}, "
+                f"{len(slider)} and {len(bob)}"
+            )
+        return t, slider, bob
 
     @classmethod
     def _from_rust(cls, d: dict) -> "Recording":
@@ -207,7 +292,7 @@ def read_recording(path: Union[PathLike, Sequence[PathLike]], **options) -> Reco
     HDF5, Tracker, Motive, Qualisys, Kinovea...). A Tracker pair is a list of two files.
     Options: ``READ_OPTIONS`` (``fps=``, ``scale=``, ``rod_length=``, ``rail_frame=``...)."""
     read, _ = _split(options, "read_recording", fit_ok=False)
-    d = _appell.read_recording_py(_paths(path), read)
+    d = _appell.read_recording_py(_paths(path, "path"), read)
     _warn_fps([d.get("fps_note")])
     return Recording._from_rust(d)
 
@@ -246,7 +331,7 @@ def inspect(path: Union[PathLike, Sequence[PathLike]], **options) -> Inspection:
     (``appell inspect``); options already known (``fps=``, ``slider=``...) are used and carried
     into the suggested commands. A Tracker pair is a list of two files."""
     read, _ = _split(options, "inspect", fit_ok=False)
-    return Inspection(_appell.inspect_py(_paths(path), read))
+    return Inspection(_appell.inspect_py(_paths(path, "path"), read))
 
 
 def _toml_value(key: str, value: Any) -> str:
@@ -279,7 +364,7 @@ class Rig:
     def from_toml(cls, path: PathLike) -> "Rig":
         """Read a rig file (or a scene, whose ``[rig]`` is used)."""
         rig = cls.__new__(cls)
-        rig.label = os.fspath(path)
+        rig.label = _path(path, "path")
         rig.text = _appell.read_toml_py(rig.label)
         rig.keys = None
         _appell.check_rig_py(rig.text, rig.label)
@@ -290,7 +375,7 @@ class Rig:
 
 
 def _rig(rig: Union[Rig, PathLike]) -> Rig:
-    return rig if isinstance(rig, Rig) else Rig.from_toml(rig)
+    return rig if isinstance(rig, Rig) else Rig.from_toml(_path(rig, "rig"))
 
 
 class _Result:
@@ -349,7 +434,7 @@ class _Result:
 
     def plot(self, path: PathLike) -> None:
         """Write the figure, SVG or PNG by the extension (never over an input)."""
-        self._inner.plot(os.fspath(path))
+        self._inner.plot(_path(path, "path"))
 
     @property
     def parameters(self) -> dict:
@@ -472,7 +557,7 @@ class FitResult(_Result):
 
     def friction_plot(self, path: PathLike) -> None:
         """Write the friction figure: each slide's |F|/|N| against its speed, with the laws."""
-        self._inner.friction_plot(os.fspath(path))
+        self._inner.friction_plot(_path(path, "path"))
 
     def __repr__(self) -> str:
         return f"<FitResult {self.answer}>"
@@ -561,7 +646,7 @@ def fit(
     r = _rig(rig)
     if isinstance(recording, Recording):
         read, fit_opts = _split(options, "fit", read_ok=False)
-        arrays = (recording.t.tobytes(), recording.slider.tobytes(), recording.bob.tobytes())
+        arrays = tuple(a.tobytes() for a in recording._arrays())
         inner = _appell.fit_py([], arrays, r.text, r.label, read, fit_opts, threads)
     else:
         read, fit_opts = _split(options, "fit")
@@ -569,9 +654,9 @@ def fit(
     result = FitResult(inner)
     _warn_fps([inner.fps_note()])
     if plot is not None:
-        result.plot(plot)
+        result.plot(_path(plot, "plot"))
     if friction_plot is not None:
-        result.friction_plot(friction_plot)
+        result.friction_plot(_path(friction_plot, "friction_plot"))
     return result
 
 
@@ -590,11 +675,11 @@ def fit_joint(
     or a list of releases (a file, or a Tracker pair as a list of two)."""
     r = _rig(rig)
     read, fit_opts = _split(options, "fit_joint")
-    if isinstance(releases, (str, os.PathLike)) and os.path.isdir(releases):
-        directory, lists = os.fspath(releases), []
+    if _is_path(releases) and os.path.isdir(_path(releases, "releases")):
+        directory, lists = _path(releases, "releases"), []
     else:
         directory = None
-        lists = [_paths(rel) for rel in _strings(releases)]
+        lists = [_paths(rel, f"releases[{i}]") for i, rel in enumerate(_strings(releases))]
     inner = _appell.fit_joint_py(
         directory, lists, r.text, r.label, read, fit_opts, bool(same_camera), bool(keep_going),
         threads,
@@ -602,12 +687,12 @@ def fit_joint(
     result = JointResult(inner)
     _warn_fps(inner.fps_notes())
     if plot is not None:
-        result.plot(plot)
+        result.plot(_path(plot, "plot"))
     return result
 
 
-def _toml_text(source: PathLike) -> tuple:
-    label = os.fspath(source)
+def _toml_text(source: PathLike, name: str) -> tuple:
+    label = _path(source, name)
     return _appell.read_toml_py(label), label
 
 
@@ -646,7 +731,7 @@ class Simulation:
 def simulate(scene: PathLike, *, frame_rate: Optional[float] = None) -> Simulation:
     """Simulate a scene file, sampled at its ``[output] frame_rate`` (else ``frame_rate``, else
     1000 Hz as ``appell simulate --out``)."""
-    text, label = _toml_text(scene)
+    text, label = _toml_text(scene, "scene")
     return Simulation(
         _appell.simulate_py(text, label, None if frame_rate is None else float(frame_rate))
     )
@@ -699,16 +784,16 @@ def plan(
     """Plan releases from a plan file; ``after`` is an earlier fit (a result, or its JSON file)
     whose values and covariance become the plan's prior; ``plot`` writes the figure (SVG or
     PNG)."""
-    text, label = _toml_text(spec)
+    text, label = _toml_text(spec, "spec")
     after_json, after_label, after_path = None, "", None
     if isinstance(after, _Result):
         after_json, after_label = after._inner.json(), "the fit given as after"
     elif after is not None:
-        after_path = after_label = os.fspath(after)
+        after_path = after_label = _path(after, "after")
     return Plan(
         _appell.plan_py(
             text, label, after_json, after_label, after_path,
-            None if plot is None else os.fspath(plot),
+            None if plot is None else _path(plot, "plot"),
         )
     )
 
@@ -727,11 +812,11 @@ def synth(
 ) -> Recording:
     """A synthetic recording of a scene with a known mu (``appell synth``); written to
     ``output`` (CSV or MCAP by extension) when given. ``metadata['truth']`` holds the truth."""
-    text, label = _toml_text(scene)
+    text, label = _toml_text(scene, "scene")
     d = _appell.synth_py(
         text, label, float(fps), None if duration is None else float(duration), float(noise),
         float(dropout), float(outliers), float(outlier_size), int(seed),
-        None if output is None else os.fspath(output),
+        None if output is None else _path(output, "output"),
     )
     rec = Recording._from_rust(d)
     rec.metadata["truth"] = {k: _number(v) for k, v in d["truth"].items()}
@@ -773,16 +858,17 @@ def regions(
     return Regions(
         _appell.regions_py(
             r.text, r.label, int(trajectories), float(duration),
-            None if plot is None else os.fspath(plot),
+            None if plot is None else _path(plot, "plot"),
         )
     )
 
 
 def _fit_row(path, rig_text, rig_label, read, fit_opts, threads=1) -> dict:
     """One recording of fit_many: a table row, the error in its own column (never raised)."""
-    row = {"recording": os.fspath(path) if not isinstance(path, (list, tuple)) else ",".join(map(os.fspath, path))}
+    files = _paths(path)
+    row = {"recording": ",".join(files)}
     try:
-        inner = _appell.fit_py(_paths(path), None, rig_text, rig_label, read, fit_opts, threads)
+        inner = _appell.fit_py(files, None, rig_text, rig_label, read, fit_opts, threads)
         d = json.loads(inner.json())
         mu = d.get("mu_kinetic") or {}
         lo, hi = _interval(mu)
@@ -809,6 +895,27 @@ def _fit_rows(paths, rig_text, rig_label, read, fit_opts, threads=1) -> list:
     return [_fit_row(p, rig_text, rig_label, read, fit_opts, threads) for p in paths]
 
 
+#: How long ``fit_many`` waits to connect to a scheduler given by its address.
+CONNECT_SECONDS = 10
+
+
+def _connect(address: str):
+    """A dask.distributed client connected to the scheduler at ``address`` (the caller closes
+    it); a TypeError naming the fix without dask.distributed, a ValueError naming the address
+    when no scheduler answers in ``CONNECT_SECONDS``."""
+    try:
+        from distributed import Client
+    except ImportError:
+        raise TypeError(
+            f"fit_many: client={address!r} is a scheduler's address, and connecting to it needs "
+            "dask.distributed: pip install 'appell[dask]', or pass a dask.distributed.Client"
+        ) from None
+    try:
+        return Client(address, timeout=CONNECT_SECONDS)
+    except (OSError, TimeoutError, ValueError) as e:
+        raise ValueError(f"fit_many: client={address!r}: cannot connect to a scheduler: {e}") from e
+
+
 def fit_many(
     paths: Iterable[Union[PathLike, Sequence[PathLike]]],
     rig: Union[Rig, PathLike],
@@ -825,7 +932,8 @@ def fit_many(
     ``result`` (the full ``--json``).
 
     ``client`` is a ``dask.distributed.Client`` (``Client(LocalCluster())``, or
-    ``Client("tcp://scheduler:8786")`` on a cluster): each recording is one task. Without
+    ``Client("tcp://scheduler:8786")`` on a cluster), or a scheduler's address (a client is
+    connected for the call and closed after it): each recording is one task. Without
     one, the recordings are fitted here, one after another. ``batch`` recordings make one
     task (default: about eight tasks per worker, since a short recording's fit of 10-20 ms
     is cheaper than a task's round trip through the scheduler; ``batch=1`` makes each
@@ -838,7 +946,18 @@ def fit_many(
     paths = list(paths)
     if client is None:
         rows = [_fit_row(p, r.text, r.label, read, fit_opts, threads) for p in paths]
+    elif isinstance(client, str):
+        with _connect(client) as connected:
+            return fit_many(
+                paths, r, connected, as_pandas=as_pandas, threads=threads, batch=batch,
+                **options,
+            )
     else:
+        if not all(hasattr(client, m) for m in ("scheduler_info", "map", "gather")):
+            raise TypeError(
+                "fit_many: client must be a dask.distributed.Client or a scheduler's address "
+                f"(\"tcp://host:8786\"), got {type(client).__name__} {client!r}"
+            )
         if batch is None:
             workers = max(1, len(client.scheduler_info().get("workers", {})))
             batch = max(1, -(-len(paths) // (8 * workers)))

@@ -13,10 +13,15 @@ use appell::report::fit::{answer, fit_json, fit_text, FitFigure, FrictionFigure}
 use appell::report::joint::{joint_answer, joint_json, joint_text, JointFigure};
 use appell::report::plot::{render, svg_string};
 use appell::scene::Scene;
+use appell::sim::Cancel;
 use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc::RecvTimeoutError;
+use std::sync::Arc;
+use std::time::Duration;
 
 /// Bad input: `ValueError` with the CLI's message (its causes joined).
 fn input(e: anyhow::Error) -> PyErr {
@@ -34,39 +39,113 @@ const MAX_THREADS: usize = 256;
 thread_local! {
     /// The pool of this Python thread's fits with `threads=N` (kept: a thread per call costs
     /// more than a short fit's overhead), with its size.
-    static POOL: std::cell::RefCell<Option<(usize, std::sync::Arc<rayon::ThreadPool>)>> =
+    static POOL: std::cell::RefCell<Option<(usize, Arc<rayon::ThreadPool>)>> =
         const { std::cell::RefCell::new(None) };
+    /// This Python thread's request to cancel its fit (Ctrl-C): the integrator's options
+    /// hold a `'static` flag, so each thread leaks one, once.
+    static CANCEL: &'static AtomicBool = Box::leak(Box::new(AtomicBool::new(false)));
 }
 
-/// Run `work` on the shared thread pool (`threads` None: a lone fit uses every core), or on a
-/// pool of `threads` of this caller's own, so that fits run in parallel by threads or cluster
-/// workers do not queue for one shared pool.
-fn pooled<T: Send>(threads: Option<usize>, work: impl FnOnce() -> T + Send) -> PyResult<T> {
+/// The pool a fit runs on: `None` for the shared one (`threads` None: a lone fit uses every
+/// core), or a pool of `threads` of this caller's own, so that fits run in parallel by
+/// threads or cluster workers do not queue for one shared pool.
+fn pool_of(threads: Option<usize>) -> PyResult<Option<Arc<rayon::ThreadPool>>> {
     let Some(n) = threads else {
-        return Ok(work());
+        return Ok(None);
     };
     if !(1..=MAX_THREADS).contains(&n) {
         return Err(PyValueError::new_err(format!(
             "threads must be from 1 to {MAX_THREADS}, got {n}"
         )));
     }
-    let pool = POOL.with(|cell| -> PyResult<_> {
+    POOL.with(|cell| {
         let mut cell = cell.borrow_mut();
         if let Some((size, pool)) = cell.as_ref() {
             if *size == n {
-                return Ok(pool.clone());
+                return Ok(Some(pool.clone()));
             }
         }
-        let pool = std::sync::Arc::new(
+        let pool = Arc::new(
             rayon::ThreadPoolBuilder::new()
                 .num_threads(n)
                 .build()
                 .map_err(|e| PyRuntimeError::new_err(format!("threads={n}: {e}")))?,
         );
         *cell = Some((n, pool.clone()));
-        Ok(pool)
-    })?;
-    Ok(pool.install(work))
+        Ok(Some(pool))
+    })
+}
+
+/// This thread's cancel request, lowered: a fit whose options hold it stops at its runs' next
+/// step once [`interruptible`] raises it.
+fn cancel_here() -> Cancel {
+    let flag = CANCEL.with(|f| *f);
+    flag.store(false, Ordering::Relaxed);
+    Cancel::on(flag)
+}
+
+/// How often a caller waiting for a fit looks for signals (Ctrl-C).
+const SIGNAL_POLL: Duration = Duration::from_millis(50);
+
+/// The stack of the thread a fit runs on: the main thread's (the command's fit runs there).
+const WORK_STACK: usize = 8 << 20;
+
+/// Run `work` on the pool `threads` asks for ([`pool_of`]) on a thread of its own, the GIL
+/// released, while this thread checks for signals every [`SIGNAL_POLL`]: a signal's exception
+/// (Ctrl-C's KeyboardInterrupt) raises this thread's cancel request ([`cancel_here`], which
+/// `work`'s runs poll), waits for `work` to stop and is raised. Python delivers signals to its
+/// main thread only, so a fit started on another thread runs to its end, as Python code there
+/// would.
+fn interruptible<T: Send>(
+    py: Python<'_>,
+    threads: Option<usize>,
+    work: impl FnOnce() -> T + Send,
+) -> PyResult<T> {
+    let pool = pool_of(threads)?;
+    let flag = CANCEL.with(|f| *f);
+    let out = std::thread::scope(|s| {
+        let (tx, rx) = std::sync::mpsc::channel();
+        let worker = std::thread::Builder::new()
+            .stack_size(WORK_STACK)
+            .spawn_scoped(s, move || {
+                let out = match pool {
+                    Some(pool) => pool.install(work),
+                    None => work(),
+                };
+                // The receiver waits until this is sent, or until the worker has been joined.
+                let _ = tx.send(out);
+            })
+            .map_err(|e| PyRuntimeError::new_err(format!("cannot start the fit's thread: {e}")))?;
+        let mut rx = rx;
+        loop {
+            let (back, got) = py.detach(move || {
+                let got = rx.recv_timeout(SIGNAL_POLL);
+                (rx, got)
+            });
+            rx = back;
+            match got {
+                Ok(out) => return Ok(out),
+                Err(RecvTimeoutError::Timeout) => {
+                    if let Err(signal) = py.check_signals() {
+                        flag.store(true, Ordering::Relaxed);
+                        // Whatever the cancelled work gave (or a panic of it) is dropped.
+                        let _ = py.detach(move || worker.join());
+                        return Err(signal);
+                    }
+                }
+                // The work panicked before it sent: its panic, as pyo3 reports any.
+                Err(RecvTimeoutError::Disconnected) => {
+                    return match py.detach(move || worker.join()) {
+                        Err(panic) => std::panic::resume_unwind(panic),
+                        Ok(()) => Err(PyRuntimeError::new_err("the fit's thread gave no result")),
+                    };
+                }
+            }
+        }
+    });
+    // Lowered again: a result's figures run the integrator with the same flag later.
+    flag.store(false, Ordering::Relaxed);
+    out
 }
 
 fn failure(e: FitFailure) -> PyErr {
@@ -253,25 +332,6 @@ fn track_floats(track: &[Option<[f64; 2]>]) -> Vec<f64> {
         .collect()
 }
 
-/// 2n floats (NaN: not seen) as a track.
-fn float_track(v: &[f64], what: &str, n: usize) -> PyResult<Vec<Option<[f64; 2]>>> {
-    if v.len() != 2 * n {
-        return Err(PyValueError::new_err(format!(
-            "{what}: expected {n} rows of (x, y) to match t, got {} values",
-            v.len()
-        )));
-    }
-    Ok(v.chunks_exact(2)
-        .map(|c| {
-            if c[0].is_finite() && c[1].is_finite() {
-                Some([c[0], c[1]])
-            } else {
-                None
-            }
-        })
-        .collect())
-}
-
 /// A recording as the Python side builds it: `t`, `slider` and `bob` arrays and its metadata.
 fn recording_dict<'py>(py: Python<'py>, rec: &Recording) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
@@ -440,31 +500,36 @@ fn fit_py(
 ) -> PyResult<Fit> {
     let started = std::time::Instant::now();
     let (opts, scale) = read.resolve()?;
-    let setup = setup(rig_text, rig_label, fit, scale)?;
+    let mut setup = setup(rig_text, rig_label, fit, scale)?;
     let (obs, report, notes) = match arrays {
-        None => py
-            .detach(|| pooled(threads, || pipeline::fit_files(&paths, &opts, &setup, true)))?
-            .map_err(failure)?,
+        None => {
+            setup.settings.options.cancel = cancel_here();
+            interruptible(py, threads, || {
+                pipeline::fit_files(&paths, &opts, &setup, true)
+            })?
+            .map_err(failure)?
+        }
         Some((t, s, b)) => {
-            let times = floats(&t, "t")?;
-            let n = times.len();
-            let rec = Recording {
-                slider: float_track(&floats(&s, "slider")?, "slider", n)?,
-                bob: float_track(&floats(&b, "bob")?, "bob", n)?,
-                times,
-                ..Recording::default()
-            };
-            py.detach(|| {
-                pooled(threads, || {
-                    let obs = pipeline::observations_for_rig(&rec, &setup.rig_path, &setup.rig)
-                        .map_err(FitFailure::Input)?;
-                    let report = pipeline::fit_observations(obs.clone(), &setup, "the arrays")?;
-                    Ok((obs, report, Vec::new()))
-                })
+            // Bounded before the bytes are copied, as a file's frames are.
+            appell::data::arrays::check_frames(t.as_bytes().len() / 8)
+                .map_err(|e| input(e.into()))?;
+            let rec = appell::data::arrays::recording_from_arrays(
+                &floats(&t, "t")?,
+                &floats(&s, "slider")?,
+                &floats(&b, "bob")?,
+            )
+            .map_err(|e| input(e.into()))?;
+            setup.settings.options.cancel = cancel_here();
+            interruptible(py, threads, || {
+                let obs = pipeline::observations_for_rig(&rec, &setup.rig_path, &setup.rig)
+                    .map_err(FitFailure::Input)?;
+                let report = pipeline::fit_observations(obs.clone(), &setup, "the arrays")?;
+                Ok((obs, report, Vec::new()))
             })?
             .map_err(failure)?
         }
     };
+    setup.settings.options.cancel = Cancel::default();
     let seconds = started.elapsed().as_secs_f64();
     let mut notes = notes;
     let fps_note = py.detach(|| fps_unused(&paths, &opts));
@@ -578,13 +643,12 @@ fn fit_joint_py(
         same_camera,
         keep_going,
     };
-    let (report, fit_notes) = py
-        .detach(|| {
-            pooled(threads, || {
-                pipeline::fit_joint_files(&paths, &opts, &setup, &joint)
-            })
-        })?
-        .map_err(failure)?;
+    let mut setup = setup;
+    setup.settings.options.cancel = cancel_here();
+    let (report, fit_notes) = interruptible(py, threads, || {
+        pipeline::fit_joint_files(&paths, &opts, &setup, &joint)
+    })?
+    .map_err(failure)?;
     notes.extend(fit_notes);
     let fps_notes: Vec<String> =
         py.detach(|| paths.iter().filter_map(|r| fps_unused(r, &opts)).collect());
@@ -855,6 +919,13 @@ fn read_toml_py(path: PathBuf) -> PyResult<String> {
     appell::scene::read_text(&path, appell::scene::MAX_TOML_BYTES).map_err(|e| input(e.into()))
 }
 
+/// Refuse a recording of `frames` frames that a file could not hold (before its arrays are
+/// copied): `ValueError` naming the bound.
+#[pyfunction]
+fn check_frames_py(frames: usize) -> PyResult<()> {
+    appell::data::arrays::check_frames(frames).map_err(|e| input(e.into()))
+}
+
 /// Check a rig file's text as a fit loads it (`ValueError` naming the key at fault).
 #[pyfunction]
 fn check_rig_py(text: &str, label: &str) -> PyResult<()> {
@@ -890,6 +961,7 @@ fn _appell(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(version, m)?)?;
     m.add_function(wrap_pyfunction!(read_toml_py, m)?)?;
     m.add_function(wrap_pyfunction!(check_rig_py, m)?)?;
+    m.add_function(wrap_pyfunction!(check_frames_py, m)?)?;
     m.add_class::<Fit>()?;
     m.add_class::<Joint>()?;
     Ok(())

@@ -8,6 +8,7 @@
 //! The files, in the order a read goes through them:
 //! - `mod.rs`: the entry points, format detection, and the assembly of what a reader returns
 //!   into a calibrated recording (the slider and the bob picked, aligned on common times).
+//! - `arrays.rs`: recordings made from arrays (Python), held to a file's bounds.
 //! - `budget.rs`: one budget per input file: what a reader may decode, hold and compute.
 //! - `options.rs`: `ReadOptions` and `Plane`; `parsed.rs`: what a reader returns (`Series`,
 //!   `Parsed`).
@@ -30,6 +31,7 @@
 //!   inspect`): markers, times, units, the pair that moves like the slider and the bob, and the
 //!   options still missing.
 
+pub mod arrays;
 mod budget;
 pub mod calibrate;
 mod dlc;

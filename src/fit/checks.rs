@@ -72,7 +72,9 @@ pub fn check_labels(rec: &Recording) -> Result<(), RecordingCheck> {
         return Ok(());
     }
     let p = &rec.provenance;
-    let flip = if p.calibration.y_flipped {
+    let flip = if from_arrays(rec) {
+        "y up: negate the y columns of slider and bob"
+    } else if p.calibration.y_flipped {
         "--y-up (the file's y points up)"
     } else {
         "--y-down (the file's y points down)"
@@ -124,9 +126,22 @@ fn bob_above(rec: &Recording, median: f64) -> bool {
     both >= 10 && above as f64 > ABOVE_SHARE * both as f64
 }
 
-/// The flags (or the file order) that read a recording's two markers the other way round.
+/// Whether a recording was made from arrays (the Python package's `Recording`), not read from
+/// a file: its fixes are to the arrays, not to a reader's flags.
+fn from_arrays(rec: &Recording) -> bool {
+    rec.provenance.format.is_none()
+}
+
+/// The flags (or the file order, or the arrays' order) that read a recording's two markers the
+/// other way round.
 fn swap_fix(rec: &Recording) -> String {
     let p = &rec.provenance;
+    if from_arrays(rec) {
+        return format!(
+            "give them the other way round: {}",
+            crate::data::arrays::ARRAYS.replace("slider, bob", "bob, slider")
+        );
+    }
     let by_file_order = p.sources.len() == 2
         && p.notes
             .iter()
@@ -159,17 +174,23 @@ pub fn check_rigid(rec: &Recording) -> Result<(), RecordingCheck> {
         return Ok(());
     }
     let p = &rec.provenance;
+    let check = if from_arrays(rec) {
+        "check that slider and bob are the slider's and the bob's tracks, in metres".to_owned()
+    } else {
+        format!(
+            "check that {:?} and {:?} are the slider's and the bob's markers (--slider NAME --bob NAME)",
+            p.slider_name, p.bob_name
+        )
+    };
     Err(RecordingCheck {
         files: files(rec),
         message: format!(
-            "not a recording of a pendulum on a slider: the slider-bob marker distance is not constant, median {:.4} m with a robust spread of {:.3e} m (1.4826 MAD over {} frames), beyond the {:.3e} m a rod's markers show (5 noise deviations of {:.2e} m plus 5 % of the median); check that {:?} and {:?} are the slider's and the bob's markers (--slider NAME --bob NAME)",
+            "not a recording of a pendulum on a slider: the slider-bob marker distance is not constant, median {:.4} m with a robust spread of {:.3e} m (1.4826 MAD over {} frames), beyond the {:.3e} m a rod's markers show (5 noise deviations of {:.2e} m plus 5 % of the median); {check}",
             g.median,
             g.spread,
             g.frames,
             g.rigid_limit(),
             g.noise,
-            p.slider_name,
-            p.bob_name
         ),
     })
 }
@@ -179,6 +200,42 @@ pub fn check_rigid(rec: &Recording) -> Result<(), RecordingCheck> {
 pub fn check_recording(rec: &Recording) -> Result<(), RecordingCheck> {
     check_labels(rec)?;
     check_rigid(rec)
+}
+
+/// The fewest frames a swing of the rig's pendulum must span for a fit to follow the motion:
+/// fewer, and the recording cannot tell one swing from the next (two a swing is the Nyquist
+/// limit). A lab's recordings have tens to thousands (a 0.3 m pendulum swings in 1.1 s, filmed
+/// at 25 to 1000 Hz); times in milliseconds read as seconds leave about one.
+pub const MIN_FRAMES_PER_SWING: f64 = 4.0;
+
+/// The frames dense enough to follow the rig's pendulum: the median frame step at most a
+/// [`MIN_FRAMES_PER_SWING`]th of the stuck pendulum's small-swing period (the slowest motion
+/// the rig makes; a sliding pivot swings faster). Refused otherwise, naming the step, the
+/// period and the likely slip: times in milliseconds where seconds are read.
+pub fn check_frame_rate(
+    rec: &Recording,
+    rig: &crate::model::Rig<f64>,
+) -> Result<(), RecordingCheck> {
+    if rec.times.len() < 2 {
+        return Ok(());
+    }
+    let step = super::problem::frame_step(&rec.times);
+    let period = crate::model::pendulum::stuck_period(rig, 0.0);
+    let per_swing = period / step;
+    if per_swing.is_nan() || per_swing >= MIN_FRAMES_PER_SWING {
+        return Ok(());
+    }
+    let fix = if from_arrays(rec) {
+        "t is in seconds: times in milliseconds are t / 1000"
+    } else {
+        "the times are read as seconds: a column of milliseconds is headed t_ms (or time_ms)"
+    };
+    Err(RecordingCheck {
+        files: files(rec),
+        message: format!(
+            "the frames are {step:.4} s apart (the median step), {per_swing:.2} a swing of the rig's pendulum (a period of {period:.3} s), where a fit needs at least {MIN_FRAMES_PER_SWING} to follow the motion: are the times in milliseconds? {fix}"
+        ),
+    })
 }
 
 /// The plain sentence for a recording whose slider never moves beyond its noise: mu_kinetic

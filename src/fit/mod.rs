@@ -63,7 +63,7 @@ mod uncertainty;
 pub use adequacy::{
     failed_tests, is_noise_free, FailedTest, FailedTests, LimitPart, RUNS_P, WINDOWS_P,
 };
-pub use checks::{check_recording, RecordingCheck};
+pub use checks::{check_frame_rate, check_recording, RecordingCheck};
 pub use error::FitError;
 pub use estimate::{Estimate, MuParts, RigValue};
 pub use noise::NoiseEstimate;

@@ -122,8 +122,11 @@ impl RigMeasurement {
         let slider_mass_sd = exact_below("slider_mass", spec.slider_mass, spec.slider_mass_sd);
         let bob_mass_sd = exact_below("bob_mass", spec.bob_mass.unwrap_or(0.0), spec.bob_mass_sd);
         let rod_mass_sd = exact_below("rod_mass", spec.rod_mass.unwrap_or(0.0), spec.rod_mass_sd);
-        let bob_radius_sd =
-            exact_below("bob_radius", spec.bob_radius.unwrap_or(0.0), spec.bob_radius_sd);
+        let bob_radius_sd = exact_below(
+            "bob_radius",
+            spec.bob_radius.unwrap_or(0.0),
+            spec.bob_radius_sd,
+        );
         let gravity_sd = exact_below("gravity", spec.gravity(), spec.gravity_sd);
         let mut key = |name: &'static str, v: Option<f64>, sd: Option<f64>, default: f64| {
             let v = v?;
@@ -160,14 +163,10 @@ impl RigMeasurement {
                 mass_sd(m, DEFAULT_BOB_MASS_REL),
             )
         });
-        let radius_sd = spec.bob_radius.filter(|&a| a > 0.0).and_then(|a| {
-            key(
-                "bob_radius",
-                Some(a),
-                bob_radius_sd,
-                DEFAULT_BOB_RADIUS_SD,
-            )
-        });
+        let radius_sd = spec
+            .bob_radius
+            .filter(|&a| a > 0.0)
+            .and_then(|a| key("bob_radius", Some(a), bob_radius_sd, DEFAULT_BOB_RADIUS_SD));
         // Gravity is listed only when it is fitted (held as typed by default).
         // Stated only when the file gives both the value and its deviation: gravity left out
         // is the default 9.81 +- 0.015 it is, not a measurement the file states.

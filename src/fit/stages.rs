@@ -872,7 +872,13 @@ fn mu_parts(est: &Estimates) -> Option<MuParts> {
         let total = est.params[i].1.stderr;
         let base = est.se[i].min(total);
         // A share of 0 is no part at all, also of an unbounded error (inf * 0 would be NaN).
-        let part = |share: f64| if share > 0.0 { base * share.sqrt() } else { 0.0 };
+        let part = |share: f64| {
+            if share > 0.0 {
+                base * share.sqrt()
+            } else {
+                0.0
+            }
+        };
         MuParts {
             noise: part(1.0 - est.rig_fraction),
             rig: part(est.rig_fraction),

@@ -14,8 +14,8 @@ pub use recording_args::{RecordingArgs, FORMAT_NAMES};
 use crate::data::{read_recording, ReadOptions, Recording};
 use crate::fit::joint::{fit_joint, JointError, JointReport, JointSettings, Release};
 use crate::fit::{
-    check_masses, check_recording, check_rod_length, check_tilt, fit, FitReport, FitSettings,
-    Observations,
+    check_frame_rate, check_masses, check_recording, check_rod_length, check_tilt, fit, FitReport,
+    FitSettings, Observations,
 };
 use crate::model::Rig;
 use crate::scene::RigFile;
@@ -85,8 +85,9 @@ impl FitSetup {
 }
 
 /// A recording read and checked before any fitting work: its slider and bob swapped, a
-/// distance no rod keeps (not this rig), a rod length its markers contradict and a rig too
-/// stiff to fit in minutes are bad input naming the file and the fix. The second value holds
+/// distance no rod keeps (not this rig), a rod length its markers contradict, frames too
+/// sparse to follow the pendulum (times in milliseconds) and a rig too stiff to fit in
+/// minutes are bad input naming the file and the fix. The second value holds
 /// the notes worth showing (frame times of two files joined).
 pub fn read_for_rig(
     paths: &[PathBuf],
@@ -160,6 +161,7 @@ fn check_for_rig(rec: &Recording, rig_path: &Path, rig: &Rig<f64>) -> anyhow::Re
     check_masses(rig_path, rig)?;
     check_tilt(rig_path, rig)?;
     check_rod_length(rig_path, rig, rec)?;
+    check_frame_rate(rec, rig)?;
     // Before any integration: a rig too stiff to fit in minutes is refused, naming its key.
     crate::scene::check_time_scale(
         rig_path,

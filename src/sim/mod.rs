@@ -10,6 +10,7 @@ pub use hybrid::{impulsive_stop, simulate, simulate_each};
 use crate::model::{Direction, Mode, State};
 use serde::Serialize;
 use std::fmt;
+use std::sync::atomic::{AtomicBool, Ordering};
 use thiserror::Error;
 
 /// The integration method of a run.
@@ -63,6 +64,49 @@ pub struct Options {
     /// (`model::pendulum::Swing`: its slip located on the swing, its end time from an
     /// elliptic integral). Off only to measure what they save, or to test the integrator.
     pub prove_stick: bool,
+    /// A flag another thread raises to stop the run between its steps (Ctrl-C in Python);
+    /// the default never does.
+    pub cancel: Cancel,
+}
+
+/// A request to stop runs early, raised by another thread: a run that sees it fails with
+/// [`SimError::Cancelled`] at its next step, so a fit whose every run fails ends at once.
+/// It holds a `'static` flag so that [`Options`] stays `Copy`: a caller keeps one flag per
+/// thread that may cancel, and lowers it before each piece of work.
+#[derive(Clone, Copy, Default)]
+pub struct Cancel(Option<&'static AtomicBool>);
+
+impl Cancel {
+    /// Runs that stop once `flag` is raised.
+    pub fn on(flag: &'static AtomicBool) -> Self {
+        Cancel(Some(flag))
+    }
+
+    /// Whether the flag is raised.
+    #[inline]
+    pub fn is_raised(self) -> bool {
+        self.0.is_some_and(|f| f.load(Ordering::Relaxed))
+    }
+}
+
+impl PartialEq for Cancel {
+    /// The same flag (or none): runs that stop on the same request.
+    fn eq(&self, other: &Self) -> bool {
+        match (self.0, other.0) {
+            (Some(a), Some(b)) => std::ptr::eq(a, b),
+            (a, b) => a.is_none() && b.is_none(),
+        }
+    }
+}
+
+impl fmt::Debug for Cancel {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(if self.0.is_some() {
+            "Cancel(flag)"
+        } else {
+            "Cancel(never)"
+        })
+    }
 }
 
 /// The rule that picks one motion at rest when the Painleve paradox leaves several consistent
@@ -112,6 +156,7 @@ impl Default for Options {
             rest_rule: RestRule::PreferStick,
             stop_threshold: 1e-9,
             prove_stick: true,
+            cancel: Cancel::default(),
         }
     }
 }
@@ -375,4 +420,10 @@ pub enum SimError {
     /// The input state or duration is unusable.
     #[error("invalid run input: {0}")]
     InvalidInput(String),
+    /// [`Options::cancel`] was raised: the run stopped at `t`.
+    #[error("cancelled at t = {t} s")]
+    Cancelled {
+        /// Time of the stop.
+        t: f64,
+    },
 }

@@ -637,7 +637,12 @@ fn a_recording_with_its_times_in_milliseconds_is_refused_naming_the_cause() {
     let file = write(dir.path(), "ms.csv", ms);
     let rig = data.join("rigs/equal_true_nosd.toml");
     let started = Instant::now();
-    let out = appell(&["fit", file.to_str().unwrap(), "--rig", rig.to_str().unwrap()]);
+    let out = appell(&[
+        "fit",
+        file.to_str().unwrap(),
+        "--rig",
+        rig.to_str().unwrap(),
+    ]);
     let took = started.elapsed();
     let err = stderr(&out);
     assert_eq!(out.status.code(), Some(2), "{err}");
@@ -661,7 +666,12 @@ fn a_rig_file_with_a_rail_near_vertical_is_refused_for_a_fit() {
             format!("[rig]\nslider_mass = 0.5\nbob_mass = 0.2\nrod_length = 0.30\ngravity = 9.81\nrail_tilt_deg = {tilt}\n"),
         );
         let started = Instant::now();
-        let out = appell(&["fit", example.to_str().unwrap(), "--rig", rig.to_str().unwrap()]);
+        let out = appell(&[
+            "fit",
+            example.to_str().unwrap(),
+            "--rig",
+            rig.to_str().unwrap(),
+        ]);
         let err = stderr(&out);
         assert_eq!(out.status.code(), Some(2), "{tilt}: {err}");
         assert!(started.elapsed() < Duration::from_secs(20));

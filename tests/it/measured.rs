@@ -242,8 +242,16 @@ fn a_deviation_below_any_measurement_is_held_exact() {
     let (a, b) = (held.mu_kinetic.unwrap(), rep.mu_kinetic.unwrap());
     assert!(b.stderr > 0.0, "{b:?}");
     assert!((a.value - b.value).abs() <= 1e-9 * a.value, "{a:?} {b:?}");
-    assert!((a.stderr - b.stderr).abs() <= 1e-6 * a.stderr, "{a:?} {b:?}");
-    for key in ["rod_length_sd", "slider_mass_sd", "bob_mass_sd", "gravity_sd"] {
+    assert!(
+        (a.stderr - b.stderr).abs() <= 1e-6 * a.stderr,
+        "{a:?} {b:?}"
+    );
+    for key in [
+        "rod_length_sd",
+        "slider_mass_sd",
+        "bob_mass_sd",
+        "gravity_sd",
+    ] {
         assert!(
             rep.warnings
                 .iter()

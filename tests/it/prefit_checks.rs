@@ -419,6 +419,42 @@ fn a_rod_length_more_than_twenty_percent_off_the_markers_is_refused() {
     }
 }
 
+/// Times in milliseconds under a header of seconds (`t`) leave about one frame a swing: refused
+/// with exit 2 naming the step and the fix, a `t_ms` header, which then reads them (issue 59,
+/// class M).
+#[test]
+fn times_in_milliseconds_read_as_seconds_are_refused_with_the_header_that_fixes_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let rows: Vec<Row> = rows(&root("data/campaign/release_01.csv"))
+        .into_iter()
+        .map(|(t, a, b)| ((t * 1000.0).round(), a, b))
+        .collect();
+    let rig = s(&root("data/campaign/rig_measured.toml"));
+    let (seconds, millis) = (d.join("as_seconds.csv"), d.join("as_ms.csv"));
+    write_rows(&seconds, "t,slider_x,slider_y,bob_x,bob_y", &rows);
+    write_rows(&millis, "t_ms,slider_x,slider_y,bob_x,bob_y", &rows);
+    let args = |rec: &Path| {
+        [
+            "fit".to_owned(),
+            s(rec),
+            "--rig".into(),
+            rig.clone(),
+            "--plain".into(),
+            "--no-profile".into(),
+        ]
+    };
+    let out = appell(&args(&seconds));
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains(&s(&seconds)) && err.contains("milliseconds") && err.contains("t_ms"),
+        "{err}"
+    );
+    let out = appell(&args(&millis));
+    assert!(out.status.success(), "{}", stderr(&out));
+}
+
 /// The largest friction ratio |F/N| a stuck slider needs under a point pendulum released from
 /// rest phi0 from the vertical, from the rod's tension (written here from Newton's laws, not
 /// the library's model): T = m2 g (3 cos phi - 2 cos phi0) along the rod, so the rail must
@@ -617,6 +653,9 @@ fn shipped_recordings_pass_the_checks() {
     for (paths, opts) in &inputs {
         let rec = read_recording(paths, opts).unwrap();
         check_recording(&rec).unwrap_or_else(|e| panic!("{e}"));
+        // Filmed at 100 Hz and faster: over 100 frames a swing of their 0.30 m rods.
+        appell::fit::check_frame_rate(&rec, &appell::model::Rig::paper(0.3))
+            .unwrap_or_else(|e| panic!("{e}"));
         let g = rec.provenance.geometry.as_ref().unwrap();
         assert!(
             (g.median - 0.3).abs() < 0.02 * 0.3,

@@ -131,8 +131,12 @@ impl<'a, T: Scalar + 'static, const N: usize> Run<'a, '_, T, N> {
         }
     }
 
-    /// Fail once the run has spent its steps (accepted and rejected).
+    /// Fail once the run has spent its steps (accepted and rejected), or when its caller
+    /// cancels it.
     pub(super) fn check_step_budget(&self) -> Result<(), SimError> {
+        if self.options.cancel.is_raised() {
+            return Err(SimError::Cancelled { t: self.t });
+        }
         if self.out.stats.steps + self.out.stats.rejected >= self.options.max_steps {
             return Err(SimError::TooManySteps {
                 t: self.t,
