@@ -618,3 +618,92 @@ fn a_wide_csv_with_a_marker_column_named_twice_is_refused_naming_both_columns() 
     }
     assert!(!out.exists());
 }
+
+/// A pendulum of 0.3 m on a slider, 200 frames at 100 Hz: (t, slider, bob) in metres.
+fn swinging(k: usize) -> (f64, [f64; 2], [f64; 2]) {
+    let t = k as f64 * 0.01;
+    let (a, x) = (0.5 * (3.0 * t).cos(), 0.02 * (3.0 * t).sin());
+    (t, [x, 0.0], [x + 0.3 * a.sin(), -0.3 * a.cos()])
+}
+
+/// `appell inspect` on `args`, text and JSON: the exit code and stderr of the text run, its
+/// stdout, and the JSON object.
+fn inspected(args: &[&str]) -> (Option<i32>, String, String, serde_json::Value) {
+    let mut all = vec!["inspect"];
+    all.extend_from_slice(args);
+    let text = appell(&all);
+    all.push("--json");
+    let json = appell(&all);
+    let v = serde_json::from_slice(&json.stdout).unwrap_or(serde_json::Value::Null);
+    (
+        text.status.code(),
+        stderr(&text),
+        String::from_utf8_lossy(&text.stdout).into_owned(),
+        v,
+    )
+}
+
+/// Issue 59, class G: `inspect` said "the file reads as it is" of files `convert` refuses
+/// (coordinates near 1.7e308, printed as "distance inf +- NaN"; an MCAP whose every frame lost
+/// its positions; `--scale 1e300`). Its verdict is now the readers' own checks: each is refused
+/// with convert's reason naming the file (exit 2, as for a file it cannot read), what it can
+/// describe still described, with no inf or NaN for a measurement.
+#[test]
+fn inspect_refuses_what_convert_refuses_with_convert_s_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut huge = String::from("t,slider_x,slider_y,bob_x,bob_y\n");
+    let mut good = huge.clone();
+    for k in 0..200 {
+        let (t, s, b) = swinging(k);
+        let x = if k % 2 == 0 { 1.6e308 } else { 1.7e308 };
+        huge += &format!("{t},{x},0,-1.7e308,-1e308\n");
+        good += &format!("{t},{},{},{},{}\n", s[0], s[1], b[0], b[1]);
+    }
+    let huge = write(d, "huge.csv", huge);
+    let good = write(d, "good.csv", good);
+    let null = r#"{"id":"slider","x":null,"y":null},{"id":"bob","x":null,"y":null}"#;
+    let dropped = json_mcap(&[(
+        "/markers",
+        (0..200)
+            .map(|k| {
+                let stamp = format!(r#"{{"sec":{},"nsec":{}}}"#, k / 100, k % 100 * 10_000_000);
+                let body = format!(r#"{{"timestamp":{stamp},"markers":[{null}]}}"#);
+                (k + 1, body)
+            })
+            .collect(),
+    )]);
+    let dropped = write(d, "dropped.mcap", dropped);
+    let out = d.join("out.csv");
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    for (input, flags) in [
+        (s(&huge), vec![]),
+        (s(&dropped), vec![]),
+        (s(&good), vec!["--scale", "1e300"]),
+    ] {
+        let mut convert = vec!["convert", input.as_str(), out.to_str().unwrap()];
+        convert.extend(&flags);
+        let c = appell(&convert);
+        assert_eq!(c.status.code(), Some(2), "{convert:?}: {}", stderr(&c));
+        let mut args = vec![input.as_str()];
+        args.extend(&flags);
+        let (code, err, text, json) = inspected(&args);
+        assert_eq!(code, Some(2), "{args:?}: {err}\n{text}");
+        // Convert's own reason (its last line, after the file's name), not one of inspect's.
+        let reason = stderr(&c);
+        let reason = reason.trim().trim_start_matches("error: ");
+        assert!(err.contains(reason), "{args:?}: {err} against {reason}");
+        assert!(!text.contains("reads as it is"), "{args:?}: {text}");
+        for word in ["inf", "NaN"] {
+            assert!(
+                !text
+                    .split(|c: char| !c.is_alphanumeric())
+                    .any(|w| w == word),
+                "{args:?}: {text}"
+            );
+        }
+        assert!(json["refused"].as_str().unwrap().contains(reason), "{json}");
+        assert!(json.get("rig_template").is_none(), "{json}");
+    }
+    assert!(!out.exists());
+}

@@ -348,7 +348,7 @@ fn by_names(
     let what = match &as_named {
         Some(p) => p.why.clone(),
         None => format!(
-            "they are seen together in fewer than {} frames",
+            "they are not seen together in {} frames at a distance a number holds",
             super::pairs::MIN_COMMON_FRAMES
         ),
     };

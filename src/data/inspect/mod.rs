@@ -69,6 +69,10 @@ pub struct Inspection {
     pub notes: Vec<String>,
     /// Problems that did not stop the reading.
     pub warnings: Vec<String>,
+    /// Why `convert` and `fit` refuse the recording as the printed commands read it (the
+    /// readers' own checks after reading: a marker never seen, the scale, coordinates beyond
+    /// any rig, the time window), when they do; `None`: they read it.
+    pub refused: Option<String>,
     /// Key-value metadata stored in the file.
     pub metadata: BTreeMap<String, String>,
     /// The rod's length in metres, when the file's scale or `--rod-length` tells it: the value
@@ -157,9 +161,11 @@ pub struct RigChoice {
 /// line); a missing `--fps`, scale or marker name is not an error but a suggestion.
 pub fn inspect(paths: &[PathBuf], opts: &ReadOptions) -> Result<Inspection, DataError> {
     let mut read = read_lenient(paths, opts)?;
+    let mut plane_used = None;
     let plane = match read.parsed.plane {
         Some(default) => {
             let (best, rig) = choose_plane(paths, opts, default, &read)?;
+            plane_used = Some(best);
             if best != default {
                 let other = ReadOptions {
                     plane: Some(best),
@@ -229,16 +235,67 @@ pub fn inspect(paths: &[PathBuf], opts: &ReadOptions) -> Result<Inspection, Data
         notes,
         warnings: read.parsed.warnings.clone(),
         metadata: read.parsed.metadata.clone(),
+        refused: None,
     };
     ins.notes.extend(read.parsed.notes.iter().cloned());
     advice::advise(&mut ins, &read.parsed, paths, opts);
+    ins.refused = refusal(paths, opts, plane_used, read, &ins);
     Ok(ins)
+}
+
+/// Why `convert` and `fit` refuse the recording as the printed commands read it, when they do:
+/// the checks [`super::recording_of`] makes after reading (the ones `convert` makes), on the
+/// pair the commands name and the plane they read, with frame numbers in place of a missing
+/// `--fps` and a rod of one metre in place of a missing scale (which the message then says).
+/// `None` also when no pair can be named or the files are to be given otherwise: the
+/// suggestions say what is missing first.
+fn refusal(
+    paths: &[PathBuf],
+    opts: &ReadOptions,
+    plane: Option<Plane>,
+    read: Read,
+    ins: &Inspection,
+) -> Option<String> {
+    let (Some(slider), Some(bob)) = (&ins.rig.slider, &ins.rig.bob) else {
+        return None;
+    };
+    if ins.suggestions.iter().any(|s| !s.files.is_empty()) {
+        return None;
+    }
+    let no_scale = ins.units.metres_per_unit.is_none() && opts.rod_length.is_none();
+    let as_printed = ReadOptions {
+        fps: opts.fps.or(read.numbered.then_some(FRAME_NUMBERS)),
+        plane: plane.or(opts.plane),
+        slider: Some(slider.clone()),
+        bob: Some(bob.clone()),
+        rod_length: opts.rod_length.or(no_scale.then_some(1.0)),
+        ..opts.clone()
+    };
+    let e =
+        super::recording_of(paths, read.format, read.detected, read.parsed, &as_printed).err()?;
+    let mut stand_ins = Vec::new();
+    if read.numbered && opts.fps.is_none() {
+        stand_ins.push(format!("--fps {FRAME_NUMBERS} (frame numbers)"));
+    }
+    if no_scale {
+        stand_ins.push("--rod-length 1".to_string());
+    }
+    Some(if stand_ins.is_empty() {
+        e.to_string()
+    } else {
+        format!(
+            "{e} (read with {} in place of the values still to give)",
+            stand_ins.join(" and ")
+        )
+    })
 }
 
 /// What the readers returned, and whether frames were numbered for want of times.
 struct Read {
     parsed: Parsed,
     format: Format,
+    /// Whether the format was detected (not given by `--format`).
+    detected: bool,
     numbered: bool,
 }
 
@@ -247,9 +304,10 @@ struct Read {
 /// next thing wrong with the file (or the same).
 fn read_lenient(paths: &[PathBuf], opts: &ReadOptions) -> Result<Read, DataError> {
     match read_parsed(paths, opts) {
-        Ok((parsed, format, _)) => Ok(Read {
+        Ok((parsed, format, detected)) => Ok(Read {
             parsed,
             format,
+            detected,
             numbered: false,
         }),
         Err(first) if opts.fps.is_none() => {
@@ -258,9 +316,10 @@ fn read_lenient(paths: &[PathBuf], opts: &ReadOptions) -> Result<Read, DataError
                 ..opts.clone()
             };
             match read_parsed(paths, &numbered) {
-                Ok((parsed, format, _)) => Ok(Read {
+                Ok((parsed, format, detected)) => Ok(Read {
                     parsed,
                     format,
+                    detected,
                     numbered: true,
                 }),
                 Err(again) => Err(match again {
