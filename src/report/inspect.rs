@@ -216,7 +216,7 @@ fn frames_line(ins: &Inspection) -> String {
     format!(
         "{} over {} s{start}{rate}{}",
         t.frames,
-        sig(t.last - t.first, 4),
+        sig(t.span, 4),
         uneven("s")
     )
 }

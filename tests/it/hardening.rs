@@ -707,3 +707,55 @@ fn inspect_refuses_what_convert_refuses_with_convert_s_reason() {
     }
     assert!(!out.exists());
 }
+
+/// Issue 59, class H: `inspect` took spans and rates from clock times it had added back to the
+/// file's start: 1000 frames a nanosecond apart near 2^63 ns were "over 1.907e-6 s" (convert
+/// reads 999 ns); frames 5e-324 s apart were "inf frames/s" with a wrong reason ("seen together
+/// in fewer than 20 frames"). The span is now the readers' times' own (convert's), and frames
+/// closer than any clock keeps apart are refused, naming the marker, the frame and the times.
+#[test]
+fn inspect_keeps_nanoseconds_and_refuses_frames_no_clock_keeps_apart() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut ns = String::from("t_ns,slider_x,slider_y,bob_x,bob_y\n");
+    let mut tiny = String::from("t,slider_x,slider_y,bob_x,bob_y\n");
+    let start = i64::MAX - 2000;
+    for k in 0..1000 {
+        let (_, s, b) = swinging(k);
+        let xy = format!("{},{},{},{}", s[0], s[1], b[0], b[1]);
+        ns += &format!("{},{xy}\n", start + k as i64);
+        if k < 200 {
+            tiny += &format!("{:e},{xy}\n", k as f64 * 5e-324);
+        }
+    }
+    let ns = write(d, "ns.csv", ns);
+    let rec = read_recording(std::slice::from_ref(&ns), &ReadOptions::default()).unwrap();
+    let span = rec.times[rec.times.len() - 1] - rec.times[0];
+    assert!((span - 999e-9).abs() < 1e-15, "convert's span {span}");
+    let (code, err, text, json) = inspected(&[ns.to_str().unwrap()]);
+    assert_eq!(code, Some(0), "{err}");
+    let said: f64 = text
+        .split("frames     1000 over ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|x| x.parse().ok())
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(
+        (said - span).abs() <= 1e-3 * span,
+        "{said} s against {span} s: {text}"
+    );
+    let rate = json["time"]["rate"].as_f64().unwrap();
+    assert!((rate - 1e9).abs() < 1e3, "{rate}");
+
+    let tiny = write(d, "tiny.csv", tiny);
+    let (code, err, text, _) = inspected(&[tiny.to_str().unwrap()]);
+    assert_eq!(code, Some(2), "{err}\n{text}");
+    assert!(
+        err.contains("tiny.csv") && err.contains("time") && err.contains("frame 2"),
+        "{err}"
+    );
+    assert!(
+        !err.contains("fewer than") && !text.contains("inf"),
+        "{err}\n{text}"
+    );
+}

@@ -102,6 +102,10 @@ pub struct Timing {
     pub first: f64,
     /// See `first`.
     pub last: f64,
+    /// The time from the first frame to the last (seconds, or frames), from the readers' times
+    /// relative to the first frame: `last - first` loses the digits a large clock (nanoseconds
+    /// since 1970) holds.
+    pub span: f64,
     /// The median step between frames (seconds, or frames).
     pub step: Option<f64>,
     /// The smallest and largest step, when they differ from the median by over 1 %.
@@ -191,7 +195,7 @@ pub fn inspect(paths: &[PathBuf], opts: &ReadOptions) -> Result<Inspection, Data
         unit: &units.unit,
     };
     let analysis = pairs::analyse(&read.parsed.series, look);
-    let time = timing(&read.parsed, read.numbered, paths);
+    let time = timing(&read.parsed, read.numbered, paths)?;
     let detection = match (opts.format, paths.first()) {
         (Some(_), _) | (None, None) => "given by --format".to_string(),
         (None, Some(first)) => {
@@ -401,9 +405,28 @@ fn units(parsed: &Parsed, opts: &ReadOptions, y_down: bool) -> Units {
     }
 }
 
-/// The frames over every marker: times within a billionth of a second (or frame) of each other
-/// are one frame (two Tracker exports of one video round its times each their own way).
-fn timing(parsed: &Parsed, numbered: bool, paths: &[PathBuf]) -> Timing {
+/// The frames over every marker: times that [`same_frame`] joins are one frame (two Tracker
+/// exports of one video round its times each their own way). A marker whose own successive
+/// times it would join is refused: its frames would be read as one, and its rate would be
+/// beyond any clock's (or no number at all).
+fn timing(parsed: &Parsed, numbered: bool, paths: &[PathBuf]) -> Result<Timing, DataError> {
+    for s in &parsed.series {
+        if let Some(k) = s.times.windows(2).position(|w| same_frame(w[0], w[1])) {
+            let (previous, time) = (s.times[k], s.times[k + 1]);
+            return Err(DataError::parse(
+                &super::paths_label(paths),
+                format!("marker {:?}, frame {}", s.name, k + 2),
+                "time",
+                "frames more than a tenth of a nanosecond (a ten-billionth of their time beyond 1 s) apart, as any clock that counts nanoseconds keeps them",
+                format!(
+                    "{} s after {} s (seconds from the first frame), {} s apart",
+                    sig(time, 6),
+                    sig(previous, 6),
+                    sig(time - previous, 3)
+                ),
+            ));
+        }
+    }
     let times = frame_times(&parsed.series.iter().collect::<Vec<_>>());
     let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
     let step = (!steps.is_empty()).then(|| super::calibrate::median(&mut steps.clone()));
@@ -413,11 +436,16 @@ fn timing(parsed: &Parsed, numbered: bool, paths: &[PathBuf]) -> Timing {
         (lo < 0.99 * m || hi > 1.01 * m).then_some([lo, hi])
     });
     let base = parsed.time_base;
-    Timing {
+    let (first, last) = (
+        times.first().copied().unwrap_or(0.0),
+        times.last().copied().unwrap_or(0.0),
+    );
+    Ok(Timing {
         timed: !numbered,
         frames: times.len(),
-        first: base + times.first().copied().unwrap_or(0.0),
-        last: base + times.last().copied().unwrap_or(0.0),
+        first: base + first,
+        last: base + last,
+        span: last - first,
         step,
         uneven,
         rate: step.filter(|s| !numbered && *s > 0.0).map(|s| 1.0 / s),
@@ -426,7 +454,7 @@ fn timing(parsed: &Parsed, numbered: bool, paths: &[PathBuf]) -> Timing {
         } else {
             None
         },
-    }
+    })
 }
 
 /// Every marker's times merged into one increasing list of frames.
@@ -445,9 +473,11 @@ fn frame_times(series: &[&Series]) -> Vec<f64> {
     all
 }
 
-/// Two times of one frame: within a billionth of their size (or of one second or frame).
+/// Two times of one frame: within a ten-billionth of their size (or of one second or frame).
+/// Two exports of one video differ by their rounding, some 1e-14 of the time; frames of a
+/// clock that counts nanoseconds (MCAP stamps, a `t_ns` column) a nanosecond apart stay two.
 fn same_frame(a: f64, b: f64) -> bool {
-    (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0)
+    (a - b).abs() <= 1e-10 * a.abs().max(b.abs()).max(1.0)
 }
 
 /// A frame rate stated in a file's name: a number followed by `Hz` or `fps`
