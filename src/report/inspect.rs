@@ -283,7 +283,10 @@ fn markers(s: &mut String, ins: &Inspection) {
 fn pairs(s: &mut String, ins: &Inspection) {
     let unit = &ins.units.unit;
     if ins.pairs.is_empty() {
-        *s += "  pairs      none compared (fewer than two markers seen together in 10 frames)\n";
+        *s += &format!(
+            "  pairs      none compared (no two markers are {})\n",
+            crate::data::inspect::together()
+        );
         return;
     }
     *s += &format!(

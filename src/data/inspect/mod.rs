@@ -17,7 +17,7 @@ mod advice;
 mod pairs;
 
 pub use advice::{Need, Suggestion};
-pub use pairs::{Marker, Pair};
+pub use pairs::{together, Marker, Pair};
 
 use super::{read_parsed, DataError, Format, Parsed, Plane, ReadOptions, Series};
 use serde::Serialize;

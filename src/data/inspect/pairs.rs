@@ -44,6 +44,12 @@ pub const MAX_TILT_DEG: f64 = 45.0;
 /// Frames with both markers a pair needs to be compared: fewer tell nothing of a motion.
 pub const MIN_COMMON_FRAMES: usize = 20;
 
+/// What two markers must be to be compared, in the words every reason uses: seen together in
+/// [`MIN_COMMON_FRAMES`] frames, at a distance (and spread) an `f64` holds.
+pub fn together() -> String {
+    format!("seen together in {MIN_COMMON_FRAMES} frames at a distance a number holds")
+}
+
 /// Frames with both markers a pair needs to be taken for the rig when the names do not say
 /// so: over a short clip two body parts can keep their distance by chance (a DeepLabCut clip of
 /// two mice: an ear of one and the snout of the other within 0.7 % over 27 frames), and a
