@@ -62,6 +62,10 @@ pub fn run(args: Args) -> Result<(), Failure> {
     if let [one] = groups.as_slice() {
         let ins = inspect(one, &opts).map_err(|e| Failure::Input(e.into()))?;
         print(&ins, args.json);
+        // Described as far as it goes, and refused as convert refuses it.
+        if let Some(why) = &ins.refused {
+            return Err(Failure::Input(anyhow!("{why}")));
+        }
         if let Some(out) = &args.rig_template {
             write_template(&ins, out)?;
         }
@@ -73,7 +77,13 @@ pub fn run(args: Args) -> Result<(), Failure> {
             outln!();
         }
         match inspect(group, &opts) {
-            Ok(ins) => print(&ins, args.json),
+            Ok(ins) => {
+                print(&ins, args.json);
+                if let Some(why) = &ins.refused {
+                    failed += 1;
+                    note!("error: {why}");
+                }
+            }
             Err(e) => {
                 failed += 1;
                 note!("error: {e}");
@@ -82,7 +92,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
     }
     if failed > 0 {
         return Err(Failure::Input(anyhow!(
-            "{failed} of {} recordings could not be inspected (their errors are above)",
+            "{failed} of {} recordings could not be inspected or are refused (their errors are above)",
             groups.len()
         )));
     }

@@ -64,6 +64,19 @@ use std::path::{Path, PathBuf};
 /// into the rail frame. The format is detected unless `opts.format` is set.
 pub fn read_recording(paths: &[PathBuf], opts: &ReadOptions) -> Result<Recording, DataError> {
     let (parsed, format, detected) = read_parsed(paths, opts)?;
+    recording_of(paths, format, detected, parsed, opts)
+}
+
+/// The recording in what the readers gave: the slider and the bob picked and aligned, the
+/// calibration, the time window; every check `convert` makes after reading the files, so that
+/// `inspect`'s verdict is theirs.
+pub(crate) fn recording_of(
+    paths: &[PathBuf],
+    format: Format,
+    detected: bool,
+    parsed: Parsed,
+    opts: &ReadOptions,
+) -> Result<Recording, DataError> {
     let mut rec = assemble(paths, format, detected, parsed, opts)?;
     if let Some((start, end)) = opts.time_window {
         crop(&mut rec, start, end, &paths_label(paths))?;

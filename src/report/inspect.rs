@@ -13,7 +13,7 @@ pub const PAIRS_SHOWN: usize = 8;
 /// file holds a rig.
 pub fn inspect_json(ins: &Inspection) -> Value {
     let mut v = serde_json::to_value(ins).expect("an inspection serializes");
-    if ins.rig.looks_like_rig {
+    if ins.rig.looks_like_rig && ins.refused.is_none() {
         v["rig_template"] = Value::String(rig_template(ins));
     }
     v
@@ -111,34 +111,11 @@ pub fn inspect_text(ins: &Inspection) -> String {
         _ => r.why.clone(),
     };
     s += &format!("  rig        {verdict}\n");
-    if ins.suggestions.is_empty() {
-        s += "  options    none missing: the file reads as it is\n";
-    }
-    for (k, sg) in ins.suggestions.iter().enumerate() {
-        let head = if k == 0 {
-            "  options    "
-        } else {
-            "             "
-        };
-        let need = match sg.need {
-            Need::Required => "required",
-            Need::Advised => "advised",
-        };
-        let what = if sg.flags.is_empty() {
-            format!("files {}", sg.typed())
-        } else {
-            sg.typed()
-        };
-        s += &format!("{head}{what} ({need}): {}\n", sg.why);
-    }
-    s += &format!("  run        {}\n", ins.convert_command);
-    s += &format!("             {}\n", ins.fit_command);
-    s += &format!("             ({})\n", placeholders(ins));
-    if ins.rig.looks_like_rig {
-        s += "  rig file   RIG.toml for the fit, to fill in (`--rig-template RIG.toml` writes it):\n";
-        for line in rig_template(ins).lines() {
-            s += &format!("    {line}\n");
-        }
+    if let Some(why) = &ins.refused {
+        // No commands to run: convert and fit stop at what is wrong with the file.
+        s += &format!("  refused    convert and fit refuse this recording: {why}\n");
+    } else {
+        s += &options_and_commands(ins);
     }
     for n in &ins.left_out {
         s += &format!("  note: {n}\n");
@@ -158,6 +135,41 @@ pub fn inspect_text(ins: &Inspection) -> String {
         s += &format!("  metadata: {}\n", kv.join(", "));
     }
     s
+}
+
+/// The options still missing, the commands to run and the rig file to fill in.
+fn options_and_commands(ins: &Inspection) -> String {
+    let mut out = String::new();
+    if ins.suggestions.is_empty() {
+        out += "  options    none missing: the file reads as it is\n";
+    }
+    for (k, sg) in ins.suggestions.iter().enumerate() {
+        let head = if k == 0 {
+            "  options    "
+        } else {
+            "             "
+        };
+        let need = match sg.need {
+            Need::Required => "required",
+            Need::Advised => "advised",
+        };
+        let what = if sg.flags.is_empty() {
+            format!("files {}", sg.typed())
+        } else {
+            sg.typed()
+        };
+        out += &format!("{head}{what} ({need}): {}\n", sg.why);
+    }
+    out += &format!("  run        {}\n", ins.convert_command);
+    out += &format!("             {}\n", ins.fit_command);
+    out += &format!("             ({})\n", placeholders(ins));
+    if ins.rig.looks_like_rig {
+        out += "  rig file   RIG.toml for the fit, to fill in (`--rig-template RIG.toml` writes it):\n";
+        for line in rig_template(ins).lines() {
+            out += &format!("    {line}\n");
+        }
+    }
+    out
 }
 
 /// How many frames, over what, at what rate.
@@ -204,7 +216,7 @@ fn frames_line(ins: &Inspection) -> String {
     format!(
         "{} over {} s{start}{rate}{}",
         t.frames,
-        sig(t.last - t.first, 4),
+        sig(t.span, 4),
         uneven("s")
     )
 }
@@ -242,6 +254,10 @@ fn markers(s: &mut String, ins: &Inspection) {
     );
     for m in &ins.markers {
         let range = |r: Option<[f64; 2]>| match r {
+            // Beyond a million, digits to the unit say nothing more.
+            Some([a, b]) if a.abs().max(b.abs()) >= 1e6 => {
+                format!("{} to {}", sig(a, 4), sig(b, 4))
+            }
             Some([a, b]) => format!("{a:.dec$} to {b:.dec$}"),
             None => "-".into(),
         };
@@ -251,7 +267,12 @@ fn markers(s: &mut String, ins: &Inspection) {
             m.seen,
             range(m.x),
             range(m.y),
-            sig(m.travel, 3),
+            // Positions a whole f64 range apart have a travel no number holds.
+            if m.travel.is_finite() {
+                sig(m.travel, 3)
+            } else {
+                "-".into()
+            },
             m.off_line.map_or("-".into(), |d| sig(d, 2)),
             w = frames.to_string().len()
         );
@@ -262,7 +283,10 @@ fn markers(s: &mut String, ins: &Inspection) {
 fn pairs(s: &mut String, ins: &Inspection) {
     let unit = &ins.units.unit;
     if ins.pairs.is_empty() {
-        *s += "  pairs      none compared (fewer than two markers seen together in 10 frames)\n";
+        *s += &format!(
+            "  pairs      none compared (no two markers are {})\n",
+            crate::data::inspect::together()
+        );
         return;
     }
     *s += &format!(

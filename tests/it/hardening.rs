@@ -681,3 +681,144 @@ fn a_rig_file_with_a_rail_near_vertical_is_refused_for_a_fit() {
         );
     }
 }
+
+/// A pendulum of 0.3 m on a slider, 200 frames at 100 Hz: (t, slider, bob) in metres.
+fn swinging(k: usize) -> (f64, [f64; 2], [f64; 2]) {
+    let t = k as f64 * 0.01;
+    let (a, x) = (0.5 * (3.0 * t).cos(), 0.02 * (3.0 * t).sin());
+    (t, [x, 0.0], [x + 0.3 * a.sin(), -0.3 * a.cos()])
+}
+
+/// `appell inspect` on `args`, text and JSON: the exit code and stderr of the text run, its
+/// stdout, and the JSON object.
+fn inspected(args: &[&str]) -> (Option<i32>, String, String, serde_json::Value) {
+    let mut all = vec!["inspect"];
+    all.extend_from_slice(args);
+    let text = appell(&all);
+    all.push("--json");
+    let json = appell(&all);
+    let v = serde_json::from_slice(&json.stdout).unwrap_or(serde_json::Value::Null);
+    (
+        text.status.code(),
+        stderr(&text),
+        String::from_utf8_lossy(&text.stdout).into_owned(),
+        v,
+    )
+}
+
+/// Issue 59, class G: `inspect` said "the file reads as it is" of files `convert` refuses
+/// (coordinates near 1.7e308, printed as "distance inf +- NaN"; an MCAP whose every frame lost
+/// its positions; `--scale 1e300`). Its verdict is now the readers' own checks: each is refused
+/// with convert's reason naming the file (exit 2, as for a file it cannot read), what it can
+/// describe still described, with no inf or NaN for a measurement.
+#[test]
+fn inspect_refuses_what_convert_refuses_with_convert_s_reason() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut huge = String::from("t,slider_x,slider_y,bob_x,bob_y\n");
+    let mut good = huge.clone();
+    for k in 0..200 {
+        let (t, s, b) = swinging(k);
+        let x = if k % 2 == 0 { 1.6e308 } else { 1.7e308 };
+        huge += &format!("{t},{x},0,-1.7e308,-1e308\n");
+        good += &format!("{t},{},{},{},{}\n", s[0], s[1], b[0], b[1]);
+    }
+    let huge = write(d, "huge.csv", huge);
+    let good = write(d, "good.csv", good);
+    let null = r#"{"id":"slider","x":null,"y":null},{"id":"bob","x":null,"y":null}"#;
+    let dropped = json_mcap(&[(
+        "/markers",
+        (0..200)
+            .map(|k| {
+                let stamp = format!(r#"{{"sec":{},"nsec":{}}}"#, k / 100, k % 100 * 10_000_000);
+                let body = format!(r#"{{"timestamp":{stamp},"markers":[{null}]}}"#);
+                (k + 1, body)
+            })
+            .collect(),
+    )]);
+    let dropped = write(d, "dropped.mcap", dropped);
+    let out = d.join("out.csv");
+    let s = |p: &Path| p.to_str().unwrap().to_string();
+    for (input, flags) in [
+        (s(&huge), vec![]),
+        (s(&dropped), vec![]),
+        (s(&good), vec!["--scale", "1e300"]),
+    ] {
+        let mut convert = vec!["convert", input.as_str(), out.to_str().unwrap()];
+        convert.extend(&flags);
+        let c = appell(&convert);
+        assert_eq!(c.status.code(), Some(2), "{convert:?}: {}", stderr(&c));
+        let mut args = vec![input.as_str()];
+        args.extend(&flags);
+        let (code, err, text, json) = inspected(&args);
+        assert_eq!(code, Some(2), "{args:?}: {err}\n{text}");
+        // Convert's own reason (its last line, after the file's name), not one of inspect's.
+        let reason = stderr(&c);
+        let reason = reason.trim().trim_start_matches("error: ");
+        assert!(err.contains(reason), "{args:?}: {err} against {reason}");
+        assert!(!text.contains("reads as it is"), "{args:?}: {text}");
+        for word in ["inf", "NaN"] {
+            assert!(
+                !text
+                    .split(|c: char| !c.is_alphanumeric())
+                    .any(|w| w == word),
+                "{args:?}: {text}"
+            );
+        }
+        assert!(json["refused"].as_str().unwrap().contains(reason), "{json}");
+        assert!(json.get("rig_template").is_none(), "{json}");
+    }
+    assert!(!out.exists());
+}
+
+/// Issue 59, class H: `inspect` took spans and rates from clock times it had added back to the
+/// file's start: 1000 frames a nanosecond apart near 2^63 ns were "over 1.907e-6 s" (convert
+/// reads 999 ns); frames 5e-324 s apart were "inf frames/s" with a wrong reason ("seen together
+/// in fewer than 20 frames"). The span is now the readers' times' own (convert's), and frames
+/// closer than any clock keeps apart are refused, naming the marker, the frame and the times.
+#[test]
+fn inspect_keeps_nanoseconds_and_refuses_frames_no_clock_keeps_apart() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let mut ns = String::from("t_ns,slider_x,slider_y,bob_x,bob_y\n");
+    let mut tiny = String::from("t,slider_x,slider_y,bob_x,bob_y\n");
+    let start = i64::MAX - 2000;
+    for k in 0..1000 {
+        let (_, s, b) = swinging(k);
+        let xy = format!("{},{},{},{}", s[0], s[1], b[0], b[1]);
+        ns += &format!("{},{xy}\n", start + k as i64);
+        if k < 200 {
+            tiny += &format!("{:e},{xy}\n", k as f64 * 5e-324);
+        }
+    }
+    let ns = write(d, "ns.csv", ns);
+    let rec = read_recording(std::slice::from_ref(&ns), &ReadOptions::default()).unwrap();
+    let span = rec.times[rec.times.len() - 1] - rec.times[0];
+    assert!((span - 999e-9).abs() < 1e-15, "convert's span {span}");
+    let (code, err, text, json) = inspected(&[ns.to_str().unwrap()]);
+    assert_eq!(code, Some(0), "{err}");
+    let said: f64 = text
+        .split("frames     1000 over ")
+        .nth(1)
+        .and_then(|r| r.split(' ').next())
+        .and_then(|x| x.parse().ok())
+        .unwrap_or_else(|| panic!("{text}"));
+    assert!(
+        (said - span).abs() <= 1e-3 * span,
+        "{said} s against {span} s: {text}"
+    );
+    let rate = json["time"]["rate"].as_f64().unwrap();
+    assert!((rate - 1e9).abs() < 1e3, "{rate}");
+
+    let tiny = write(d, "tiny.csv", tiny);
+    let (code, err, text, _) = inspected(&[tiny.to_str().unwrap()]);
+    assert_eq!(code, Some(2), "{err}\n{text}");
+    assert!(
+        err.contains("tiny.csv") && err.contains("time") && err.contains("frame 2"),
+        "{err}"
+    );
+    assert!(
+        !err.contains("fewer than") && !text.contains("inf"),
+        "{err}\n{text}"
+    );
+}

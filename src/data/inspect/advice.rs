@@ -288,8 +288,8 @@ fn choose(
                         p.slider, p.bob, p.why
                     ),
                     None => format!(
-                        "{problem}, and no two markers are seen together in {} frames: name them",
-                        super::pairs::MIN_COMMON_FRAMES
+                        "{problem}, and no two markers are {}: name them",
+                        super::pairs::together()
                     ),
                 };
                 let flags = name_flags("SLIDER", "BOB", why.clone());
@@ -347,10 +347,7 @@ fn by_names(
     }
     let what = match &as_named {
         Some(p) => p.why.clone(),
-        None => format!(
-            "they are seen together in fewer than {} frames",
-            super::pairs::MIN_COMMON_FRAMES
-        ),
+        None => format!("they are not {}", super::pairs::together()),
     };
     if let Some(p) = best {
         let why = format!(

@@ -17,7 +17,7 @@ mod advice;
 mod pairs;
 
 pub use advice::{Need, Suggestion};
-pub use pairs::{Marker, Pair};
+pub use pairs::{together, Marker, Pair};
 
 use super::{read_parsed, DataError, Format, Parsed, Plane, ReadOptions, Series};
 use serde::Serialize;
@@ -69,6 +69,10 @@ pub struct Inspection {
     pub notes: Vec<String>,
     /// Problems that did not stop the reading.
     pub warnings: Vec<String>,
+    /// Why `convert` and `fit` refuse the recording as the printed commands read it (the
+    /// readers' own checks after reading: a marker never seen, the scale, coordinates beyond
+    /// any rig, the time window), when they do; `None`: they read it.
+    pub refused: Option<String>,
     /// Key-value metadata stored in the file.
     pub metadata: BTreeMap<String, String>,
     /// The rod's length in metres, when the file's scale or `--rod-length` tells it: the value
@@ -98,6 +102,10 @@ pub struct Timing {
     pub first: f64,
     /// See `first`.
     pub last: f64,
+    /// The time from the first frame to the last (seconds, or frames), from the readers' times
+    /// relative to the first frame: `last - first` loses the digits a large clock (nanoseconds
+    /// since 1970) holds.
+    pub span: f64,
     /// The median step between frames (seconds, or frames).
     pub step: Option<f64>,
     /// The smallest and largest step, when they differ from the median by over 1 %.
@@ -157,9 +165,11 @@ pub struct RigChoice {
 /// line); a missing `--fps`, scale or marker name is not an error but a suggestion.
 pub fn inspect(paths: &[PathBuf], opts: &ReadOptions) -> Result<Inspection, DataError> {
     let mut read = read_lenient(paths, opts)?;
+    let mut plane_used = None;
     let plane = match read.parsed.plane {
         Some(default) => {
             let (best, rig) = choose_plane(paths, opts, default, &read)?;
+            plane_used = Some(best);
             if best != default {
                 let other = ReadOptions {
                     plane: Some(best),
@@ -185,7 +195,7 @@ pub fn inspect(paths: &[PathBuf], opts: &ReadOptions) -> Result<Inspection, Data
         unit: &units.unit,
     };
     let analysis = pairs::analyse(&read.parsed.series, look);
-    let time = timing(&read.parsed, read.numbered, paths);
+    let time = timing(&read.parsed, read.numbered, paths)?;
     let detection = match (opts.format, paths.first()) {
         (Some(_), _) | (None, None) => "given by --format".to_string(),
         (None, Some(first)) => {
@@ -229,16 +239,67 @@ pub fn inspect(paths: &[PathBuf], opts: &ReadOptions) -> Result<Inspection, Data
         notes,
         warnings: read.parsed.warnings.clone(),
         metadata: read.parsed.metadata.clone(),
+        refused: None,
     };
     ins.notes.extend(read.parsed.notes.iter().cloned());
     advice::advise(&mut ins, &read.parsed, paths, opts);
+    ins.refused = refusal(paths, opts, plane_used, read, &ins);
     Ok(ins)
+}
+
+/// Why `convert` and `fit` refuse the recording as the printed commands read it, when they do:
+/// the checks [`super::recording_of`] makes after reading (the ones `convert` makes), on the
+/// pair the commands name and the plane they read, with frame numbers in place of a missing
+/// `--fps` and a rod of one metre in place of a missing scale (which the message then says).
+/// `None` also when no pair can be named or the files are to be given otherwise: the
+/// suggestions say what is missing first.
+fn refusal(
+    paths: &[PathBuf],
+    opts: &ReadOptions,
+    plane: Option<Plane>,
+    read: Read,
+    ins: &Inspection,
+) -> Option<String> {
+    let (Some(slider), Some(bob)) = (&ins.rig.slider, &ins.rig.bob) else {
+        return None;
+    };
+    if ins.suggestions.iter().any(|s| !s.files.is_empty()) {
+        return None;
+    }
+    let no_scale = ins.units.metres_per_unit.is_none() && opts.rod_length.is_none();
+    let as_printed = ReadOptions {
+        fps: opts.fps.or(read.numbered.then_some(FRAME_NUMBERS)),
+        plane: plane.or(opts.plane),
+        slider: Some(slider.clone()),
+        bob: Some(bob.clone()),
+        rod_length: opts.rod_length.or(no_scale.then_some(1.0)),
+        ..opts.clone()
+    };
+    let e =
+        super::recording_of(paths, read.format, read.detected, read.parsed, &as_printed).err()?;
+    let mut stand_ins = Vec::new();
+    if read.numbered && opts.fps.is_none() {
+        stand_ins.push(format!("--fps {FRAME_NUMBERS} (frame numbers)"));
+    }
+    if no_scale {
+        stand_ins.push("--rod-length 1".to_string());
+    }
+    Some(if stand_ins.is_empty() {
+        e.to_string()
+    } else {
+        format!(
+            "{e} (read with {} in place of the values still to give)",
+            stand_ins.join(" and ")
+        )
+    })
 }
 
 /// What the readers returned, and whether frames were numbered for want of times.
 struct Read {
     parsed: Parsed,
     format: Format,
+    /// Whether the format was detected (not given by `--format`).
+    detected: bool,
     numbered: bool,
 }
 
@@ -247,9 +308,10 @@ struct Read {
 /// next thing wrong with the file (or the same).
 fn read_lenient(paths: &[PathBuf], opts: &ReadOptions) -> Result<Read, DataError> {
     match read_parsed(paths, opts) {
-        Ok((parsed, format, _)) => Ok(Read {
+        Ok((parsed, format, detected)) => Ok(Read {
             parsed,
             format,
+            detected,
             numbered: false,
         }),
         Err(first) if opts.fps.is_none() => {
@@ -258,9 +320,10 @@ fn read_lenient(paths: &[PathBuf], opts: &ReadOptions) -> Result<Read, DataError
                 ..opts.clone()
             };
             match read_parsed(paths, &numbered) {
-                Ok((parsed, format, _)) => Ok(Read {
+                Ok((parsed, format, detected)) => Ok(Read {
                     parsed,
                     format,
+                    detected,
                     numbered: true,
                 }),
                 Err(again) => Err(match again {
@@ -342,9 +405,28 @@ fn units(parsed: &Parsed, opts: &ReadOptions, y_down: bool) -> Units {
     }
 }
 
-/// The frames over every marker: times within a billionth of a second (or frame) of each other
-/// are one frame (two Tracker exports of one video round its times each their own way).
-fn timing(parsed: &Parsed, numbered: bool, paths: &[PathBuf]) -> Timing {
+/// The frames over every marker: times that [`same_frame`] joins are one frame (two Tracker
+/// exports of one video round its times each their own way). A marker whose own successive
+/// times it would join is refused: its frames would be read as one, and its rate would be
+/// beyond any clock's (or no number at all).
+fn timing(parsed: &Parsed, numbered: bool, paths: &[PathBuf]) -> Result<Timing, DataError> {
+    for s in &parsed.series {
+        if let Some(k) = s.times.windows(2).position(|w| same_frame(w[0], w[1])) {
+            let (previous, time) = (s.times[k], s.times[k + 1]);
+            return Err(DataError::parse(
+                &super::paths_label(paths),
+                format!("marker {:?}, frame {}", s.name, k + 2),
+                "time",
+                "frames more than a tenth of a nanosecond (a ten-billionth of their time beyond 1 s) apart, as any clock that counts nanoseconds keeps them",
+                format!(
+                    "{} s after {} s (seconds from the first frame), {} s apart",
+                    sig(time, 6),
+                    sig(previous, 6),
+                    sig(time - previous, 3)
+                ),
+            ));
+        }
+    }
     let times = frame_times(&parsed.series.iter().collect::<Vec<_>>());
     let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
     let step = (!steps.is_empty()).then(|| super::calibrate::median(&mut steps.clone()));
@@ -354,11 +436,16 @@ fn timing(parsed: &Parsed, numbered: bool, paths: &[PathBuf]) -> Timing {
         (lo < 0.99 * m || hi > 1.01 * m).then_some([lo, hi])
     });
     let base = parsed.time_base;
-    Timing {
+    let (first, last) = (
+        times.first().copied().unwrap_or(0.0),
+        times.last().copied().unwrap_or(0.0),
+    );
+    Ok(Timing {
         timed: !numbered,
         frames: times.len(),
-        first: base + times.first().copied().unwrap_or(0.0),
-        last: base + times.last().copied().unwrap_or(0.0),
+        first: base + first,
+        last: base + last,
+        span: last - first,
         step,
         uneven,
         rate: step.filter(|s| !numbered && *s > 0.0).map(|s| 1.0 / s),
@@ -367,7 +454,7 @@ fn timing(parsed: &Parsed, numbered: bool, paths: &[PathBuf]) -> Timing {
         } else {
             None
         },
-    }
+    })
 }
 
 /// Every marker's times merged into one increasing list of frames.
@@ -386,9 +473,11 @@ fn frame_times(series: &[&Series]) -> Vec<f64> {
     all
 }
 
-/// Two times of one frame: within a billionth of their size (or of one second or frame).
+/// Two times of one frame: within a ten-billionth of their size (or of one second or frame).
+/// Two exports of one video differ by their rounding, some 1e-14 of the time; frames of a
+/// clock that counts nanoseconds (MCAP stamps, a `t_ns` column) a nanosecond apart stay two.
 fn same_frame(a: f64, b: f64) -> bool {
-    (a - b).abs() <= 1e-9 * a.abs().max(b.abs()).max(1.0)
+    (a - b).abs() <= 1e-10 * a.abs().max(b.abs()).max(1.0)
 }
 
 /// A frame rate stated in a file's name: a number followed by `Hz` or `fps`

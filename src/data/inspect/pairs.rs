@@ -44,6 +44,12 @@ pub const MAX_TILT_DEG: f64 = 45.0;
 /// Frames with both markers a pair needs to be compared: fewer tell nothing of a motion.
 pub const MIN_COMMON_FRAMES: usize = 20;
 
+/// What two markers must be to be compared, in the words every reason uses: seen together in
+/// [`MIN_COMMON_FRAMES`] frames, at a distance (and spread) an `f64` holds.
+pub fn together() -> String {
+    format!("seen together in {MIN_COMMON_FRAMES} frames at a distance a number holds")
+}
+
 /// Frames with both markers a pair needs to be taken for the rig when the names do not say
 /// so: over a short clip two body parts can keep their distance by chance (a DeepLabCut clip of
 /// two mice: an ear of one and the snout of the other within 0.7 % over 27 frames), and a
@@ -68,10 +74,11 @@ pub struct Marker {
     /// The smallest and largest y.
     pub y: Option<[f64; 2]>,
     /// How far it travels: the diagonal of the box holding its positions between their 2nd and
-    /// 98th percentiles (a few mis-tracked positions do not stretch it).
+    /// 98th percentiles (a few mis-tracked positions do not stretch it); infinite for
+    /// positions the whole range of a number apart (the text then shows `-`).
     pub travel: f64,
     /// The robust spread of its positions across their best straight line (`None` with fewer
-    /// than 10 positions).
+    /// than 10 positions, or positions so large that the spread is no number).
     pub off_line: Option<f64>,
     /// The angle of that line to the file's x axis, degrees in (-90, 90] (`None` with fewer
     /// than 2 positions).
@@ -238,7 +245,9 @@ fn marker(s: &Series, scale: f64) -> Marker {
         x: range(0),
         y: range(1),
         travel,
-        off_line: off_line_spread(&s.points).map(|d| d * scale),
+        off_line: off_line_spread(&s.points)
+            .map(|d| d * scale)
+            .filter(|d| d.is_finite()),
         heading_deg: heading(&pts),
         compared: false,
     }
@@ -286,9 +295,12 @@ fn on_common_frames(series: &[&Series], scale: f64) -> (Vec<Vec<Option<[f64; 2]>
     (tracks, stride, times.len())
 }
 
-/// The distance of two tracks (`None` with fewer than [`MIN_COMMON_FRAMES`] frames with both).
+/// The distance of two tracks (`None` with fewer than [`MIN_COMMON_FRAMES`] frames with both,
+/// or positions so far apart that the distance or its spread is no number).
 fn pair_geometry(a: &[Option<[f64; 2]>], b: &[Option<[f64; 2]>]) -> Option<Geometry> {
-    geometry(a, b, None).filter(|g| g.frames >= MIN_COMMON_FRAMES)
+    geometry(a, b, None).filter(|g| {
+        g.frames >= MIN_COMMON_FRAMES && [g.median, g.spread, g.noise].iter().all(|v| v.is_finite())
+    })
 }
 
 /// Compare two tracks both ways round and keep the order that looks more like a rig.
