@@ -31,8 +31,18 @@ pub(super) fn prepare(obs: Observations, settings: &FitSettings) -> Result<Prepa
     let mut obs = check_data(obs)?;
     let n_frames = obs.times.len();
     let (sigma, noise, dropped) = noise_and_outliers(&mut obs, settings)?;
-    if let Err(FitError::TooFewFrames(left)) = enough_frames(&obs) {
-        return Err(all_dropped(&obs, left, dropped, sigma, settings));
+    match enough_frames(&obs) {
+        Err(FitError::TooFewFrames(left)) => {
+            return Err(all_dropped(&obs, left, dropped, sigma, settings))
+        }
+        // Mis-tracked frames are a few of a track; most of one is a noise that is not the
+        // track's (a bob noise of 1e-10 m dropped 1991 of 2001 positions and the rest was
+        // fitted to a misfit with exit 0).
+        _ if most_dropped(&obs, dropped) => {
+            let left = both_seen(&obs);
+            return Err(all_dropped(&obs, left, dropped, sigma, settings));
+        }
+        _ => {}
     }
     if let Some(message) = nothing_moves(&obs, sigma) {
         return Err(FitError::NoMotion(message));
@@ -57,23 +67,34 @@ fn check_data(mut obs: Observations) -> Result<Observations, FitError> {
     Ok(obs)
 }
 
-/// At least ten frames with both markers.
-pub(super) fn enough_frames(obs: &Observations) -> Result<(), FitError> {
-    let both = obs
-        .slider
+/// Frames with both markers.
+fn both_seen(obs: &Observations) -> usize {
+    obs.slider
         .iter()
         .zip(&obs.bob)
         .filter(|(s, b)| s.is_some() && b.is_some())
-        .count();
+        .count()
+}
+
+/// Whether the filter dropped more than half of either marker's positions.
+fn most_dropped(obs: &Observations, dropped: [usize; 2]) -> bool {
+    let seen = [&obs.slider, &obs.bob].map(|t| t.iter().flatten().count());
+    (0..2).any(|m| dropped[m] > seen[m])
+}
+
+/// At least ten frames with both markers.
+pub(super) fn enough_frames(obs: &Observations) -> Result<(), FitError> {
+    let both = both_seen(obs);
     if both < 10 {
         return Err(FitError::TooFewFrames(both));
     }
     Ok(())
 }
 
-/// Why too few frames are left once the mis-tracked filter ran (there were ten or more with
-/// both markers before it): how many positions of each marker it dropped, the noise it
-/// measured them against and where that noise came from, and the fix.
+/// Why the filtered recording cannot be fitted (there were ten or more frames with both
+/// markers before it ran): too few frames left, or more than half of a track dropped; how many
+/// positions of each marker it dropped, the noise it measured them against and where that
+/// noise came from, and the fix.
 fn all_dropped(
     obs: &Observations,
     left: usize,
@@ -93,8 +114,13 @@ fn all_dropped(
             "the tracks jump from frame to frame far beyond their measured noise; check the frame times and the markers (--noise sets the noise)",
         )
     };
+    let leaving = if left < 10 {
+        format!("leaving {left} frames with both markers where the fit needs at least 10")
+    } else {
+        "more than half of a track, which is no longer a few mis-tracked frames".to_string()
+    };
     FitError::AllDropped(format!(
-        "the mis-tracked filter dropped {} of {} slider and {} of {} bob positions (each more than {} noise deviations from the quadratic through its neighbours, with the noise {source}: slider {:.3e} m, bob {:.3e} m), leaving {left} frames with both markers where the fit needs at least 10: {fix}",
+        "the mis-tracked filter dropped {} of {} slider and {} of {} bob positions (each more than {} noise deviations from the quadratic through its neighbours, with the noise {source}: slider {:.3e} m, bob {:.3e} m), {leaving}: {fix}",
         dropped[0],
         dropped[0] + seen[0],
         dropped[1],

@@ -284,6 +284,31 @@ fn a_filter_that_drops_every_position_says_so() {
     );
 }
 
+/// A noise given for one marker far below its track's (`--noise 2e-4,1e-10`) drops most of
+/// that track (1991 of 2001 bob positions) but leaves ten frames with both markers: the rest
+/// was fitted, a misfit with exit 0. More than half of a track is no few mis-tracked frames:
+/// refused as the filter's doing, exit 1, naming the counts and `--noise`.
+#[test]
+fn a_filter_that_drops_most_of_one_track_says_so() {
+    let rec = s(&root("data/campaign/release_01.csv"));
+    let rig = s(&root("data/campaign/rig_measured.toml"));
+    let out = run_within(
+        &["fit", &rec, "--rig", &rig, "--noise", "2e-4,1e-10"],
+        SECONDS,
+    );
+    no_panic(&out);
+    let err = stderr(&out);
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("release_01.csv")
+            && err.contains("mis-tracked filter dropped")
+            && err.contains("more than half")
+            && err.contains("--noise"),
+        "{err}"
+    );
+    assert!(out.stdout.is_empty());
+}
+
 /// Every bench flag is bounded: a value out of range is bad input (exit 2) naming the flag
 /// and the range, at once. `--frames 10^12` aborted on allocation, `--batches 2^64-1`
 /// panicked, `--batches 10^9` and `--seconds-per-point 1e300` never ended.
