@@ -1689,38 +1689,14 @@ def command_line(res):
         f"  # signal {res['case'].sig} after {res['case'].sig_delay} s" if res["case"].sig else "")
 
 
-def main():
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--appell", required=True)
-    ap.add_argument("--out", required=True, help="TSV of every case")
-    ap.add_argument("--workdir", required=True)
-    ap.add_argument("--md", help="also write the per-class summary (Markdown) here")
-    ap.add_argument("--only", help="comma-separated classes (1-10)")
-    ap.add_argument("--timeout", type=float, default=60.0)
-    ap.add_argument("--list", action="store_true", help="build the cases, print them, run nothing")
-    # The repository root: this script is in scripts/sweeps/.
-    ap.add_argument("--repo", default=os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
-    args = ap.parse_args()
-    global GNU_TIME
-    if GNU_TIME and subprocess.run([GNU_TIME, "-f", "%M", "-o", os.devnull, "true"],
-                                   capture_output=True).returncode != 0:
-        GNU_TIME = None  # not GNU time: wait4's figure (a floor of this process's RSS) is used
-    only = {int(x) for x in args.only.split(",")} if args.only else None
-    os.makedirs(args.workdir, exist_ok=True)
-    sw = Sweep(args.appell, args.workdir, args.repo, args.timeout)
-    t_start = time.monotonic()
-    sw.prepare_data()
-    sw.build(only)
+def run_cases(sw, out, t_start):
+    """Run every case of sw in order, writing the TSV to out and the summary to stderr;
+    returns (results, total wall seconds since t_start). Shared by the other attack sweeps."""
     data_before = snapshot([sw.D])
-    print(f"{len(sw.cases)} cases", file=sys.stderr)
-    if args.list:
-        for c in sw.cases:
-            print(f"{c.cls}\t{c.name}\t{c.expect}\t{shlex.join(c.argv)}")
-        return 0
     results = []
     cols = ["class", "case", "verdict", "exit", "wall_s", "peak_rss_mib", "panic", "input_changed", "leftovers",
             "names_file", "names_field", "expect", "reason", "notes", "command", "stderr_head"]
-    with open(args.out, "w") as tsv:
+    with open(out, "w") as tsv:
         tsv.write("\t".join(cols) + "\n")
         for i, c in enumerate(sw.cases):
             # TMPDIR is per sweep; empty it of anything a previous case left (recorded there).
@@ -1750,32 +1726,70 @@ def main():
         if r["verdict"] != "PASS":
             print(f"\n{r['verdict']} c{r['case'].cls} {r['case'].name}: exit {r['rc']}, {r['wall']:.2f} s: {r['reason']}\n"
                   f"  $ {command_line(r)}\n  " + "\n  ".join(r["stderr"].strip().splitlines()[:4]), file=sys.stderr)
+    return results, total
+
+
+def write_md(path, results, total, titles, title, command):
+    """The per-class summary (Markdown) of results: classes in the order of titles."""
+    n_pass = sum(r["verdict"] == "PASS" for r in results)
+    lines = [title, "",
+             command,
+             f"({len(results)} cases, {n_pass} pass, {total:.0f} s wall for the whole sweep incl. setup).", "",
+             "Acceptance per case: exit 0 with a correct result, 1 with a reason, or 2 naming the file and "
+             "field, within 20 s and 4 GiB peak RSS; no input changed; no partial output; no panic text.", "",
+             "| class | what it covers | cases | pass | median wall s | max wall s | max RSS MiB |",
+             "|---|---|---|---|---|---|---|"]
+    for k in titles:
+        rs = [r for r in results if r["case"].cls == k]
+        if not rs:
+            continue
+        walls = [r["wall"] for r in rs]
+        lines.append(f"| {k} | {titles[k]} | {len(rs)} | {sum(r['verdict'] == 'PASS' for r in rs)} | "
+                     f"{statistics.median(walls):.3f} | {max(walls):.2f} | "
+                     f"{max(r['rss_kib'] for r in rs) / 1024:.0f} |")
+    fails = [r for r in results if r["verdict"] != "PASS"]
+    lines += ["", "## Not passing", ""]
+    if not fails:
+        lines.append("None.")
+    for r in fails:
+        lines.append(f"- **{r['verdict']}** class {r['case'].cls} `{r['case'].name}`: exit {r['rc']}, "
+                     f"{r['wall']:.2f} s; {r['reason']}  ")
+        lines.append(f"  `{command_line(r)}`")
+    with open(path, "w") as f:
+        f.write("\n".join(lines) + "\n")
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--appell", required=True)
+    ap.add_argument("--out", required=True, help="TSV of every case")
+    ap.add_argument("--workdir", required=True)
+    ap.add_argument("--md", help="also write the per-class summary (Markdown) here")
+    ap.add_argument("--only", help="comma-separated classes (1-10)")
+    ap.add_argument("--timeout", type=float, default=60.0)
+    ap.add_argument("--list", action="store_true", help="build the cases, print them, run nothing")
+    # The repository root: this script is in scripts/sweeps/.
+    ap.add_argument("--repo", default=os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))))
+    args = ap.parse_args()
+    global GNU_TIME
+    if GNU_TIME and subprocess.run([GNU_TIME, "-f", "%M", "-o", os.devnull, "true"],
+                                   capture_output=True).returncode != 0:
+        GNU_TIME = None  # not GNU time: wait4's figure (a floor of this process's RSS) is used
+    only = {int(x) for x in args.only.split(",")} if args.only else None
+    os.makedirs(args.workdir, exist_ok=True)
+    sw = Sweep(args.appell, args.workdir, args.repo, args.timeout)
+    t_start = time.monotonic()
+    sw.prepare_data()
+    sw.build(only)
+    print(f"{len(sw.cases)} cases", file=sys.stderr)
+    if args.list:
+        for c in sw.cases:
+            print(f"{c.cls}\t{c.name}\t{c.expect}\t{shlex.join(c.argv)}")
+        return 0
+    results, total = run_cases(sw, args.out, t_start)
     if args.md:
-        lines = ["# attack_sweep.py: issue 35 input-safety sweep", "",
-                 f"`python3 scripts/sweeps/attack_sweep.py --appell {args.appell} --out {args.out} --workdir {args.workdir}`",
-                 f"({len(results)} cases, {n_pass} pass, {total:.0f} s wall for the whole sweep incl. setup).", "",
-                 "Acceptance per case: exit 0 with a correct result, 1 with a reason, or 2 naming the file and "
-                 "field, within 20 s and 4 GiB peak RSS; no input changed; no partial output; no panic text.", "",
-                 "| class | what it covers | cases | pass | median wall s | max wall s | max RSS MiB |",
-                 "|---|---|---|---|---|---|---|"]
-        for k in range(1, 11):
-            rs = [r for r in results if r["case"].cls == k]
-            if not rs:
-                continue
-            walls = [r["wall"] for r in rs]
-            lines.append(f"| {k} | {CLASS_TITLES[k]} | {len(rs)} | {sum(r['verdict'] == 'PASS' for r in rs)} | "
-                         f"{statistics.median(walls):.3f} | {max(walls):.2f} | "
-                         f"{max(r['rss_kib'] for r in rs) / 1024:.0f} |")
-        fails = [r for r in results if r["verdict"] != "PASS"]
-        lines += ["", "## Not passing", ""]
-        if not fails:
-            lines.append("None.")
-        for r in fails:
-            lines.append(f"- **{r['verdict']}** class {r['case'].cls} `{r['case'].name}`: exit {r['rc']}, "
-                         f"{r['wall']:.2f} s; {r['reason']}  ")
-            lines.append(f"  `{command_line(r)}`")
-        with open(args.md, "w") as f:
-            f.write("\n".join(lines) + "\n")
+        write_md(args.md, results, total, CLASS_TITLES, "# attack_sweep.py: issue 35 input-safety sweep",
+                 f"`python3 scripts/sweeps/attack_sweep.py --appell {args.appell} --out {args.out} --workdir {args.workdir}`")
     return 0
 
 
