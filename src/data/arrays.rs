@@ -46,8 +46,10 @@ pub fn recording_from_arrays(
     for (i, &t) in times.iter().enumerate() {
         clock.check(path, || format!("t[{i}] = {t}"), t - t0)?;
     }
+    let relative: Vec<f64> = times.iter().map(|t| t - t0).collect();
+    super::check_frame_spacing(path, "t", &relative)?;
     let mut rec = Recording {
-        times: times.iter().map(|t| t - t0).collect(),
+        times: relative,
         slider: track(slider, "slider", times.len())?,
         bob: track(bob, "bob", times.len())?,
         provenance: Provenance {

@@ -55,6 +55,7 @@ pub use options::{Plane, ReadOptions};
 pub(crate) use parsed::{Parsed, Series};
 pub use recording::{
     Calibration, Format, Geometry, Provenance, Recording, Track, CANONICAL_HEADER,
+    MIN_FRAMES_PER_SWING,
 };
 
 use std::io::Read;
@@ -163,9 +164,44 @@ pub(crate) fn read_parsed(
         });
     }
     let mut parsed = parsed.expect("at least one path");
+    for s in &parsed.series {
+        check_frame_spacing(
+            &paths_label(paths),
+            &format!("marker {:?}", s.name),
+            &s.times,
+        )?;
+    }
     by_file_order(&mut parsed, &per_file, opts);
     let format = format.expect("format set with the first path");
     Ok((parsed, format, detected))
+}
+
+/// Two times of one frame: within a ten-billionth of their size (or of one second or frame).
+/// Two exports of one video differ by their rounding, some 1e-14 of the time; frames of a
+/// clock that counts nanoseconds (MCAP stamps, a `t_ns` column) a nanosecond apart stay two.
+pub(crate) fn same_frame(a: f64, b: f64) -> bool {
+    (a - b).abs() <= 1e-10 * a.abs().max(b.abs()).max(1.0)
+}
+
+/// Refuse successive `times` (seconds from the first frame) of one marker that [`same_frame`]
+/// would take for one frame: closer than any clock keeps frames apart (times 5e-324 s apart),
+/// they make every rate infinite and every derivative a division by nothing. One rule for
+/// every reader and for arrays, so `convert`, `inspect` and `fit` refuse the same files.
+pub(crate) fn check_frame_spacing(path: &Path, what: &str, times: &[f64]) -> Result<(), DataError> {
+    let Some(k) = times.windows(2).position(|w| same_frame(w[0], w[1])) else {
+        return Ok(());
+    };
+    let (previous, time) = (times[k], times[k + 1]);
+    Err(DataError::parse(
+        path,
+        format!("{what}, frame {}", k + 2),
+        "time",
+        "frames more than a tenth of a nanosecond (a ten-billionth of their time beyond 1 s) apart, as any clock that counts nanoseconds keeps them",
+        format!(
+            "{time:.6e} s after {previous:.6e} s (seconds from the first frame), {:.3e} s apart",
+            time - previous
+        ),
+    ))
 }
 
 /// The words of the note that says two tracks were taken as the slider and the bob in the

@@ -303,3 +303,9 @@ impl Recording {
         s
     }
 }
+
+/// The fewest frames a swing of the rig's pendulum must span for a fit to follow the motion:
+/// fewer, and the recording cannot tell one swing from the next (two a swing is the Nyquist
+/// limit). A lab's recordings have tens to thousands (a 0.3 m pendulum swings in 1.1 s, filmed
+/// at 25 to 1000 Hz); times in milliseconds read as seconds leave about one.
+pub const MIN_FRAMES_PER_SWING: f64 = 4.0;

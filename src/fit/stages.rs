@@ -280,7 +280,7 @@ pub(super) fn estimates(
             f.warnings.push(format!(
                 "{} is not determined by this recording (nothing the markers show depends on it): held at {} {}, not fitted; a release that shows it would pin it",
                 q.name(),
-                f.problem.get(q),
+                crate::data::inspect::sig(f.problem.get(q), 4),
                 q.unit()
             ));
         }

@@ -161,13 +161,13 @@ pub fn undetermined(jtj: &DMatrix<f64>) -> Vec<usize> {
         let eig = scaled.symmetric_eigen();
         let big = eig.eigenvalues.iter().cloned().fold(0.0, f64::max);
         // The projection onto the range: a parameter that lies in it has a diagonal of 1.
-        for a in 0..n {
+        for (a, &index) in live.iter().enumerate() {
             let in_range: f64 = (0..n)
                 .filter(|&m| eig.eigenvalues[m] > 1e-12 * big)
                 .map(|m| eig.eigenvectors[(a, m)].powi(2))
                 .sum();
             if in_range < 1.0 - 1e-6 {
-                out.push(live[a]);
+                out.push(index);
             }
         }
     }

@@ -650,6 +650,15 @@ fn a_recording_with_its_times_in_milliseconds_is_refused_naming_the_cause() {
     for part in ["ms.csv", "milliseconds", "t_ms"] {
         assert!(err.contains(part), "{part:?} missing: {err}");
     }
+    // inspect reads the file as it is (no rig to refuse it by) but says what the fit it
+    // suggests will refuse, from the markers' own distance.
+    let out = appell(&["inspect", file.to_str().unwrap()]);
+    let text = format!("{}{}", String::from_utf8_lossy(&out.stdout), stderr(&out));
+    assert_eq!(out.status.code(), Some(0), "{text}");
+    assert!(
+        text.contains("milliseconds") && text.contains("t_ms"),
+        "{text}"
+    );
 }
 
 /// A rig file with its rail near vertical (`rail_tilt_deg = 89.9`, and 30: steeper than the
@@ -821,4 +830,30 @@ fn inspect_keeps_nanoseconds_and_refuses_frames_no_clock_keeps_apart() {
         !err.contains("fewer than") && !text.contains("inf"),
         "{err}\n{text}"
     );
+    // One rule where every reader passes: convert and fit refuse the file as inspect does (they
+    // took it: convert wrote "1000 frames over 0 s", fit exited 0 with no mu).
+    let rig = write(
+        d,
+        "rig.toml",
+        "[rig]\nslider_mass = 0.1\nbob_mass = 0.1\nrod_length = 0.3\ngravity = 9.81\n",
+    );
+    let out_csv = d.join("out.csv");
+    for args in [
+        vec!["convert", tiny.to_str().unwrap(), out_csv.to_str().unwrap()],
+        vec![
+            "fit",
+            tiny.to_str().unwrap(),
+            "--rig",
+            rig.to_str().unwrap(),
+        ],
+    ] {
+        let out = appell(&args);
+        let err = stderr(&out);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("tiny.csv") && err.contains("time") && err.contains("frame 2"),
+            "{args:?}: {err}"
+        );
+    }
+    assert!(!out_csv.exists());
 }

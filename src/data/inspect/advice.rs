@@ -5,7 +5,10 @@
 use super::pairs::{pair_as_named, Look, Pair, LINE_NOISE, LINE_SHARE, MAX_LEAN_DEG};
 use super::{sig, Inspection, RigChoice, RodLength};
 use crate::data::calibrate::fit_rail;
-use crate::data::{align, paths_label, select, DataError, Parsed, ReadOptions, Recording, Series};
+use crate::data::{
+    align, paths_label, select, DataError, Parsed, ReadOptions, Recording, Series,
+    MIN_FRAMES_PER_SWING,
+};
 use serde::Serialize;
 use std::path::PathBuf;
 
@@ -133,6 +136,9 @@ pub(super) fn advise(ins: &mut Inspection, parsed: &Parsed, paths: &[PathBuf], o
         }),
         _ => None,
     };
+    if let Some(w) = too_sparse(ins) {
+        ins.warnings.push(w);
+    }
     if ins.units.metres_per_unit.is_none() {
         match opts.rod_length {
             None => out.push(Suggestion::one(
@@ -580,6 +586,33 @@ pub fn quote(word: &str) -> String {
     } else {
         format!("'{}'", word.replace('\'', r"'\''"))
     }
+}
+
+/// A warning when the frames are too far apart for a pendulum of the rod's length: the fit
+/// refuses fewer than [`MIN_FRAMES_PER_SWING`] frames a swing (`fit::check_frame_rate`), and
+/// such spacing is almost always times in milliseconds read as seconds. Said here so that the
+/// fit command inspect suggests is not refused without a word.
+fn too_sparse(ins: &Inspection) -> Option<String> {
+    let (rod, step) = (ins.rod_length.as_ref()?.metres, ins.time.step?);
+    if !ins.time.timed || rod.is_nan() || rod <= 0.0 {
+        return None;
+    }
+    let rig = crate::model::Rig {
+        rod_length: rod,
+        marker_length: rod,
+        ..crate::model::Rig::paper(0.0)
+    };
+    let period = crate::model::pendulum::stuck_period(&rig, 0.0);
+    let per_swing = period / step;
+    (per_swing < MIN_FRAMES_PER_SWING).then(|| {
+        format!(
+            "the frames are {} s apart, {} a swing of a {} m pendulum (a period of {} s), where a fit needs at least {MIN_FRAMES_PER_SWING}: are the times in milliseconds? a column of milliseconds is headed t_ms (or time_ms)",
+            sig(step, 4),
+            sig(per_swing, 3),
+            sig(rod, 3),
+            sig(period, 3)
+        )
+    })
 }
 
 #[cfg(test)]

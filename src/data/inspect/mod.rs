@@ -19,7 +19,7 @@ mod pairs;
 pub use advice::{Need, Suggestion};
 pub use pairs::{together, Marker, Pair};
 
-use super::{read_parsed, DataError, Format, Parsed, Plane, ReadOptions, Series};
+use super::{read_parsed, same_frame, DataError, Format, Parsed, Plane, ReadOptions, Series};
 use serde::Serialize;
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -407,26 +407,8 @@ fn units(parsed: &Parsed, opts: &ReadOptions, y_down: bool) -> Units {
 
 /// The frames over every marker: times that [`same_frame`] joins are one frame (two Tracker
 /// exports of one video round its times each their own way). A marker whose own successive
-/// times it would join is refused: its frames would be read as one, and its rate would be
-/// beyond any clock's (or no number at all).
+/// times it would join was refused by the reading (`data::check_frame_spacing`).
 fn timing(parsed: &Parsed, numbered: bool, paths: &[PathBuf]) -> Result<Timing, DataError> {
-    for s in &parsed.series {
-        if let Some(k) = s.times.windows(2).position(|w| same_frame(w[0], w[1])) {
-            let (previous, time) = (s.times[k], s.times[k + 1]);
-            return Err(DataError::parse(
-                &super::paths_label(paths),
-                format!("marker {:?}, frame {}", s.name, k + 2),
-                "time",
-                "frames more than a tenth of a nanosecond (a ten-billionth of their time beyond 1 s) apart, as any clock that counts nanoseconds keeps them",
-                format!(
-                    "{} s after {} s (seconds from the first frame), {} s apart",
-                    sig(time, 6),
-                    sig(previous, 6),
-                    sig(time - previous, 3)
-                ),
-            ));
-        }
-    }
     let times = frame_times(&parsed.series.iter().collect::<Vec<_>>());
     let mut steps: Vec<f64> = times.windows(2).map(|w| w[1] - w[0]).collect();
     let step = (!steps.is_empty()).then(|| super::calibrate::median(&mut steps.clone()));
@@ -471,13 +453,6 @@ fn frame_times(series: &[&Series]) -> Vec<f64> {
     all.sort_by(f64::total_cmp);
     all.dedup_by(|b, a| same_frame(*a, *b));
     all
-}
-
-/// Two times of one frame: within a ten-billionth of their size (or of one second or frame).
-/// Two exports of one video differ by their rounding, some 1e-14 of the time; frames of a
-/// clock that counts nanoseconds (MCAP stamps, a `t_ns` column) a nanosecond apart stay two.
-fn same_frame(a: f64, b: f64) -> bool {
-    (a - b).abs() <= 1e-10 * a.abs().max(b.abs()).max(1.0)
 }
 
 /// A frame rate stated in a file's name: a number followed by `Hz` or `fps`
