@@ -523,7 +523,10 @@ class Sweep:
             return
         if res["panic"]:
             reasons.append("panic text or exit 101")
-        if rc < 0:
+        # The signal a case sends ends a run that has made no temporary yet by its default
+        # action (the cleanup handler is installed just before the first temporary, since
+        # cbded02); the case's own check still says nothing was left behind.
+        if rc < 0 and not (c.sig is not None and -rc == int(c.sig)):
             reasons.append(f"killed by signal {-rc}")
         if res["wall"] > LIMIT_S:
             reasons.append(f"took {res['wall']:.1f} s (> {LIMIT_S:.0f} s)")

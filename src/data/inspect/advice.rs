@@ -593,7 +593,17 @@ pub fn quote(word: &str) -> String {
 /// such spacing is almost always times in milliseconds read as seconds. Said here so that the
 /// fit command inspect suggests is not refused without a word.
 fn too_sparse(ins: &Inspection) -> Option<String> {
-    let (rod, step) = (ins.rod_length.as_ref()?.metres, ins.time.step?);
+    // The rod as inspect takes it, else the closest pair's distance once the units are
+    // metres (a clip that starts with the rod level does not look like a rig, yet swings so).
+    let rod = match &ins.rod_length {
+        Some(r) => r.metres,
+        None => ins
+            .units
+            .metres_per_unit
+            .and(ins.pairs.first())
+            .map(|p| p.median)?,
+    };
+    let step = ins.time.step?;
     if !ins.time.timed || rod.is_nan() || rod <= 0.0 {
         return None;
     }
