@@ -104,8 +104,24 @@ fuzz_target!(|input: Input| {
         let _ = writeln!(text, "friction_law = \"{}\"", LAWS[l as usize % LAWS.len()]);
     }
     let path = Path::new("rig.toml");
-    let Ok((rig, spec, _)) = RigFile::parse_on_earth(&text, path, 0.3, input.site) else {
-        return;
+    // RIG_MEASURED_STAGES=1 with `-runs=0` over a corpus says where each input ends.
+    let stages = std::env::var_os("RIG_MEASURED_STAGES").is_some();
+    let (rig, spec, _) = match RigFile::parse_on_earth(&text, path, 0.3, input.site) {
+        Ok(parsed) => parsed,
+        Err(e) => {
+            if stages {
+                let e = e.to_string();
+                let kind = if e.contains("duplicate key") {
+                    "duplicate key"
+                } else if e.contains("TOML") || e.contains("invalid type") {
+                    "not TOML / wrong type"
+                } else {
+                    "refused by a range check"
+                };
+                eprintln!("STAGE {kind}");
+            }
+            return;
+        }
     };
     // What passes is a rig every command accepts, and a measurement whose priors the solve can
     // use: a tiny deviation is the exact value, never a weight that swamps the data.
@@ -121,7 +137,16 @@ fuzz_target!(|input: Input| {
     for (name, v, sd, _) in &m.keys {
         assert!(v.is_finite() && sd.is_finite() && *sd >= 0.0, "{text}: {name} {v} {sd}");
     }
-    let _ = check_masses(path, &rig);
-    let _ = check_tilt(path, &rig);
-    let _ = check_time_scale(path, &rig, RigOrigin::File { friction: "rig" });
+    let masses = check_masses(path, &rig).is_ok();
+    let tilt = check_tilt(path, &rig).is_ok();
+    let scale = check_time_scale(path, &rig, RigOrigin::File { friction: "rig" }).is_ok();
+    if stages {
+        let held = m.notes.iter().any(|n| n.contains("held exact"));
+        eprintln!(
+            "STAGE read, {} priors{}, fit pre-checks {}",
+            m.priors().len(),
+            if held { ", a tiny sd held exact" } else { "" },
+            if masses && tilt && scale { "pass" } else { "refuse" }
+        );
+    }
 });
