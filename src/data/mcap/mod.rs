@@ -16,9 +16,11 @@
 //!   is read by `data::ros_cdr`.
 //! - `tf.rs`: the samples accumulated while reading, and `/tf` trees composed to their root.
 //! - `write.rs`: the writer of JSON marker frames.
+//! - `overlay.rs`: the writer of overlays for Foxglove (a recording and a model's motion).
 
 mod chunks;
 mod decode;
+pub mod overlay;
 mod records;
 mod tf;
 mod write;
@@ -482,5 +484,6 @@ fn marker_series(
         });
     }
     parsed.time_base = t0 as f64 / 1e9;
+    parsed.time_base_ns = Some(t0);
     Ok(())
 }
