@@ -391,3 +391,118 @@ fn the_shipped_layout_opens_the_overlays_topics() {
         }
     }
 }
+
+/// The model's markers on an overlay's `/appell/markers`, frame by frame.
+fn model_markers(msgs: &[Msg]) -> Vec<[f64; 4]> {
+    msgs.iter()
+        .filter(|m| m.topic == ov::TOPIC_MARKERS)
+        .map(|m| {
+            let v = json(m);
+            ["slider_x", "slider_y", "bob_x", "bob_y"].map(|k| v["model"][k].as_f64().unwrap())
+        })
+        .collect()
+}
+
+/// `synth` and `simulate --out X.mcap` write the same topics by the same writer: the scene's
+/// motion as the model, equal to the simulator's markers; synth's recording is still read
+/// back by appell's reader as before.
+#[test]
+fn synth_and_simulate_write_the_overlays_schemas() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene_path = root("configs/paper_rest_horizontal.toml");
+    let scene = appell::scene::Scene::from_path(&scene_path).unwrap();
+    let syn_path = dir.path().join("syn.mcap");
+    let o = appell(&[
+        "synth",
+        scene_path.to_str().unwrap(),
+        syn_path.to_str().unwrap(),
+        "--fps",
+        "200",
+        "--noise",
+        "0.001",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let msgs = read_checked(&std::fs::read(&syn_path).unwrap());
+    let rec = appell::data::read_recording(&[syn_path.clone()], &ReadOptions::default()).unwrap();
+    let sol = simulate(
+        &scene.rig,
+        &scene.initial,
+        *rec.times.last().unwrap(),
+        &scene.options,
+        &Request {
+            sample_times: rec.times.clone(),
+            friction_work: false,
+            positions_only: false,
+        },
+    )
+    .unwrap();
+    let got = model_markers(&msgs);
+    assert_eq!(got.len(), rec.len());
+    for (g, s) in got.iter().zip(&sol.samples) {
+        let want = appell::model::markers(&scene.rig, &s.state);
+        for k in 0..4 {
+            assert!((g[k] - want[k]).abs() <= 1e-12, "{g:?} {want:?}");
+        }
+    }
+    let events = msgs.iter().filter(|m| m.topic == ov::TOPIC_EVENTS).count();
+    assert_eq!(events, sol.events.len());
+    // The recorded topic holds what the reader reads from `/markers`.
+    let recorded: Vec<Value> = msgs
+        .iter()
+        .filter(|m| m.topic == ov::TOPIC_MARKERS)
+        .map(json)
+        .collect();
+    for (i, v) in recorded.iter().enumerate() {
+        assert_eq!(v["recorded"]["bob_x"].as_f64(), rec.bob[i].map(|p| p[0]));
+    }
+
+    let sim_path = dir.path().join("sim.mcap");
+    let o = appell(&[
+        "simulate",
+        scene_path.to_str().unwrap(),
+        "--out",
+        sim_path.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let msgs = read_checked(&std::fs::read(&sim_path).unwrap());
+    let mut scene = scene;
+    scene.output.frame_rate = scene.output.frame_rate.or(Some(1000.0));
+    let sol = simulate(
+        &scene.rig,
+        &scene.initial,
+        scene.duration,
+        &scene.options,
+        &scene.request(),
+    )
+    .unwrap();
+    let got = model_markers(&msgs);
+    assert_eq!(got.len(), sol.samples.len());
+    for (g, s) in got.iter().zip(&sol.samples) {
+        let want = appell::model::markers(&scene.rig, &s.state);
+        for k in 0..4 {
+            assert!((g[k] - want[k]).abs() <= 1e-12, "{g:?} {want:?}");
+        }
+    }
+    let stamps: Vec<u64> = msgs
+        .iter()
+        .filter(|m| m.topic == ov::TOPIC_EVENTS)
+        .map(|m| m.log_time)
+        .collect();
+    let want: Vec<u64> = sol
+        .events
+        .iter()
+        .filter(|e| e.t <= sol.samples.last().unwrap().t)
+        .map(|e| ov::stamp_of(0, e.t))
+        .collect();
+    assert_eq!(stamps, want);
+}

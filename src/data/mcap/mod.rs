@@ -26,9 +26,10 @@ mod tf;
 mod write;
 
 pub use decode::{NOT_POSITIONS, POINTS_NAMES};
+pub use overlay::FRAME_SCHEMA;
 pub use records::record_limit;
 pub use tf::TF_SAMPLE_LIMIT;
-pub use write::{write_json, FRAME_SCHEMA};
+pub use write::write_json;
 
 use super::{Budget, DataError, Parsed, ReadOptions, Series};
 use ::mcap::records::op;

@@ -8,8 +8,8 @@
 //! time order and written as they come (no frame is kept), events at their own times between
 //! them.
 
-use crate::model::{Contact, Mode};
-use crate::sim::Event;
+use crate::model::{Camera, Contact, Mode, Rig, State};
+use crate::sim::{simulate_each, Event, Options, Request};
 use ::mcap::records::{MessageHeader, Metadata};
 use ::mcap::McapError;
 use foxglove::messages::{
@@ -71,6 +71,22 @@ pub struct ModelFrame {
     pub contact: Contact<f64>,
 }
 
+impl ModelFrame {
+    /// The model at one sample of a run: its markers as `camera` sees them
+    /// ([`crate::model::observed_markers`]), its mode and its forces ([`crate::model::Rig::contact`]).
+    pub fn of(
+        rig: &crate::model::Rig<f64>,
+        camera: &crate::model::Camera<f64>,
+        s: &crate::sim::Sample<f64>,
+    ) -> ModelFrame {
+        ModelFrame {
+            markers: crate::model::observed_markers(rig, camera, s.mode, &s.state),
+            mode: s.mode,
+            contact: rig.contact(s.mode, &s.state),
+        }
+    }
+}
+
 /// One frame of an overlay: its time (s from the first frame), the recorded markers when
 /// there is a recording, the model when there is one.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -87,6 +103,9 @@ pub struct OverlayFrame {
 /// Which topics an overlay holds.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Topics {
+    /// The recorded markers also as appell's own recording (`/markers`, JSON
+    /// `lab.MarkerFrame2D`, [`super::write_json`]), which its reader reads back: `synth`'s.
+    pub lab_markers: bool,
     /// The recorded markers.
     pub recorded: bool,
     /// The model's markers, mode and forces (and the residual, with `recorded`).
@@ -160,7 +179,8 @@ struct Channels {
 /// interleave; [`OverlayWriter::finish`] ends the file.
 pub struct OverlayWriter<'w> {
     out: ::mcap::Writer<::mcap::write::NoSeek<&'w mut dyn Write>>,
-    ch: Channels,
+    ch: Option<Channels>,
+    lab: Option<u16>,
     topics: Topics,
     origin_ns: u64,
     events: Vec<Event>,
@@ -239,33 +259,35 @@ impl<'w> OverlayWriter<'w> {
             .disable_seeking(true)
             .create(::mcap::write::NoSeek::new(w))?;
         let none = BTreeMap::new();
+        let lab = match topics.lab_markers {
+            true => {
+                let id =
+                    out.add_schema("lab.MarkerFrame2D", "jsonschema", FRAME_SCHEMA.as_bytes())?;
+                Some(out.add_channel(id, "/markers", "json", &none)?)
+            }
+            false => None,
+        };
         let proto = |out: &mut ::mcap::Writer<_>, schema: foxglove::Schema, topic: &str| {
             let id = out.add_schema(&schema.name, &schema.encoding, &schema.data)?;
             out.add_channel(id, topic, "protobuf", &none)
         };
+        let overlay = topics.recorded || topics.model;
         let scene = SceneUpdate::get_schema().expect("foxglove.SceneUpdate has a schema");
         let log = Log::get_schema().expect("foxglove.Log has a schema");
-        let recorded = proto(&mut out, scene.clone(), TOPIC_RECORDED)?;
-        let model = proto(&mut out, scene, TOPIC_MODEL)?;
-        let events_ch = proto(&mut out, log.clone(), TOPIC_EVENTS)?;
-        let answer = proto(&mut out, log, TOPIC_ANSWER)?;
-        let json = |out: &mut ::mcap::Writer<_>, name: &str, schema: &str, topic: &str| {
-            let id = out.add_schema(name, "jsonschema", schema.as_bytes())?;
-            out.add_channel(id, topic, "json", &none)
-        };
-        let markers = json(&mut out, "appell.Markers", MARKERS_SCHEMA, TOPIC_MARKERS)?;
-        let residual = json(&mut out, "appell.Residual", RESIDUAL_SCHEMA, TOPIC_RESIDUAL)?;
-        let mode = json(&mut out, "appell.Mode", MODE_SCHEMA, TOPIC_MODE)?;
-        let forces = json(&mut out, "appell.Forces", FORCES_SCHEMA, TOPIC_FORCES)?;
-        for (name, map) in metadata {
-            out.write_metadata(&Metadata {
-                name: name.clone(),
-                metadata: map.clone(),
-            })?;
-        }
-        Ok(OverlayWriter {
-            out,
-            ch: Channels {
+        let ch = if overlay {
+            let recorded = proto(&mut out, scene.clone(), TOPIC_RECORDED)?;
+            let model = proto(&mut out, scene, TOPIC_MODEL)?;
+            let events_ch = proto(&mut out, log.clone(), TOPIC_EVENTS)?;
+            let answer = proto(&mut out, log, TOPIC_ANSWER)?;
+            let json = |out: &mut ::mcap::Writer<_>, name: &str, schema: &str, topic: &str| {
+                let id = out.add_schema(name, "jsonschema", schema.as_bytes())?;
+                out.add_channel(id, topic, "json", &none)
+            };
+            let markers = json(&mut out, "appell.Markers", MARKERS_SCHEMA, TOPIC_MARKERS)?;
+            let residual = json(&mut out, "appell.Residual", RESIDUAL_SCHEMA, TOPIC_RESIDUAL)?;
+            let mode = json(&mut out, "appell.Mode", MODE_SCHEMA, TOPIC_MODE)?;
+            let forces = json(&mut out, "appell.Forces", FORCES_SCHEMA, TOPIC_FORCES)?;
+            Some(Channels {
                 recorded,
                 model,
                 markers,
@@ -274,7 +296,20 @@ impl<'w> OverlayWriter<'w> {
                 forces,
                 events: events_ch,
                 answer,
-            },
+            })
+        } else {
+            None
+        };
+        for (name, map) in metadata {
+            out.write_metadata(&Metadata {
+                name: name.clone(),
+                metadata: map.clone(),
+            })?;
+        }
+        Ok(OverlayWriter {
+            out,
+            ch,
+            lab,
             topics,
             origin_ns,
             events: events.to_owned(),
@@ -341,7 +376,9 @@ impl<'w> OverlayWriter<'w> {
                 e.t
             );
             let at = e.t;
-            self.log(self.ch.events, at, "appell.event", text)?;
+            if let Some(ch) = self.ch.as_ref().filter(|_| self.topics.model) {
+                self.log(ch.events, at, "appell.event", text)?;
+            }
             self.next_event += 1;
         }
         Ok(())
@@ -349,13 +386,29 @@ impl<'w> OverlayWriter<'w> {
 
     /// The one-line answer, at time `t` (the first frame's).
     pub fn answer(&mut self, t: f64, text: &str) -> Result<(), McapError> {
-        self.log(self.ch.answer, t, "appell.answer", text.to_owned())
+        match &self.ch {
+            Some(ch) => self.log(ch.answer, t, "appell.answer", text.to_owned()),
+            None => Ok(()),
+        }
     }
 
     /// Write one frame (frames in time order).
     pub fn frame(&mut self, f: &OverlayFrame) -> Result<(), McapError> {
         self.events_until(f.t)?;
         let ns = self.stamp_of(f.t);
+        if let (Some(lab), Some([slider, bob])) = (self.lab, f.recorded) {
+            self.buf.clear();
+            frame_json(&mut self.buf, ns as i64, slider, bob).map_err(io)?;
+            self.put(lab, ns)?;
+        }
+        let Some(ch) = self
+            .ch
+            .as_ref()
+            .map(|c| (c.recorded, c.model, c.markers, c.residual, c.mode, c.forces))
+        else {
+            return Ok(());
+        };
+        let (ch_recorded, ch_model, ch_markers, ch_residual, ch_mode, ch_forces) = ch;
         let ts = Some(stamp(ns));
         let entity = |id: &str, spheres, lines| SceneEntity {
             timestamp: ts,
@@ -374,7 +427,7 @@ impl<'w> OverlayWriter<'w> {
                 deletions: vec![],
                 entities: vec![entity("recorded", spheres, vec![])],
             };
-            self.put_proto(self.ch.recorded, ns, &update)?;
+            self.put_proto(ch_recorded, ns, &update)?;
         }
         if let Some(m) = &model {
             let c = mode_color(m.mode);
@@ -404,14 +457,14 @@ impl<'w> OverlayWriter<'w> {
                 deletions: vec![],
                 entities: vec![entity("model", spheres, vec![rod])],
             };
-            self.put_proto(self.ch.model, ns, &update)?;
+            self.put_proto(ch_model, ns, &update)?;
         }
         let model_xy = model.map(|m| {
             let [sx, sy, bx, by] = m.markers;
             [Some([sx, sy]), Some([bx, by])]
         });
         self.put_json(
-            self.ch.markers,
+            ch_markers,
             ns,
             &MarkersMsg {
                 t: f.t,
@@ -433,14 +486,14 @@ impl<'w> OverlayWriter<'w> {
                 slider: ds.map(|d| d[0].hypot(d[1])),
                 bob: db.map(|d| d[0].hypot(d[1])),
             };
-            self.put_json(self.ch.residual, ns, &msg)?;
+            self.put_json(ch_residual, ns, &msg)?;
         }
         let (sliding, direction) = match m.mode {
             Mode::Stick => (0, 0),
             Mode::Slide(d) => (1, d.sign() as i8),
         };
         self.put_json(
-            self.ch.mode,
+            ch_mode,
             ns,
             &ModeMsg {
                 t: f.t,
@@ -450,7 +503,7 @@ impl<'w> OverlayWriter<'w> {
             },
         )?;
         self.put_json(
-            self.ch.forces,
+            ch_forces,
             ns,
             &ForcesMsg {
                 t: f.t,
@@ -468,7 +521,180 @@ impl<'w> OverlayWriter<'w> {
     }
 }
 
+/// Why an overlay could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum OverlayError {
+    /// The model could not be simulated over the frames.
+    #[error("simulating the model over the frames: {0}")]
+    Sim(#[from] crate::sim::SimError),
+    /// The MCAP file could not be written.
+    #[error("{0}")]
+    Mcap(#[from] ::mcap::McapError),
+}
+
+impl From<OverlayError> for std::io::Error {
+    fn from(e: OverlayError) -> Self {
+        match e {
+            OverlayError::Mcap(::mcap::McapError::Io(io)) => io,
+            other => std::io::Error::other(other.to_string()),
+        }
+    }
+}
+
+/// The model a run samples: rig, start, camera and the integrator's options.
+pub struct ModelRun<'a> {
+    /// The rig.
+    pub rig: &'a Rig<f64>,
+    /// State at the first frame.
+    pub initial: &'a State<f64>,
+    /// How the camera sees the markers (the ideal camera for a simulation).
+    pub camera: &'a Camera<f64>,
+    /// Integrator options.
+    pub options: &'a Options,
+}
+
+impl ModelRun<'_> {
+    /// The model at one sample: markers, mode and forces.
+    pub fn frame(&self, s: &crate::sim::Sample<f64>) -> ModelFrame {
+        ModelFrame::of(self.rig, self.camera, s)
+    }
+}
+
+/// One marker's recorded positions, a frame each (`None` where it was not seen).
+pub type Positions<'a> = &'a [Option<[f64; 2]>];
+
+/// What an overlay holds besides the model: frame times (s from the first frame), the
+/// recorded tracks when there is a recording, the events, the answer line and the metadata.
+pub struct OverlayInput<'a> {
+    /// Frame times (s from the first frame, ascending).
+    pub times: &'a [f64],
+    /// Slider and bob as recorded, one entry per frame (`None`: no recording).
+    pub recorded: Option<[Positions<'a>; 2]>,
+    /// The model's events (the fit's, or the simulation's).
+    pub events: &'a [Event],
+    /// The one-line answer, written at the first frame.
+    pub answer: Option<String>,
+    /// The first frame's stamp in the recording's clock (ns).
+    pub origin_ns: u64,
+    /// Also write the recorded markers as appell's own recording (`/markers`), which its
+    /// reader reads back.
+    pub lab_markers: bool,
+    /// MCAP metadata records (name -> key -> value).
+    pub metadata: BTreeMap<String, BTreeMap<String, String>>,
+}
+
+/// Write an overlay of `input` and the model `run` (sampled at every frame time) on `w`.
+/// Frames the run does not reach (it stopped at a paradox) keep their recorded markers only.
+pub fn write_overlay(
+    w: &mut dyn Write,
+    input: &OverlayInput,
+    run: Option<&ModelRun>,
+) -> Result<(), OverlayError> {
+    let topics = Topics {
+        lab_markers: input.lab_markers,
+        recorded: input.recorded.is_some(),
+        model: run.is_some(),
+    };
+    let mut out = OverlayWriter::new(w, input.origin_ns, topics, input.events, &input.metadata)?;
+    let times = input.times;
+    if let (Some(answer), Some(&t0)) = (&input.answer, times.first()) {
+        out.answer(t0, answer)?;
+    }
+    let recorded = |i: usize| input.recorded.map(|[s, b]| [s[i], b[i]]);
+    let mut written = 0;
+    if let (Some(run), Some(&t_end)) = (run, times.last()) {
+        let mut failed: Option<::mcap::McapError> = None;
+        simulate_each(
+            run.rig,
+            run.initial,
+            t_end,
+            run.options,
+            &Request {
+                sample_times: times.to_vec(),
+                friction_work: false,
+                positions_only: false,
+            },
+            &mut |s| {
+                if failed.is_some() {
+                    return;
+                }
+                let frame = OverlayFrame {
+                    t: s.t,
+                    recorded: recorded(written),
+                    model: Some(run.frame(&s)),
+                };
+                written += 1;
+                if let Err(e) = out.frame(&frame) {
+                    failed = Some(e);
+                }
+            },
+        )?;
+        if let Some(e) = failed {
+            return Err(e.into());
+        }
+    }
+    for (i, &t) in times.iter().enumerate().skip(written) {
+        out.frame(&OverlayFrame {
+            t,
+            recorded: recorded(i),
+            model: None,
+        })?;
+    }
+    out.finish()?;
+    Ok(())
+}
+
 /// The stamp (ns) of time `t` (s) after `origin_ns`, rounded to the nanosecond.
 pub fn stamp_of(origin_ns: u64, t: f64) -> u64 {
     origin_ns.saturating_add_signed((t * 1e9).round() as i64)
+}
+
+/// A marker in a JSON frame message.
+#[derive(Serialize)]
+struct OutMarker<'a> {
+    id: &'a str,
+    x: Option<f64>,
+    y: Option<f64>,
+}
+
+#[derive(Serialize)]
+struct OutStamp {
+    sec: i64,
+    nsec: i64,
+}
+
+#[derive(Serialize)]
+struct OutFrame<'a> {
+    timestamp: OutStamp,
+    frame_id: &'a str,
+    markers: Vec<OutMarker<'a>>,
+}
+
+/// JSON Schema of the frame messages [`write_json`] writes (schema `lab.MarkerFrame2D`).
+pub const FRAME_SCHEMA: &str = r#"{"title":"lab.MarkerFrame2D","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"frame_id":{"type":"string"},"markers":{"type":"array","items":{"type":"object","properties":{"id":{"type":"string"},"x":{"type":"number"},"y":{"type":"number"}}}}}}"#;
+
+/// One `lab.MarkerFrame2D` JSON frame at `ns` (a missing marker with null x and y) into `buf`.
+fn frame_json(
+    buf: &mut Vec<u8>,
+    ns: i64,
+    slider: Option<[f64; 2]>,
+    bob: Option<[f64; 2]>,
+) -> serde_json::Result<()> {
+    let markers = [("slider", slider), ("bob", bob)]
+        .into_iter()
+        .map(|(id, p)| OutMarker {
+            id,
+            x: p.map(|p| p[0]),
+            y: p.map(|p| p[1]),
+        })
+        .collect();
+    let frame = OutFrame {
+        timestamp: OutStamp {
+            sec: ns.div_euclid(1_000_000_000),
+            nsec: ns.rem_euclid(1_000_000_000),
+        },
+        frame_id: "rail",
+        markers,
+    };
+    serde_json::to_writer(buf, &frame)
 }
