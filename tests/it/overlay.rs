@@ -428,7 +428,9 @@ fn synth_and_simulate_write_the_overlays_schemas() {
         String::from_utf8_lossy(&o.stderr)
     );
     let msgs = read_checked(&std::fs::read(&syn_path).unwrap());
-    let rec = appell::data::read_recording(&[syn_path.clone()], &ReadOptions::default()).unwrap();
+    let rec =
+        appell::data::read_recording(std::slice::from_ref(&syn_path), &ReadOptions::default())
+            .unwrap();
     let sol = simulate(
         &scene.rig,
         &scene.initial,
