@@ -329,15 +329,34 @@ fn release_paths(args: &Args, format_given: bool) -> Result<Vec<Vec<PathBuf>>, F
 
 /// `appell fit --joint`: the releases read (in parallel), fitted together and reported.
 fn run_joint(args: &Args, opts: &ReadOptions, setup: &FitSetup) -> Result<(), Failure> {
-    if args.overlay.is_some() {
-        return Err(Failure::Input(anyhow!(
-            "--overlay writes one recording's fit; with --joint it is not written yet: fit each release alone with --overlay"
-        )));
-    }
     let (rig, settings) = (&setup.rig, &setup.settings);
     let (paths, notes) = pipeline::once_each(release_paths(args, opts.format.is_some())?);
     for n in notes {
         note!("note: {n}");
+    }
+    // One overlay a release, beside --overlay's path: each checked as every output is, before
+    // the fit.
+    let overlays: Vec<PathBuf> = match &args.overlay {
+        Some(out) => paths
+            .iter()
+            .map(|p| appell::report::overlay::release_overlay_path(out, p))
+            .collect(),
+        None => Vec::new(),
+    };
+    if !overlays.is_empty() {
+        let inputs = fit_inputs(args);
+        let mut outputs: Vec<(&str, &Path)> = [
+            ("--plot", &args.plot),
+            ("--friction-plot", &args.friction_plot),
+        ]
+        .into_iter()
+        .filter_map(|(flag, p)| Some((flag, p.as_deref()?)))
+        .collect();
+        for o in &overlays {
+            super::refuse_input(Some(o), &inputs)?;
+            outputs.push(("--overlay", o));
+        }
+        appell::output::refuse_same_output(&outputs).map_err(|e| Failure::Input(e.into()))?;
     }
     let joint = JointSettings {
         same_camera: args.same_camera,
@@ -379,6 +398,31 @@ fn run_joint(args: &Args, opts: &ReadOptions, setup: &FitSetup) -> Result<(), Fa
             releases,
         };
         written(p, render(p, &figure), args.json)?;
+    }
+    if !overlays.is_empty() {
+        let answer = appell::report::joint::joint_answer(&rep);
+        for (row, part) in rep.releases.iter().zip(&rep.parts) {
+            let Some(k) = paths
+                .iter()
+                .position(|p| pipeline::release_name(p) == row.name)
+            else {
+                continue;
+            };
+            let out = &overlays[k];
+            let r = pipeline::origin_ns(&paths[k], opts).and_then(|origin| {
+                appell::output::write_atomic(out, |w| {
+                    Ok(appell::report::overlay::write_release_overlay(
+                        w,
+                        part,
+                        answer.clone(),
+                        origin,
+                    )?)
+                })
+                .map_err(anyhow::Error::from)
+            });
+            let r = r.map_err(|e| format!("writing {}: {e:#}", out.display()));
+            saved(out, r, args.json, "overlay")?;
+        }
     }
     // A failed result is reported in full, and is no answer: exit 1 with the reason.
     if let Some(why) = &rep.failed {

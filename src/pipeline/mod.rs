@@ -240,6 +240,12 @@ pub fn fit_observations(
         .map_err(|e| FitFailure::Run(anyhow::anyhow!(e).context(format!("fitting {name}"))))
 }
 
+/// The first frame's stamp in a recording's own clock (ns, [`crate::data::Provenance::origin_ns`]),
+/// read again: an overlay of a joint fit's release is stamped from it.
+pub fn origin_ns(paths: &[PathBuf], opts: &ReadOptions) -> anyhow::Result<u64> {
+    Ok(read_recording(paths, opts)?.provenance.origin_ns())
+}
+
 /// What a fit's JSON was made from: the recordings read, the rig file, and this tool's
 /// version, so that a result kept in a lab's archive says where it came from.
 pub fn provenance(v: &mut serde_json::Value, inputs: &[PathBuf], rig: &Path) {

@@ -21,7 +21,65 @@ pub fn write_fit_overlay(
     rep: &FitReport,
     origin_ns: u64,
 ) -> Result<(), OverlayError> {
-    let answer = super::fit::answer(rep);
+    let run = ModelRun {
+        rig: &rep.rig,
+        initial: &rep.initial,
+        camera: &rep.camera,
+        options: &rep.problem.options,
+    };
+    model_overlay(
+        w,
+        obs,
+        &run,
+        &rep.events,
+        super::fit::answer(rep),
+        origin_ns,
+    )
+}
+
+/// The overlay of one release of `appell fit --joint --overlay`: the release's recording and
+/// the joint model at its optimum for that release (`part`), its events (the model's own run
+/// over the release's frames) and the joint fit's one-line answer, stamped from `origin_ns`.
+pub fn write_release_overlay(
+    w: &mut dyn Write,
+    part: &crate::fit::TrajectoryProblem,
+    answer: String,
+    origin_ns: u64,
+) -> Result<(), OverlayError> {
+    let obs = part.observations();
+    let t_end = obs.times.last().copied().unwrap_or(0.0);
+    let events = crate::sim::simulate_each(
+        &part.rig,
+        &part.initial,
+        t_end,
+        &part.options,
+        // Sampled at the frames as the overlay's run is: a run that samples nothing takes its
+        // stick phases in closed form, with switch times a nanosecond apart from these.
+        &crate::sim::Request {
+            sample_times: obs.times.clone(),
+            ..crate::sim::Request::default()
+        },
+        &mut |_| {},
+    )?
+    .events;
+    let run = ModelRun {
+        rig: &part.rig,
+        initial: &part.initial,
+        camera: &part.camera,
+        options: &part.options,
+    };
+    model_overlay(w, obs, &run, &events, answer, origin_ns)
+}
+
+/// A recording and a model's run over its frames, with the model's events and an answer line.
+fn model_overlay(
+    w: &mut dyn Write,
+    obs: &Observations,
+    run: &ModelRun,
+    events: &[crate::sim::Event],
+    answer: String,
+    origin_ns: u64,
+) -> Result<(), OverlayError> {
     let mut metadata = BTreeMap::new();
     metadata.insert(
         "appell.fit".to_owned(),
@@ -36,19 +94,31 @@ pub fn write_fit_overlay(
     let input = OverlayInput {
         times: &obs.times,
         recorded: Some([&obs.slider, &obs.bob]),
-        events: &rep.events,
+        events,
         answer: Some(answer),
         origin_ns,
         lab_markers: false,
         metadata,
     };
-    let run = ModelRun {
-        rig: &rep.rig,
-        initial: &rep.initial,
-        camera: &rep.camera,
-        options: &rep.problem.options,
-    };
-    write_overlay(w, &input, Some(&run))
+    write_overlay(w, &input, Some(run))
+}
+
+/// Where `fit --joint --overlay OUT.mcap` writes a release's overlay: beside `OUT`, named
+/// `OUT`'s stem, an underscore and the release's first file's stem (`fit_release_03.mcap`).
+pub fn release_overlay_path(
+    out: &std::path::Path,
+    release: &[std::path::PathBuf],
+) -> std::path::PathBuf {
+    let stem = out
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let name = release
+        .first()
+        .and_then(|p| p.file_stem())
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    out.with_file_name(format!("{stem}_{name}.mcap"))
 }
 
 /// The kinds of overlay file, by the output's extension.

@@ -508,3 +508,81 @@ fn synth_and_simulate_write_the_overlays_schemas() {
         .collect();
     assert_eq!(stamps, want);
 }
+
+/// `fit --joint --overlay OUT.mcap` writes one overlay a release beside OUT: each release's
+/// recording and the joint model at its optimum for that release, equal to the simulator's.
+#[test]
+fn a_joint_fit_writes_one_overlay_a_release() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("fit.mcap");
+    let campaign = root("data/campaign");
+    let rig = campaign.join("rig_measured.toml");
+    let o = appell(&[
+        "fit",
+        campaign.to_str().unwrap(),
+        "--joint",
+        "--rig",
+        rig.to_str().unwrap(),
+        "--overlay",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    // The library's joint fit gives each release's model.
+    let setup = FitSetup::new(&rig, &FitArgs::default(), None).unwrap();
+    let (files, _) = appell::pipeline::directory_files(&campaign, false).unwrap();
+    let paths: Vec<Vec<PathBuf>> = files.into_iter().map(|f| vec![f]).collect();
+    let joint = appell::fit::joint::JointSettings {
+        same_camera: false,
+        keep_going: false,
+    };
+    let (rep, _) =
+        appell::pipeline::fit_joint_files(&paths, &ReadOptions::default(), &setup, &joint)
+            .unwrap_or_else(|_| panic!("the campaign fits"));
+    assert_eq!(rep.parts.len(), paths.len());
+    for (p, part) in paths.iter().zip(&rep.parts) {
+        let file = appell::report::overlay::release_overlay_path(&out, p);
+        let msgs = read_checked(&std::fs::read(&file).unwrap());
+        let obs = part.observations();
+        let sol = simulate(
+            &part.rig,
+            &part.initial,
+            *obs.times.last().unwrap(),
+            &part.options,
+            &Request {
+                sample_times: obs.times.clone(),
+                friction_work: false,
+                positions_only: false,
+            },
+        )
+        .unwrap();
+        let got = model_markers(&msgs);
+        assert_eq!(got.len(), obs.times.len(), "{}", file.display());
+        for (g, s) in got.iter().zip(&sol.samples) {
+            let want = observed_markers(&part.rig, &part.camera, s.mode, &s.state);
+            for k in 0..4 {
+                assert!(
+                    (g[k] - want[k]).abs() <= 1e-12,
+                    "{}: {g:?} {want:?}",
+                    file.display()
+                );
+            }
+        }
+        let events: Vec<u64> = msgs
+            .iter()
+            .filter(|m| m.topic == ov::TOPIC_EVENTS)
+            .map(|m| m.log_time)
+            .collect();
+        let origin = appell::pipeline::origin_ns(p, &ReadOptions::default()).unwrap();
+        let want: Vec<u64> = sol
+            .events
+            .iter()
+            .map(|e| ov::stamp_of(origin, e.t))
+            .collect();
+        assert_eq!(events, want, "{}", file.display());
+    }
+}
