@@ -92,6 +92,22 @@ fn read_checked(bytes: &[u8]) -> Vec<Msg> {
     out
 }
 
+/// A run of the simulator sampled at `times`, as `simulate` gives it.
+fn sampled(
+    rig: &appell::model::Rig<f64>,
+    initial: &appell::model::State<f64>,
+    t_end: f64,
+    options: &appell::sim::Options,
+    times: Vec<f64>,
+) -> appell::sim::Solution<f64> {
+    let request = Request {
+        sample_times: times,
+        friction_work: false,
+        positions_only: false,
+    };
+    simulate(rig, initial, t_end, options, &request).unwrap()
+}
+
 fn json(m: &Msg) -> Value {
     serde_json::from_slice(&m.data).unwrap()
 }
@@ -130,18 +146,13 @@ fn a_fit_overlay_holds_simulates_markers_the_fits_events_and_the_recordings_cloc
     }
 
     // The model's markers: the simulator's for the fitted scene, through the model's markers.
-    let sol = simulate(
+    let sol = sampled(
         &rep.rig,
         &rep.initial,
         *obs.times.last().unwrap(),
         &rep.problem.options,
-        &Request {
-            sample_times: obs.times.clone(),
-            friction_work: false,
-            positions_only: false,
-        },
-    )
-    .unwrap();
+        obs.times.clone(),
+    );
     assert_eq!(sol.samples.len(), n);
     let mut worst: f64 = 0.0;
     for ((m, s), scene) in markers.iter().zip(&sol.samples).zip(on(ov::TOPIC_MODEL)) {
@@ -431,18 +442,13 @@ fn synth_and_simulate_write_the_overlays_schemas() {
     let rec =
         appell::data::read_recording(std::slice::from_ref(&syn_path), &ReadOptions::default())
             .unwrap();
-    let sol = simulate(
+    let sol = sampled(
         &scene.rig,
         &scene.initial,
         *rec.times.last().unwrap(),
         &scene.options,
-        &Request {
-            sample_times: rec.times.clone(),
-            friction_work: false,
-            positions_only: false,
-        },
-    )
-    .unwrap();
+        rec.times.clone(),
+    );
     let got = model_markers(&msgs);
     assert_eq!(got.len(), rec.len());
     for (g, s) in got.iter().zip(&sol.samples) {
@@ -548,18 +554,13 @@ fn a_joint_fit_writes_one_overlay_a_release() {
         let file = appell::report::overlay::release_overlay_path(&out, p);
         let msgs = read_checked(&std::fs::read(&file).unwrap());
         let obs = part.observations();
-        let sol = simulate(
+        let sol = sampled(
             &part.rig,
             &part.initial,
             *obs.times.last().unwrap(),
             &part.options,
-            &Request {
-                sample_times: obs.times.clone(),
-                friction_work: false,
-                positions_only: false,
-            },
-        )
-        .unwrap();
+            obs.times.clone(),
+        );
         let got = model_markers(&msgs);
         assert_eq!(got.len(), obs.times.len(), "{}", file.display());
         for (g, s) in got.iter().zip(&sol.samples) {
