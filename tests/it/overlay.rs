@@ -229,9 +229,19 @@ fn a_fit_overlay_holds_simulates_markers_the_fits_events_and_the_recordings_cloc
         let c = rep.rig.contact(s.mode, &s.state);
         assert_eq!(f["normal"].as_f64(), Some(c.normal));
         assert_eq!(f["friction"].as_f64(), Some(c.friction));
-        if s.mode != appell::model::Mode::Stick {
-            let mu = f["mu"].as_f64().unwrap();
+        let (n, fr, mu) = (c.normal, c.friction, f["mu"].as_f64().unwrap());
+        if s.mode == appell::model::Mode::Stick {
+            // Held within the static cone, |F| = mu |N|.
+            assert!(
+                fr.abs() <= rep.rig.mu_static * n.abs() * (1.0 + 1e-9),
+                "{fr} {n}"
+            );
+            assert!((fr.abs() - mu * n.abs()).abs() <= 1e-12 * n.abs().max(1.0));
+        } else {
+            // Coulomb sliding: mu the fitted coefficient, F = -mu sign(x') |N| against the motion.
             assert!((mu - rep.rig.mu_kinetic).abs() < 1e-9, "{mu}");
+            let want = -mu * s.state[2].signum() * n.abs();
+            assert!((fr - want).abs() <= 1e-9 * n.abs().max(1.0), "{fr} {want}");
         }
     }
 }
