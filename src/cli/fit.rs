@@ -3,6 +3,7 @@
 
 use super::Failure;
 use anyhow::anyhow;
+use appell::data::Provenance;
 use appell::data::ReadOptions;
 use appell::fit::joint::JointSettings;
 use appell::fit::{FitReport, Observations};
@@ -55,14 +56,19 @@ pub struct Args {
     /// sliding speed, both directions, with the chosen and the compared laws (SVG or PNG).
     #[arg(long, value_name = "FILE.svg")]
     friction_plot: Option<PathBuf>,
+    /// Write the fit back beside the recording: `.mcap` for Foxglove (recorded and fitted
+    /// markers, residuals, modes, forces, events and the answer in the recording's clock;
+    /// docs/overlay.md).
+    #[arg(long, value_name = "FILE.mcap")]
+    overlay: Option<PathBuf>,
     #[command(flatten)]
     fit: FitArgs,
     #[command(flatten)]
     recording: RecordingArgs,
 }
 
-/// A recording's observations and fit, or why not.
-type Fitted = Result<(Observations, FitReport), Failure>;
+/// A recording's observations, provenance and fit, or why not.
+type Fitted = Result<(Observations, Provenance, FitReport), Failure>;
 
 /// A recording read and checked before any fitting work ([`pipeline::read_for_rig`]), its
 /// notes on stderr (`fit`, `fit --joint`, `bench --joint`).
@@ -98,11 +104,12 @@ pub(super) fn directory_files(dir: &Path, format_given: bool) -> Result<Vec<Path
 }
 
 fn fit_one(paths: &[PathBuf], opts: &ReadOptions, setup: &FitSetup, keep: bool) -> Fitted {
-    let (obs, report, notes) = pipeline::fit_files(paths, opts, setup, keep).map_err(failure)?;
+    let (obs, provenance, report, notes) =
+        pipeline::fit_recording(paths, opts, setup, keep).map_err(failure)?;
     for n in notes {
         note!("note: {n}");
     }
-    Ok((obs, report))
+    Ok((obs, provenance, report))
 }
 
 /// Every file the fit reads: the rig, the recordings (a directory's entries), the releases.
@@ -128,6 +135,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
     let outputs: Vec<(&str, &Path)> = [
         ("--plot", &args.plot),
         ("--friction-plot", &args.friction_plot),
+        ("--overlay", &args.overlay),
     ]
     .into_iter()
     .filter_map(|(flag, p)| Some((flag, p.as_deref()?)))
@@ -146,6 +154,10 @@ pub fn run(args: Args) -> Result<(), Failure> {
     for p in [&args.plot, &args.friction_plot].into_iter().flatten() {
         appell::report::plot::ImageFormat::from_path(p).map_err(|e| Failure::Input(e.into()))?;
     }
+    if let Some(p) = &args.overlay {
+        appell::report::overlay::OverlayFormat::from_path(p)
+            .map_err(|e| Failure::Input(e.into()))?;
+    }
     let settings = &setup.settings;
     if args.joint {
         return run_joint(&args, &opts, &setup);
@@ -154,6 +166,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         if let Some(flag) = [
             (args.plot.is_some(), "--plot"),
             (args.friction_plot.is_some(), "--friction-plot"),
+            (args.overlay.is_some(), "--overlay"),
         ]
         .iter()
         .find_map(|(given, flag)| given.then_some(flag))
@@ -181,7 +194,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
         let mut failed = 0;
         for (file, r) in results {
             match r {
-                Ok((_, rep)) => {
+                Ok((_, _, rep)) => {
                     // A failed result is reported, and is no answer: it counts toward exit 1.
                     failed += usize::from(rep.failed.is_some());
                     let mut v = fit_json(&rep);
@@ -218,7 +231,8 @@ pub fn run(args: Args) -> Result<(), Failure> {
         }
         return Ok(());
     }
-    let (obs, rep) = fit_one(&args.inputs, &opts, &setup, args.plot.is_some())?;
+    let keep = args.plot.is_some() || args.overlay.is_some();
+    let (obs, recording, rep) = fit_one(&args.inputs, &opts, &setup, keep)?;
     // The report first: a figure that cannot be written must not cost the result.
     if args.json {
         let mut v = fit_json(&rep);
@@ -250,6 +264,16 @@ pub fn run(args: Args) -> Result<(), Failure> {
         };
         written(p, render(p, &figure), args.json)?;
     }
+    if let Some(p) = &args.overlay {
+        let origin = recording.origin_ns();
+        let r = appell::output::write_atomic(p, |w| {
+            Ok(appell::report::overlay::write_fit_overlay(
+                w, &obs, &rep, origin,
+            )?)
+        });
+        let r = r.map_err(|e| format!("writing {}: {e}", p.display()));
+        saved(p, r, args.json, "overlay")?;
+    }
     // A failed result is reported in full, and is no answer: exit 1 with the reason.
     if let Some(why) = &rep.failed {
         return Err(Failure::Run(anyhow!("{why}")));
@@ -260,15 +284,25 @@ pub fn run(args: Args) -> Result<(), Failure> {
 /// A figure's outcome after the report: a line saying where it went (text reports), or the
 /// error, exit 1, the report already printed.
 fn written<E: std::fmt::Display>(p: &Path, r: Result<(), E>, json: bool) -> Result<(), Failure> {
+    saved(p, r, json, "figure")
+}
+
+/// An output's outcome after the report ([`written`] for any output, named `what`).
+fn saved<E: std::fmt::Display>(
+    p: &Path,
+    r: Result<(), E>,
+    json: bool,
+    what: &str,
+) -> Result<(), Failure> {
     match r {
         Ok(()) => {
             if !json {
-                outln!("figure written to {}", p.display());
+                outln!("{what} written to {}", p.display());
             }
             Ok(())
         }
         Err(e) => Err(Failure::Run(anyhow!(
-            "{e} (the report above is complete; only the figure is missing)"
+            "{e} (the report above is complete; only the {what} is missing)"
         ))),
     }
 }
@@ -299,6 +333,30 @@ fn run_joint(args: &Args, opts: &ReadOptions, setup: &FitSetup) -> Result<(), Fa
     let (paths, notes) = pipeline::once_each(release_paths(args, opts.format.is_some())?);
     for n in notes {
         note!("note: {n}");
+    }
+    // One overlay a release, beside --overlay's path: each checked as every output is, before
+    // the fit.
+    let overlays: Vec<PathBuf> = match &args.overlay {
+        Some(out) => paths
+            .iter()
+            .map(|p| appell::report::overlay::release_overlay_path(out, p))
+            .collect(),
+        None => Vec::new(),
+    };
+    if !overlays.is_empty() {
+        let inputs = fit_inputs(args);
+        let mut outputs: Vec<(&str, &Path)> = [
+            ("--plot", &args.plot),
+            ("--friction-plot", &args.friction_plot),
+        ]
+        .into_iter()
+        .filter_map(|(flag, p)| Some((flag, p.as_deref()?)))
+        .collect();
+        for o in &overlays {
+            super::refuse_input(Some(o), &inputs)?;
+            outputs.push(("--overlay", o));
+        }
+        appell::output::refuse_same_output(&outputs).map_err(|e| Failure::Input(e.into()))?;
     }
     let joint = JointSettings {
         same_camera: args.same_camera,
@@ -340,6 +398,31 @@ fn run_joint(args: &Args, opts: &ReadOptions, setup: &FitSetup) -> Result<(), Fa
             releases,
         };
         written(p, render(p, &figure), args.json)?;
+    }
+    if !overlays.is_empty() {
+        let answer = appell::report::joint::joint_answer(&rep);
+        for (row, part) in rep.releases.iter().zip(&rep.parts) {
+            let Some(k) = paths
+                .iter()
+                .position(|p| pipeline::release_name(p) == row.name)
+            else {
+                continue;
+            };
+            let out = &overlays[k];
+            let r = pipeline::origin_ns(&paths[k], opts).and_then(|origin| {
+                appell::output::write_atomic(out, |w| {
+                    Ok(appell::report::overlay::write_release_overlay(
+                        w,
+                        part,
+                        answer.clone(),
+                        origin,
+                    )?)
+                })
+                .map_err(anyhow::Error::from)
+            });
+            let r = r.map_err(|e| format!("writing {}: {e:#}", out.display()));
+            saved(out, r, args.json, "overlay")?;
+        }
     }
     // A failed result is reported in full, and is no answer: exit 1 with the reason.
     if let Some(why) = &rep.failed {

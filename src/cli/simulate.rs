@@ -16,7 +16,8 @@ pub struct Args {
     #[arg(long)]
     json: bool,
     /// Write the sampled trajectory to this CSV (at the scene's output.frame_rate, else
-    /// 1000 Hz).
+    /// 1000 Hz); a `.mcap` file holds the overlay's topics for Foxglove instead
+    /// (docs/overlay.md).
     #[arg(long, value_name = "FILE.csv")]
     out: Option<PathBuf>,
 }
@@ -42,7 +43,11 @@ pub fn run(args: Args) -> Result<(), Failure> {
     })?;
     if let Some(path) = &args.out {
         appell::output::write_atomic(path, |w| {
-            report::write_trajectory_csv(w, &scene.rig, &scene, &sol)
+            if appell::data::synth::output_format(path) == appell::data::Format::Mcap {
+                Ok(report::overlay::write_simulation_overlay(w, &scene, &sol)?)
+            } else {
+                report::write_trajectory_csv(w, &scene.rig, &scene, &sol)
+            }
         })
         .map_err(|e| Failure::Run(anyhow!(e).context(format!("writing {}", path.display()))))?;
     }

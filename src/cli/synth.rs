@@ -60,7 +60,7 @@ pub fn run(args: Args) -> Result<(), Failure> {
     let syn = synth::synthesize(&scene, &opts).map_err(|e| {
         Failure::Run(anyhow!(e).context(format!("simulating {}", args.scene.display())))
     })?;
-    synth::write(&args.output, &syn.recording, &syn.truth).map_err(|e| Failure::Run(e.into()))?;
+    synth::write_synthetic(&args.output, &syn, &scene).map_err(|e| Failure::Run(e.into()))?;
     let (ns, nb) = syn.recording.seen();
     let quiet = appell::output::names_stdout(&args.output);
     status!(

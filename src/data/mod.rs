@@ -329,6 +329,10 @@ fn assemble(
             slider_name,
             bob_name,
             time_origin: parsed.time_base + t0,
+            // The stamps' own integers: t0 is an exact difference of two of them over 1e9.
+            time_origin_ns: parsed
+                .time_base_ns
+                .map(|base| base.saturating_add((t0 * 1e9).round() as i64)),
             notes: parsed.notes,
             warnings: parsed.warnings,
             metadata: parsed.metadata,

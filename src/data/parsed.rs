@@ -23,6 +23,9 @@ pub(crate) struct Parsed {
     pub y_down: bool,
     /// The file-clock time (seconds) that the series' times are relative to.
     pub time_base: f64,
+    /// The same in integer nanoseconds when the file's clock is (MCAP's log times): exact
+    /// where `time_base` is rounded to a fraction of a microsecond.
+    pub time_base_ns: Option<i64>,
     pub notes: Vec<String>,
     pub warnings: Vec<String>,
     pub metadata: BTreeMap<String, String>,

@@ -163,6 +163,8 @@ pub struct Provenance {
     pub bob_name: String,
     /// The file's time of the first frame (seconds in the file's clock).
     pub time_origin: f64,
+    /// The same in integer nanoseconds, exact, when the file's clock counts them (MCAP).
+    pub time_origin_ns: Option<i64>,
     /// Scale, flip and rail-frame transform.
     pub calibration: Calibration,
     /// Rod length check.
@@ -190,6 +192,19 @@ pub struct Recording {
 
 /// The canonical wide CSV header.
 pub const CANONICAL_HEADER: &str = "t,slider_x,slider_y,bob_x,bob_y";
+
+impl Provenance {
+    /// The first frame's stamp in the file's own clock (ns): the file's integer stamp when it
+    /// has one (MCAP), else its time origin in seconds rounded to the nanosecond; a clock
+    /// before zero (MCAP's stamps have none) starts at zero. An overlay's frames are stamped
+    /// from it.
+    pub fn origin_ns(&self) -> u64 {
+        let ns = self
+            .time_origin_ns
+            .unwrap_or_else(|| (self.time_origin * 1e9).round() as i64);
+        ns.max(0) as u64
+    }
+}
 
 impl Recording {
     /// Number of frames.

@@ -95,6 +95,8 @@ pub struct Synthetic {
     pub truth: BTreeMap<String, String>,
     /// When the simulation ended before the duration (a paradox it does not resolve).
     pub stopped_at: Option<f64>,
+    /// The simulation's events (the true mode switches).
+    pub events: Vec<crate::sim::Event>,
 }
 
 /// Simulate `scene` and turn its markers into a recording with noise, dropouts and outliers.
@@ -204,6 +206,7 @@ pub fn synthesize(scene: &Scene, opts: &SynthOptions) -> Result<Synthetic, SimEr
         recording: rec,
         truth,
         stopped_at,
+        events: sol.events,
     })
 }
 
@@ -221,6 +224,42 @@ pub fn output_format(path: &Path) -> Format {
 
 /// Stamp of the first frame in synthetic MCAP files (2023-11-14, as in the example files).
 pub const START_NS: i64 = 1_700_000_000_000_000_000;
+
+/// Write a synthetic recording of `scene` to `path` atomically: canonical CSV as [`write`];
+/// MCAP with appell's recording topic (`/markers`, read back by its reader) and the overlay's
+/// topics besides (docs/overlay.md): the noisy markers as recorded, the scene's true motion as
+/// the model (its markers, modes, forces and events), so a planned release can be looked at in
+/// Foxglove before it is recorded.
+pub fn write_synthetic(path: &Path, syn: &Synthetic, scene: &Scene) -> Result<(), DataError> {
+    use super::mcap::overlay::{write_overlay, ModelRun, OverlayInput};
+    if output_format(path) != Format::Mcap {
+        return write(path, &syn.recording, &syn.truth);
+    }
+    let rec = &syn.recording;
+    let last = rec.times.last().copied().unwrap_or(0.0);
+    let events: Vec<_> = syn.events.iter().filter(|e| e.t <= last).cloned().collect();
+    let input = OverlayInput {
+        times: &rec.times,
+        recorded: Some([&rec.slider, &rec.bob]),
+        events: &events,
+        answer: None,
+        origin_ns: START_NS as u64,
+        lab_markers: true,
+        metadata: BTreeMap::from([("truth".to_string(), syn.truth.clone())]),
+    };
+    let run = ModelRun {
+        rig: &scene.rig,
+        initial: &scene.initial,
+        camera: &crate::model::Camera::default(),
+        options: &scene.options,
+    };
+    crate::output::write_atomic(path, |w| Ok(write_overlay(w, &input, Some(&run))?)).map_err(
+        |source| DataError::Write {
+            path: path.to_owned(),
+            source,
+        },
+    )
+}
 
 /// Write a recording to `path` atomically: canonical CSV, or MCAP (JSON frames, zstd, the
 /// `truth` map as a metadata record named `truth`) when the extension is `.mcap`.

@@ -118,6 +118,17 @@ pub struct SlideDynamics<T> {
     pub mu: T,
 }
 
+/// The rail's forces on the slider at one instant ([`Rig::contact`]).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Contact<T> {
+    /// Rail reaction N (N, y down convention as in [`SlideDynamics::normal`]).
+    pub normal: T,
+    /// Friction force along the rail (N, positive toward +x).
+    pub friction: T,
+    /// The friction coefficient in use: the law's mu while sliding, |F| / |N| while stuck.
+    pub mu: T,
+}
+
 /// Which normal-force signs sigma give a self-consistent sliding motion.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct SlideBranches {
@@ -349,13 +360,49 @@ impl<T: Scalar> Rig<T> {
                 self.stick_angular_acceleration(y[THETA], y[THETA_DOT]),
             ),
             Mode::Slide(dir) => {
-                let s = dir.sign();
-                let sh = Shorthands::at(self, y);
-                let sigma = self
-                    .slide_sigma(&sh, s, y[X_DOT])
-                    .unwrap_or_else(|| sign(sh.q.re()));
-                let d = self.slide(&sh, s, sigma, y[X_DOT]);
+                let (d, _) = self.slide_at(dir.sign(), y);
                 (d.x_ddot, d.theta_ddot)
+            }
+        }
+    }
+
+    /// The sliding model's dynamics toward `s` at state `y` on the branch the simulator takes
+    /// (the consistent one with a positive denominator, else sigma = sign(Q)), with that sigma.
+    fn slide_at(&self, s: f64, y: &[T]) -> (SlideDynamics<T>, f64) {
+        let sh = Shorthands::at(self, y);
+        let sigma = self
+            .slide_sigma(&sh, s, y[X_DOT])
+            .unwrap_or_else(|| sign(sh.q.re()));
+        (self.slide(&sh, s, sigma, y[X_DOT]), sigma)
+    }
+
+    /// The rail's forces on the slider in `mode` at state `y` (docs/physics.md): while stuck
+    /// N = b and the friction that holds the slider, F = -c, with `mu` the share |F| / |N| it
+    /// uses; while sliding toward s the branch's N, F = -mu s |N| - c_v x' and the law's mu at
+    /// that speed and load.
+    pub fn contact(&self, mode: Mode, y: &[T]) -> Contact<T> {
+        match mode {
+            Mode::Stick => {
+                let sh = Shorthands::at(self, y);
+                let friction = -sh.c;
+                Contact {
+                    normal: sh.b,
+                    friction,
+                    mu: friction.abs() / sh.b.abs(),
+                }
+            }
+            Mode::Slide(dir) => {
+                let s = dir.sign();
+                let (d, sigma) = self.slide_at(s, y);
+                let mut friction = -(d.mu * d.normal) * (s * sigma);
+                if !self.viscous_friction.is_exact_zero() {
+                    friction -= self.viscous_friction * y[X_DOT];
+                }
+                Contact {
+                    normal: d.normal,
+                    friction,
+                    mu: d.mu,
+                }
             }
         }
     }

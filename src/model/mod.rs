@@ -13,7 +13,7 @@ pub mod regions;
 mod rig;
 mod transition;
 
-pub use forces::{energy, momentum, Shorthands, SlideBranches, SlideDynamics};
+pub use forces::{energy, momentum, Contact, Shorthands, SlideBranches, SlideDynamics};
 pub use markers::{markers, observed_markers, observed_markers_with, Camera};
 pub use mode::{Direction, Mode};
 pub use param::{Param, CAMERA_PARAMS};

@@ -98,13 +98,14 @@ pub fn read_for_rig(
     read_calibrated(paths, opts, rig_path, rig).map(|(obs, notes, _)| (obs, notes))
 }
 
-/// [`read_for_rig`] with the recording's calibration (where its scale came from).
+/// [`read_for_rig`] with the recording's provenance (its calibration, where its scale came
+/// from, and its clock).
 fn read_calibrated(
     paths: &[PathBuf],
     opts: &ReadOptions,
     rig_path: &Path,
     rig: &Rig<f64>,
-) -> anyhow::Result<(Observations, Vec<String>, crate::data::Calibration)> {
+) -> anyhow::Result<(Observations, Vec<String>, crate::data::Provenance)> {
     let rec = read_recording(paths, opts)?;
     let files: Vec<String> = paths.iter().map(|p| p.display().to_string()).collect();
     let notes = rec
@@ -115,8 +116,8 @@ fn read_calibrated(
         .map(|n| format!("{}: {n}", files.join(" + ")))
         .collect();
     check_for_rig(&rec, rig_path, rig)?;
-    let calibration = rec.provenance.calibration.clone();
-    Ok((Observations::from(rec), notes, calibration))
+    let provenance = rec.provenance.clone();
+    Ok((Observations::from(rec), notes, provenance))
 }
 
 /// The relative standard deviation of a camera scale set from `--rod-length` (`None` for a
@@ -189,15 +190,35 @@ pub fn fit_files(
     setup: &FitSetup,
     keep: bool,
 ) -> Result<(Observations, FitReport, Vec<String>), FitFailure> {
-    let (obs, notes, calibration) =
+    fit_recording(paths, opts, setup, keep).map(|(obs, _, report, notes)| (obs, report, notes))
+}
+
+/// [`fit_files`] with the recording's provenance: its calibration and its clock, which an
+/// overlay writes the model back in.
+pub fn fit_recording(
+    paths: &[PathBuf],
+    opts: &ReadOptions,
+    setup: &FitSetup,
+    keep: bool,
+) -> Result<
+    (
+        Observations,
+        crate::data::Provenance,
+        FitReport,
+        Vec<String>,
+    ),
+    FitFailure,
+> {
+    let (obs, notes, provenance) =
         read_calibrated(paths, opts, &setup.rig_path, &setup.rig).map_err(FitFailure::Input)?;
+    let calibration = &provenance.calibration;
     let (kept, given) = if keep {
         (obs.clone(), obs)
     } else {
         (Observations::default(), obs)
     };
     let name = paths[0].display().to_string();
-    let report = match scale_sd(&calibration, opts, setup) {
+    let report = match scale_sd(calibration, opts, setup) {
         Some(sd) => {
             let mut scaled = setup.clone();
             scaled.settings.scale_sd = Some(sd);
@@ -205,7 +226,7 @@ pub fn fit_files(
         }
         None => fit_observations(given, setup, &name)?,
     };
-    Ok((kept, report, notes))
+    Ok((kept, provenance, report, notes))
 }
 
 /// Fit observations already read (from arrays, in Python) with a setup; `name` labels the
@@ -217,6 +238,12 @@ pub fn fit_observations(
 ) -> Result<FitReport, FitFailure> {
     fit(obs, &setup.rig, &setup.settings)
         .map_err(|e| FitFailure::Run(anyhow::anyhow!(e).context(format!("fitting {name}"))))
+}
+
+/// The first frame's stamp in a recording's own clock (ns, [`crate::data::Provenance::origin_ns`]),
+/// read again: an overlay of a joint fit's release is stamped from it.
+pub fn origin_ns(paths: &[PathBuf], opts: &ReadOptions) -> anyhow::Result<u64> {
+    Ok(read_recording(paths, opts)?.provenance.origin_ns())
 }
 
 /// What a fit's JSON was made from: the recordings read, the rig file, and this tool's

@@ -3,6 +3,7 @@
 pub mod fit;
 pub mod inspect;
 pub mod joint;
+pub mod overlay;
 pub mod plan;
 pub mod plot;
 pub mod regions;

@@ -22,6 +22,7 @@ mod joint;
 mod measured;
 mod misspec;
 mod outputs;
+mod overlay;
 mod paradox;
 mod plan;
 mod prefit_checks;

@@ -16,17 +16,20 @@
 //!   is read by `data::ros_cdr`.
 //! - `tf.rs`: the samples accumulated while reading, and `/tf` trees composed to their root.
 //! - `write.rs`: the writer of JSON marker frames.
+//! - `overlay.rs`: the writer of overlays for Foxglove (a recording and a model's motion).
 
 mod chunks;
 mod decode;
+pub mod overlay;
 mod records;
 mod tf;
 mod write;
 
 pub use decode::{NOT_POSITIONS, POINTS_NAMES};
+pub use overlay::FRAME_SCHEMA;
 pub use records::record_limit;
 pub use tf::TF_SAMPLE_LIMIT;
-pub use write::{write_json, FRAME_SCHEMA};
+pub use write::write_json;
 
 use super::{Budget, DataError, Parsed, ReadOptions, Series};
 use ::mcap::records::op;
@@ -482,5 +485,6 @@ fn marker_series(
         });
     }
     parsed.time_base = t0 as f64 / 1e9;
+    parsed.time_base_ns = Some(t0);
     Ok(())
 }

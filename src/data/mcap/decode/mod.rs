@@ -116,9 +116,15 @@ pub(super) fn decoder_for(
 ) -> Result<Decoder, Reject> {
     match encoding {
         // Foxglove's JSON types that hold no position: a velocity in a Vector3 is not a marker.
-        "json" if NOT_POSITIONS.contains(&schema_name) => Err(Reject::Invalid(format!(
-            "{schema_name} holds no marker position"
-        ))),
+        // An overlay's numbers (appell's own plot topics) are not markers either.
+        "json"
+            if NOT_POSITIONS.contains(&schema_name)
+                || super::overlay::OVERLAY_JSON_SCHEMAS.contains(&schema_name) =>
+        {
+            Err(Reject::Invalid(format!(
+                "{schema_name} holds no marker position"
+            )))
+        }
         "json" => Ok(Decoder::Json),
         "cdr" => {
             if schema_encoding != "ros2msg" && schema_encoding != "ros2idl" {
