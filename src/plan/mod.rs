@@ -7,12 +7,15 @@
 //! nearest achievable release is.
 
 pub mod criteria;
+pub mod discriminate;
 pub mod prior;
 pub mod search;
 pub mod spec;
 
 pub use criteria::{Criteria, Evaluation, Hit};
 pub use spec::{PlanSpec, Target, Uncertain};
+
+use crate::fit::Param;
 
 use crate::model::regions::{max_mass_ratio_for_paradox, mu_critical};
 use crate::model::{Rig, Shorthands, State};
@@ -43,6 +46,15 @@ pub struct Proposal {
     pub predicted_mu_stderr: f64,
     /// Whether the claimed robustness reaches the plan's `min_robustness`.
     pub meets_min_robustness: bool,
+    /// When the plan weighs laws: each pair's separation by this release (the planned
+    /// recording added to what came before), worst first.
+    pub separations: Vec<discriminate::Separation>,
+    /// The worst pair's expected BIC margin (NaN when the plan weighs no laws).
+    pub separation: f64,
+    /// Predicted standard errors of each weighed law's parameters (mu_kinetic and the
+    /// law's own) from a recording of this release, the law at its reference departure:
+    /// (law, parameter, stderr).
+    pub law_stderr: Vec<(discriminate::Law, Param, f64)>,
     /// Samples of the nominal run at the frame rate (for figures).
     pub samples: Vec<Sample<f64>>,
 }
@@ -135,6 +147,10 @@ pub struct PlanReport {
     /// mu's standard error known before (the fit of `--after`): each proposal's predicted
     /// standard error is mu's after adding it to that knowledge.
     pub prior_mu_stderr: Option<f64>,
+    /// The laws weighed (empty: the plan ranks by mu's precision).
+    pub laws: Vec<discriminate::Law>,
+    /// Why these laws, or why none, in plain sentences.
+    pub law_notes: Vec<String>,
 }
 
 /// A plan that could not be computed.
@@ -157,7 +173,14 @@ pub fn plan(spec: &PlanSpec) -> Result<PlanReport, PlanError> {
 
 /// Plan, advancing `bar` once per release judged on the grid.
 pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanReport, PlanError> {
-    let ev = Evaluator::new(spec);
+    let mut ev = Evaluator::new(spec);
+    let planned_rows = 4.0 * spec.camera.frame_times().len() as f64;
+    let (laws, law_notes) = discriminate::resolve(&ev, planned_rows);
+    let weighed: Vec<discriminate::Law> = laws
+        .as_ref()
+        .map_or_else(Vec::new, |l| l.candidates.iter().map(|c| c.0).collect());
+    ev.laws = laws;
+    let ev = ev;
     let ranges = search::release_box(spec);
     let points = search::grid(&ranges, spec.search.grid_points);
     bar.set_length(points.len() as u64);
@@ -166,7 +189,7 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
     let mut notes = paradox_notes(spec);
     let mut grid_found = search::screen(&ev, &points, &draws, bar);
     let evaluated = points.len();
-    grid_found.retain(|c| c.stderr.is_finite() || c.robustness > 0.0);
+    grid_found.retain(|c| c.usable() || c.robustness > 0.0);
     if grid_found.is_empty() {
         bar.finish_and_clear();
         let nearest = nearest(&ev, &draws);
@@ -183,6 +206,8 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
             evaluated,
             rig: spec.rig,
             prior_mu_stderr: prior_mu_stderr(spec),
+            laws: weighed,
+            law_notes,
         });
     }
     grid_found.sort_by(|a, b| a.objective(min_rob).total_cmp(&b.objective(min_rob)));
@@ -230,7 +255,11 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
     // other); with `top` ranked ones they are dropped.
     let (mut proposals, mut failed): (Vec<Proposal>, Vec<Proposal>) =
         all.into_iter().partition(Proposal::ranked);
-    proposals.sort_by(|a, b| a.predicted_mu_stderr.total_cmp(&b.predicted_mu_stderr));
+    if ev.laws.is_some() {
+        proposals.sort_by(|a, b| b.separation.total_cmp(&a.separation));
+    } else {
+        proposals.sort_by(|a, b| a.predicted_mu_stderr.total_cmp(&b.predicted_mu_stderr));
+    }
     failed.sort_by(|a, b| b.robustness.total_cmp(&a.robustness));
     let mut taken: Vec<ReleaseValues> = proposals
         .iter()
@@ -281,6 +310,8 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
         evaluated,
         rig: spec.rig,
         prior_mu_stderr: prior_mu_stderr(spec),
+        laws: weighed,
+        law_notes,
     })
 }
 
@@ -310,6 +341,11 @@ fn checked(ev: &Evaluator, check: &Draws, c: &Candidate) -> Result<Proposal, Pla
             message: "the nominal run failed".into(),
         })?;
     let robustness = search::robustness_lower_bound(passed, check.len());
+    let mut separations: Vec<discriminate::Separation> = ev
+        .laws
+        .as_ref()
+        .map_or_else(Vec::new, |l| l.separations(ev, &y0).into_iter().flatten().collect());
+    separations.sort_by(|a, b| a.expected_delta_bic.total_cmp(&b.expected_delta_bic));
     Ok(Proposal {
         initial: y0,
         events: sol.events,
@@ -319,6 +355,9 @@ fn checked(ev: &Evaluator, check: &Draws, c: &Candidate) -> Result<Proposal, Pla
         robustness_observed: passed as f64 / check.len() as f64,
         draws: check.len(),
         predicted_mu_stderr: c.stderr,
+        separations,
+        separation: c.separation,
+        law_stderr: ev.law_stderr(&c.release),
         samples: sol.samples,
     })
 }

@@ -87,6 +87,8 @@ pub struct Prior {
     pub information: DMatrix<f64>,
     /// Where the values are in the JSON: `shared` (a joint fit) or `parameters`.
     pub section: &'static str,
+    /// What the fit said about the friction laws (for a plan that tells them apart).
+    pub laws: Option<super::discriminate::LawTable>,
 }
 
 fn invalid(path: &Path, message: String) -> SceneError {
@@ -228,6 +230,7 @@ impl Prior {
             covariance,
             information,
             section,
+            laws: super::discriminate::LawTable::from_json(v),
         })
     }
 

@@ -3,7 +3,7 @@
 //! robustness as a penalty, then a fresh Monte Carlo check of the best points.
 
 use super::criteria::{Criteria, Evaluation};
-use super::spec::PlanSpec;
+use super::spec::{PlanSpec, Uncertain};
 use crate::fit::lm::LeastSquares;
 use crate::fit::{Observations, Param, TrajectoryProblem};
 use crate::model::{Rig, State};
@@ -27,6 +27,9 @@ pub struct Draws {
     pub mu_static: Vec<f64>,
     /// Uniform draws in [-1, 1] for the execution errors of (theta, theta', x').
     pub release: Vec<[f64; 3]>,
+    /// Standard normal draws for the law's other parameters (a stream of their own, so that
+    /// a plan without them draws what it drew before they existed).
+    pub law: Vec<[f64; 2]>,
 }
 
 impl Draws {
@@ -37,8 +40,12 @@ impl Draws {
             mu_kinetic: Vec::with_capacity(n),
             mu_static: Vec::with_capacity(n),
             release: Vec::with_capacity(n),
+            law: Vec::with_capacity(n),
         };
+        let mut law_rng = ChaCha8Rng::seed_from_u64(seed ^ 0x1a55_1a55);
         for _ in 0..n {
+            d.law
+                .push(std::array::from_fn(|_| law_rng.sample(StandardNormal)));
             d.mu_kinetic.push(rng.sample(StandardNormal));
             d.mu_static.push(rng.sample(StandardNormal));
             d.release
@@ -70,6 +77,9 @@ pub struct Evaluator<'a> {
     pub criteria: Criteria,
     /// Simulator settings of the planner (looser than a fit's: decisions need ~1e-8).
     pub options: Options,
+    /// The laws to tell apart, when the plan weighs laws ([`super::discriminate`]): releases
+    /// are then ranked by how surely they separate them.
+    pub laws: Option<super::discriminate::Laws>,
     obs: Arc<Observations>,
 }
 
@@ -94,7 +104,45 @@ impl<'a> Evaluator<'a> {
                 max_events: 400,
                 ..Options::default()
             },
+            laws: None,
             obs,
+        }
+    }
+
+    /// Observations of zeros at the plan's frames (a Jacobian does not depend on them).
+    pub fn placeholder(&self) -> Arc<Observations> {
+        self.obs.clone()
+    }
+
+    /// The release's separation of the plan's laws (the worst pair's expected BIC margin),
+    /// NaN when the plan weighs no laws.
+    pub fn separation(&self, p: &ReleaseValues) -> f64 {
+        match &self.laws {
+            Some(laws) => super::discriminate::Laws::worst(&laws.separations(self, &self.initial(p))),
+            None => f64::NAN,
+        }
+    }
+
+    /// A candidate judged on `draws`: its robustness, mu's predicted standard error and,
+    /// when the plan weighs laws and the release can be ranked, its separation.
+    pub fn candidate(&self, p: &ReleaseValues, draws: &Draws) -> Candidate {
+        let robustness = self.passes(p, draws) as f64 / draws.len() as f64;
+        let stderr = self.mu_stderr(p);
+        // Releases far from robust are priced out by the penalty anyway: no rival fits.
+        let separation = if robustness >= 0.5 * self.spec.goal.min_robustness {
+            self.separation(p)
+        } else {
+            f64::NAN
+        };
+        Candidate {
+            release: *p,
+            robustness,
+            stderr,
+            separation: if self.laws.is_some() && separation.is_nan() {
+                f64::NEG_INFINITY
+            } else {
+                separation
+            },
         }
     }
 
@@ -111,6 +159,19 @@ impl<'a> Evaluator<'a> {
             Some(u) => u.at(draws.mu_static[i]).max(rig.mu_kinetic),
             None => rig.mu_kinetic,
         };
+        for (k, (q, u)) in self.spec.law_uncertain.iter().enumerate().take(2) {
+            let z = draws.law[i][k];
+            match (q, u) {
+                // A split may take either sign: no clamp at zero.
+                (Param::FrictionSplit, Uncertain::Normal { mean, sd }) => {
+                    rig.kinetic_split = mean + sd * z;
+                    rig.static_split = rig.kinetic_split;
+                }
+                (Param::StribeckVelocity, u) => rig.stribeck_velocity = u.at(z).max(1e-9),
+                (Param::LoadExponent, u) => rig.load_exponent = u.at(z),
+                _ => {}
+            }
+        }
         rig
     }
 
@@ -158,62 +219,102 @@ impl<'a> Evaluator<'a> {
     /// its own initial state marginalised (a Schur complement), is added to the fit's, and
     /// the error is mu's after both. Infinite when mu is not identifiable.
     pub fn mu_stderr(&self, p: &ReleaseValues) -> f64 {
+        let extra: &[Param] = match (&self.spec.prior, &self.spec.mu_static) {
+            (None, Some(_)) => &[Param::MuStatic],
+            _ => &[],
+        };
+        self.stderrs(&self.spec.rig, &self.initial(p), extra)
+            .and_then(|v| v.into_iter().find(|(q, _)| *q == Param::MuKinetic))
+            .map_or(f64::INFINITY, |(_, se)| se)
+    }
+
+    /// Predicted standard errors of the rig's parameters (mu_kinetic, an earlier fit's
+    /// parameters, and `extra`) from a recording of release `y0` of `rig`, the release's own
+    /// initial state marginalised and an earlier fit's knowledge added; infinite for one
+    /// the recording cannot pin down, `None` when the run fails.
+    pub fn stderrs(
+        &self,
+        rig: &Rig<f64>,
+        y0: &State<f64>,
+        extra: &[Param],
+    ) -> Option<Vec<(Param, f64)>> {
         let state = [Param::X, Param::Theta, Param::XDot, Param::ThetaDot];
         let mut free: Vec<Param> = match &self.spec.prior {
             Some(prior) => prior.names.clone(),
             None => vec![Param::MuKinetic],
         };
+        let known = free.len();
+        free.extend(extra.iter().filter(|q| !free.contains(q)).collect::<Vec<_>>());
         let rig_params = free.len();
         free.extend(state);
-        if self.spec.prior.is_none() && self.spec.mu_static.is_some() {
-            free.push(Param::MuStatic);
-        }
-        let mu_index = free
-            .iter()
-            .position(|q| *q == Param::MuKinetic)
-            .unwrap_or(0);
-        let mut problem = TrajectoryProblem::new(
-            self.obs.clone(),
-            self.spec.rig,
-            self.initial(p),
-            free.clone(),
-            self.options,
-        );
+        let mut problem =
+            TrajectoryProblem::new(self.obs.clone(), *rig, *y0, free.clone(), self.options);
         problem.tie_static = !free.contains(&Param::MuStatic);
         let noise = self.spec.camera.noise_m;
         problem.sigma = [noise, noise];
-        let Ok(normal) = problem.normal_equations(&problem.values()) else {
-            return f64::INFINITY;
+        let normal = problem.normal_equations(&problem.values()).ok()?;
+        let k = free.len();
+        let a = normal.jtj.view((0, 0), (rig_params, rig_params));
+        let b = normal
+            .jtj
+            .view((0, rig_params), (rig_params, k - rig_params));
+        let c = normal
+            .jtj
+            .view((rig_params, rig_params), (k - rig_params, k - rig_params))
+            .into_owned();
+        let infinite = || free[..rig_params].iter().map(|&q| (q, f64::INFINITY)).collect();
+        let Some(c_inv) = c.cholesky().map(|ch| ch.inverse()) else {
+            return Some(infinite());
         };
-        let info = match &self.spec.prior {
-            None => normal.jtj,
-            Some(prior) => {
-                let k = free.len();
-                let a = normal.jtj.view((0, 0), (rig_params, rig_params));
-                let b = normal
-                    .jtj
-                    .view((0, rig_params), (rig_params, k - rig_params));
-                let c = normal
-                    .jtj
-                    .view((rig_params, rig_params), (k - rig_params, k - rig_params))
-                    .into_owned();
-                let Some(c_inv) = c.cholesky().map(|ch| ch.inverse()) else {
-                    return f64::INFINITY;
-                };
-                a - b * c_inv * b.transpose() + &prior.information
+        let mut info = a - b * c_inv * b.transpose();
+        if let Some(prior) = &self.spec.prior {
+            let mut block = info.view_mut((0, 0), (known, known));
+            block += &prior.information;
+        }
+        let Some(ch) = info.cholesky() else {
+            return Some(infinite());
+        };
+        let cov = ch.inverse();
+        Some(
+            free[..rig_params]
+                .iter()
+                .enumerate()
+                .map(|(i, &q)| {
+                    let var = cov[(i, i)];
+                    (q, if var.is_finite() && var > 0.0 { var.sqrt() } else { f64::INFINITY })
+                })
+                .collect(),
+        )
+    }
+
+    /// Predicted standard errors of each weighed law's parameters (mu_kinetic and its own,
+    /// at its reference departure) from a recording of this release; without laws to weigh,
+    /// those of the plan's own law when it has parameters beyond mu.
+    pub fn law_stderr(&self, p: &ReleaseValues) -> Vec<(super::discriminate::Law, Param, f64)> {
+        use super::discriminate::{reference_rig, Law};
+        let laws: Vec<(Law, Rig<f64>)> = match &self.laws {
+            Some(l) => l.candidates.clone(),
+            None => {
+                let own = Law::of_rig(&self.spec.rig);
+                if own == Law::Coulomb {
+                    return Vec::new();
+                }
+                vec![(own, reference_rig(&self.spec.rig, own))]
             }
         };
-        match info.cholesky() {
-            Some(ch) => {
-                let var = ch.inverse()[(mu_index, mu_index)];
-                if var.is_finite() && var > 0.0 {
-                    var.sqrt()
-                } else {
-                    f64::INFINITY
+        let y0 = self.initial(p);
+        let mut out = Vec::new();
+        for (law, rig) in laws {
+            let Some(ses) = self.stderrs(&rig, &y0, law.params()) else {
+                continue;
+            };
+            for (q, se) in ses {
+                if q == Param::MuKinetic || law.params().contains(&q) {
+                    out.push((law, q, se));
                 }
             }
-            None => f64::INFINITY,
         }
+        out
     }
 }
 
@@ -226,13 +327,32 @@ pub struct Candidate {
     pub robustness: f64,
     /// Predicted standard error of mu.
     pub stderr: f64,
+    /// The worst pair's expected BIC margin when the plan weighs laws (NaN when it does not).
+    pub separation: f64,
 }
 
+/// The scale of the separation in the objective: asinh(margin / 10) grows as the log of a
+/// margin well above the fit's lines (2 and 6 in BIC) and stays ordered below them.
+const SEPARATION_SCALE: f64 = 10.0;
+
 impl Candidate {
-    /// What the search minimises: log stderr, plus a steep penalty for every bit of
-    /// robustness missing (a constraint softened so Nelder-Mead can feel its way back).
+    /// What the search minimises: log stderr, or, when the plan weighs laws, minus the
+    /// separation on a log-like scale; plus a steep penalty for every bit of robustness
+    /// missing (a constraint softened so Nelder-Mead can feel its way back).
     pub fn objective(&self, min_robustness: f64) -> f64 {
-        self.stderr.ln() + 20.0 * (min_robustness - self.robustness).max(0.0)
+        let value = if self.separation.is_nan() {
+            self.stderr.ln()
+        } else {
+            // A separation never computed (-inf) ranks last, but finitely.
+            -(self.separation.max(-1e6) / SEPARATION_SCALE).asinh()
+        };
+        value + 20.0 * (min_robustness - self.robustness).max(0.0)
+    }
+
+    /// Whether the search can use it: mu identifiable, and under a law plan its separation
+    /// computed.
+    pub fn usable(&self) -> bool {
+        self.stderr.is_finite() && self.separation != f64::NEG_INFINITY
     }
 }
 
@@ -274,11 +394,7 @@ pub fn screen(
         .par_iter()
         .filter_map(|p| {
             let ok = ev.nominal_ok(p);
-            let out = ok.then(|| Candidate {
-                release: *p,
-                robustness: ev.passes(p, draws) as f64 / draws.len() as f64,
-                stderr: ev.mu_stderr(p),
-            });
+            let out = ok.then(|| ev.candidate(p, draws));
             bar.inc(1);
             out
         })
@@ -356,11 +472,9 @@ impl Refine<'_, '_> {
 
     fn candidate(&self, u: &[f64]) -> Option<Candidate> {
         let (p, _) = self.release(u);
-        self.ev.nominal_ok(&p).then(|| Candidate {
-            release: p,
-            robustness: self.ev.passes(&p, self.draws) as f64 / self.draws.len() as f64,
-            stderr: self.ev.mu_stderr(&p),
-        })
+        self.ev
+            .nominal_ok(&p)
+            .then(|| self.ev.candidate(&p, self.draws))
     }
 }
 
@@ -372,7 +486,7 @@ impl CostFunction for Refine<'_, '_> {
         let (_, outside) = self.release(u);
         let min_rob = self.ev.spec.goal.min_robustness;
         let value = match self.candidate(u) {
-            Some(c) if c.stderr.is_finite() => c.objective(min_rob),
+            Some(c) if c.usable() => c.objective(min_rob),
             _ => 1e6,
         };
         Ok(value + 1e3 * outside)
@@ -420,7 +534,7 @@ pub fn refine(ev: &Evaluator, draws: &Draws, start: &Candidate, iters: u64) -> C
     };
     let min_rob = ev.spec.goal.min_robustness;
     best.and_then(|u| problem.candidate(&u))
-        .filter(|c| c.stderr.is_finite() && c.objective(min_rob) < start.objective(min_rob))
+        .filter(|c| c.usable() && c.objective(min_rob) < start.objective(min_rob))
         .unwrap_or(*start)
 }
 

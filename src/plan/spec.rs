@@ -34,13 +34,15 @@ pub struct PlanRigSpec {
     pub gravity: Option<f64>,
 }
 
-/// The `[friction]` section: the estimate of mu and how uncertain it is, as a standard
-/// deviation (normal draws) or a range (uniform draws).
-#[derive(Debug, Clone, Copy, Deserialize, PartialEq)]
+/// The `[friction]` section: the law the lab expects (the rig file's keys: Coulomb's by
+/// default) with its coefficients, each as an estimate with a standard deviation (`_sd`,
+/// normal draws) or a range (`_range`, uniform draws), and optionally the laws to tell apart.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
 #[serde(deny_unknown_fields)]
 pub struct FrictionSpec {
-    /// Estimate of mu_kinetic.
-    pub mu_kinetic: f64,
+    /// Estimate of mu_kinetic (left out under the direction law, which gives each
+    /// direction's).
+    pub mu_kinetic: Option<f64>,
     /// Standard deviation of mu_kinetic.
     pub mu_kinetic_sd: Option<f64>,
     /// Range `[lo, hi]` of mu_kinetic (instead of a standard deviation).
@@ -51,6 +53,35 @@ pub struct FrictionSpec {
     pub mu_static_sd: Option<f64>,
     /// Range of mu_static.
     pub mu_static_range: Option<[f64; 2]>,
+    /// The friction law (`coulomb`, `stribeck`, `direction`, `load`), as in a rig file.
+    pub friction_law: Option<crate::model::FrictionLaw>,
+    /// Stribeck speed v_s (m/s), with `friction_law = "stribeck"`.
+    pub stribeck_velocity: Option<f64>,
+    /// Its standard deviation.
+    pub stribeck_velocity_sd: Option<f64>,
+    /// Its range.
+    pub stribeck_velocity_range: Option<[f64; 2]>,
+    /// Kinetic coefficient toward +x, with `friction_law = "direction"`.
+    pub mu_kinetic_positive: Option<f64>,
+    /// Its standard deviation.
+    pub mu_kinetic_positive_sd: Option<f64>,
+    /// Kinetic coefficient toward -x.
+    pub mu_kinetic_negative: Option<f64>,
+    /// Its standard deviation.
+    pub mu_kinetic_negative_sd: Option<f64>,
+    /// Static coefficient toward +x (default: the kinetic one).
+    pub mu_static_positive: Option<f64>,
+    /// Static coefficient toward -x.
+    pub mu_static_negative: Option<f64>,
+    /// Exponent n of `friction_law = "load"`.
+    pub load_exponent: Option<f64>,
+    /// Its standard deviation.
+    pub load_exponent_sd: Option<f64>,
+    /// Its range.
+    pub load_exponent_range: Option<[f64; 2]>,
+    /// Laws to tell apart (`coulomb`, `static`, `stribeck`, `direction`, `load`): the plan
+    /// then ranks releases by how surely a recording would separate them.
+    pub discriminate: Option<Vec<String>>,
 }
 
 /// The `[camera]` section.
@@ -324,7 +355,7 @@ impl fmt::Display for Uncertain {
 }
 
 /// Standard normal CDF (Abramowitz-Stegun 7.1.26 erf, 1.5e-7): enough to map draws.
-fn normal_cdf(z: f64) -> f64 {
+pub(crate) fn normal_cdf(z: f64) -> f64 {
     let x = z.abs() / std::f64::consts::SQRT_2;
     let t = 1.0 / (1.0 + 0.327_591_1 * x);
     let poly = t
@@ -403,6 +434,9 @@ pub struct PlanSpec {
     pub mu_kinetic: Uncertain,
     /// mu_static and its uncertainty; `None`: equal to mu_kinetic in every draw.
     pub mu_static: Option<Uncertain>,
+    /// The law's other parameters with their uncertainties (the Stribeck speed, the
+    /// direction law's split, the load exponent), drawn like mu.
+    pub law_uncertain: Vec<(crate::fit::Param, Uncertain)>,
     /// The camera.
     pub camera: Camera,
     /// The release mechanism.
@@ -414,6 +448,9 @@ pub struct PlanSpec {
     /// What an earlier fit knows (`--after`): the releases are then ranked by mu's standard
     /// error with that knowledge added.
     pub prior: Option<super::prior::Prior>,
+    /// Laws to tell apart (`friction.discriminate`); empty: those an earlier fit left open,
+    /// or none.
+    pub discriminate: Vec<super::discriminate::Law>,
 }
 
 fn invalid(path: &Path, key: &str, expected: &str, value: impl fmt::Debug) -> SceneError {
@@ -548,8 +585,9 @@ impl PlanFile {
     /// Check every value, naming the first bad key: the sections in the file's order, each
     /// by its own check.
     pub fn validate(&self, path: &Path) -> Result<PlanSpec, SceneError> {
-        let (mu_kinetic, mu_static) = self.friction.uncertainties(path)?;
         let rig = self.rig.rig(path, &self.friction)?;
+        let (mu_kinetic, mu_static, law_uncertain) = self.friction.uncertainties(path, &rig)?;
+        let discriminate = self.friction.discriminate(path)?;
         let camera = self.camera.validate(path)?;
         let release = self.release.validate(path)?;
         let goal = self.goal.validate(path, &camera)?;
@@ -558,29 +596,64 @@ impl PlanFile {
             rig,
             mu_kinetic,
             mu_static,
+            law_uncertain,
             camera,
             release,
             goal,
             search: self.search,
             prior: None,
+            discriminate,
         };
         spec.check_work(path, None)?;
         Ok(spec)
     }
 }
 
+/// The law parameters' uncertainties of a plan's friction: (parameter, uncertainty).
+type LawUncertain = Vec<(crate::fit::Param, Uncertain)>;
+
 impl FrictionSpec {
-    /// mu_kinetic and mu_static (when given) with their uncertainties; mu_static's
-    /// uncertainty without mu_static is an error.
-    fn uncertainties(&self, path: &Path) -> Result<(Uncertain, Option<Uncertain>), SceneError> {
+    /// mu_kinetic and mu_static (when given) with their uncertainties, and the law's other
+    /// parameters' (of `rig`, the plan's rig built from these keys); an uncertainty without
+    /// its value is an error.
+    fn uncertainties(
+        &self,
+        path: &Path,
+        rig: &Rig<f64>,
+    ) -> Result<(Uncertain, Option<Uncertain>, LawUncertain), SceneError> {
+        use crate::fit::Param;
         let f = self;
-        let mu_kinetic = uncertain(
-            path,
-            "mu_kinetic",
-            f.mu_kinetic,
-            f.mu_kinetic_sd,
-            f.mu_kinetic_range,
-        )?;
+        let missing = |key: &str| SceneError::Invalid {
+            path: path.to_owned(),
+            message: format!("friction.{key} is missing (its uncertainty is given)"),
+        };
+        let mut law = Vec::new();
+        let mu_kinetic = match (f.mu_kinetic_positive, f.mu_kinetic_negative) {
+            (Some(p), Some(n)) => {
+                // Each direction's coefficient drawn on its own: their mean and half
+                // difference are then independent with sd sqrt(sd+^2 + sd-^2) / 2 (the
+                // same for equal errors).
+                let sp = f.mu_kinetic_positive_sd.unwrap_or(0.0);
+                let sn = f.mu_kinetic_negative_sd.unwrap_or(0.0);
+                for (key, sd) in [("mu_kinetic_positive_sd", sp), ("mu_kinetic_negative_sd", sn)] {
+                    if !(sd.is_finite() && (0.0..=RIG_MAX).contains(&sd)) {
+                        return Err(invalid(path, &format!("friction.{key}"), &format!("between 0 and {RIG_MAX:e} (as mu itself)"), sd));
+                    }
+                }
+                let sd = 0.5 * sp.hypot(sn);
+                law.push((Param::FrictionSplit, Uncertain::Normal { mean: 0.5 * (p - n), sd }));
+                Uncertain::Normal { mean: 0.5 * (p + n), sd }
+            }
+            _ if f.mu_kinetic_positive_sd.is_some() => return Err(missing("mu_kinetic_positive")),
+            _ if f.mu_kinetic_negative_sd.is_some() => return Err(missing("mu_kinetic_negative")),
+            _ => uncertain(
+                path,
+                "mu_kinetic",
+                rig.mu_kinetic,
+                f.mu_kinetic_sd,
+                f.mu_kinetic_range,
+            )?,
+        };
         let mu_static = match f.mu_static {
             Some(m) => Some(uncertain(
                 path,
@@ -590,16 +663,58 @@ impl FrictionSpec {
                 f.mu_static_range,
             )?),
             None if f.mu_static_sd.is_some() || f.mu_static_range.is_some() => {
-                return Err(SceneError::Invalid {
-                    path: path.to_owned(),
-                    message: "friction.mu_static is missing (its uncertainty is given)".into(),
-                })
+                return Err(missing("mu_static"))
             }
             None => None,
         };
-        Ok((mu_kinetic, mu_static))
+        for (q, key, value, sd, range) in [
+            (Param::StribeckVelocity, "stribeck_velocity", f.stribeck_velocity, f.stribeck_velocity_sd, f.stribeck_velocity_range),
+            (Param::LoadExponent, "load_exponent", f.load_exponent, f.load_exponent_sd, f.load_exponent_range),
+        ] {
+            match value {
+                Some(v) => {
+                    let u = uncertain(path, key, v, sd, range)?;
+                    if u != (Uncertain::Normal { mean: v, sd: 0.0 }) {
+                        law.push((q, u));
+                    }
+                }
+                None if sd.is_some() || range.is_some() => return Err(missing(key)),
+                None => {}
+            }
+        }
+        Ok((mu_kinetic, mu_static, law))
+    }
+
+    /// The laws of `discriminate`, each named once.
+    fn discriminate(&self, path: &Path) -> Result<Vec<super::discriminate::Law>, SceneError> {
+        use super::discriminate::Law;
+        let Some(names) = &self.discriminate else {
+            return Ok(Vec::new());
+        };
+        let mut laws = Vec::new();
+        for (i, name) in names.iter().enumerate() {
+            let law = Law::from_name(name).ok_or_else(|| {
+                invalid(
+                    path,
+                    &format!("friction.discriminate[{i}]"),
+                    "one of \"coulomb\", \"static\", \"stribeck\", \"direction\", \"load\"",
+                    name,
+                )
+            })?;
+            if laws.contains(&law) {
+                return Err(invalid(path, &format!("friction.discriminate[{i}]"), "a law not named before", name));
+            }
+            laws.push(law);
+        }
+        if laws.len() < 2 {
+            return Err(invalid(path, "friction.discriminate", "at least two laws to tell apart", names));
+        }
+        Ok(laws)
     }
 }
+
+/// The rig file's friction keys, named in a plan's messages as its `[friction]` keys.
+const FRICTION_KEYS: [&str; 4] = ["mu_", "friction_law", "stribeck_velocity", "load_exponent"];
 
 impl PlanRigSpec {
     /// The rig with the friction's central values, checked as a rig file's by the same
@@ -617,17 +732,17 @@ impl PlanRigSpec {
             pendulum_com: r.pendulum_com,
             pendulum_inertia: r.pendulum_inertia,
             gravity: r.gravity,
-            mu_kinetic: Some(f.mu_kinetic),
+            mu_kinetic: f.mu_kinetic,
             mu_static: f.mu_static,
             rail_tilt_deg: None,
             pivot_damping: None,
-            friction_law: None,
-            mu_kinetic_positive: None,
-            mu_kinetic_negative: None,
-            mu_static_positive: None,
-            mu_static_negative: None,
-            load_exponent: None,
-            stribeck_velocity: None,
+            friction_law: f.friction_law,
+            mu_kinetic_positive: f.mu_kinetic_positive,
+            mu_kinetic_negative: f.mu_kinetic_negative,
+            mu_static_positive: f.mu_static_positive,
+            mu_static_negative: f.mu_static_negative,
+            load_exponent: f.load_exponent,
+            stribeck_velocity: f.stribeck_velocity,
             viscous_friction: None,
             rod_length_sd: None,
             slider_mass_sd: None,
@@ -639,7 +754,9 @@ impl PlanRigSpec {
         let rig = spec.checked(path).map_err(|e| match e {
             SceneError::Invalid { path, message } => SceneError::Invalid {
                 path,
-                message: message.replace("rig.mu_", "friction.mu_"),
+                message: FRICTION_KEYS.iter().fold(message, |m, k| {
+                    m.replace(&format!("rig.{k}"), &format!("friction.{k}"))
+                }),
             },
             e => e,
         })?;

@@ -99,12 +99,71 @@ fn proposal_json(report: &PlanReport, rank: Option<usize>, p: &Proposal) -> Valu
             "slider_range_m": p.nominal.slider_range,
         },
     });
+    law_json(&mut v, p);
     // Only with --after: what the release adds to the earlier fit's knowledge.
     if let Some(prior) = report.prior_mu_stderr {
         v["prior_mu_stderr"] = finite(prior);
         v["shrinks_mu_stderr_by"] = finite(prior / p.predicted_mu_stderr);
     }
     v
+}
+
+/// A proposal's law fields: `separation` (the worst pair's expected BIC margin) and
+/// `discrimination` (each pair, worst first) when the plan weighs laws; `predicted_stderr`
+/// (law -> parameter -> predicted standard error) when it weighs laws or plans for a law
+/// with parameters beyond mu.
+fn law_json(v: &mut Value, p: &Proposal) {
+    if !p.separation.is_nan() {
+        v["separation"] = finite(p.separation);
+        v["discrimination"] = json!(p
+            .separations
+            .iter()
+            .map(|s| json!({
+                "truth": s.truth,
+                "rival": s.rival,
+                "lambda": finite(s.lambda),
+                "expected_delta_bic": finite(s.expected_delta_bic),
+                "probability": finite(s.probability),
+            }))
+            .collect::<Vec<_>>());
+    }
+    if !p.law_stderr.is_empty() {
+        let mut m = serde_json::Map::new();
+        for (law, q, se) in &p.law_stderr {
+            let e = m
+                .entry(law.name())
+                .or_insert_with(|| json!({}));
+            e[q.name()] = finite(*se);
+        }
+        v["predicted_stderr"] = Value::Object(m);
+    }
+}
+
+/// The lines of a proposal's law separation and the laws' predicted errors.
+fn law_lines(s: &mut String, p: &Proposal) {
+    for sep in &p.separations {
+        let _ = writeln!(
+            s,
+            "   separates {} (true) from {}: chi-square {:.1} on average, expected BIC margin {:+.1}, chance the fit prefers {} {:.2}",
+            sep.truth,
+            sep.rival,
+            sep.lambda,
+            sep.expected_delta_bic,
+            sep.truth,
+            sep.probability
+        );
+    }
+    let mut by_law: Vec<(crate::plan::discriminate::Law, Vec<String>)> = Vec::new();
+    for (law, q, se) in &p.law_stderr {
+        let text = format!("{} {:.2e}", q.name(), se);
+        match by_law.iter_mut().find(|(l, _)| l == law) {
+            Some((_, v)) => v.push(text),
+            None => by_law.push((*law, vec![text])),
+        }
+    }
+    for (law, v) in by_law {
+        let _ = writeln!(s, "   predicted stderr under {law}: {}", v.join(", "));
+    }
 }
 
 /// The plan as one JSON object: `feasible`, `targets`, `min_robustness`, `release_box`,
@@ -144,6 +203,11 @@ pub fn plan_json(report: &PlanReport) -> Value {
             "robustness": n.robustness,
         })),
         "notes": report.notes,
+        "laws": {
+            "weighed": report.laws,
+            "criterion": if report.laws.is_empty() { "precision of mu" } else { "separation of the laws" },
+            "notes": report.law_notes,
+        },
         "evaluated": report.evaluated,
     })
 }
@@ -153,7 +217,7 @@ pub fn plan_json(report: &PlanReport) -> Value {
 pub fn plan_table(report: &PlanReport) -> String {
     let mut s = String::new();
     let _ = writeln!(s, "targets: {}", target_label(report));
-    for n in &report.notes {
+    for n in report.law_notes.iter().chain(&report.notes) {
         let _ = writeln!(s, "note: {n}");
     }
     if let Some(n) = &report.nearest {
@@ -236,6 +300,7 @@ pub fn plan_table(report: &PlanReport) -> String {
                 prior / p.predicted_mu_stderr
             ))
         );
+        law_lines(&mut s, p);
         for h in p.nominal.hits.iter().flatten() {
             let _ = writeln!(
                 s,
