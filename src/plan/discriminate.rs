@@ -14,12 +14,11 @@
 //! BIC's penalty, not the data, decides.
 
 use super::search::Evaluator;
-use crate::fit::lm::LeastSquares;
-use crate::fit::{Observations, Param, TrajectoryProblem};
+use crate::fit::{Param, TrajectoryProblem};
 use super::spec::normal_cdf;
 use crate::model::{FrictionLaw, Rig, State};
+use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
-use std::sync::Arc;
 
 /// A friction law the plan can weigh: the fit's names (`static` is Coulomb's law with a
 /// static coefficient above the kinetic one).
@@ -178,6 +177,52 @@ pub struct Laws {
     /// Residual rows of the recordings the fit will have (for the BIC's ln n): the planned
     /// release's and those before it.
     pub rows: f64,
+    /// Each pair's terms from the recording already made (its release known from the fit),
+    /// fitted together with the planned one: the rival shares its coefficient and law
+    /// parameters across both, each recording has its own release.
+    pub before: Vec<Option<Terms>>,
+    /// The rig at the truths' common coefficient with no departure (Coulomb's): where each
+    /// rival's Jacobian is taken.
+    pub null: Rig<f64>,
+}
+
+/// One recording's part of a rival's linearised fit to the truth's predictions, its own
+/// release marginalised: the sum of squares left, and the gradient and information about
+/// the rival's shared parameters (mu_kinetic and its law's).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Terms {
+    /// r'r - c' C^-1 c: what the release's own state cannot absorb.
+    pub ss: f64,
+    /// J'r of the shared parameters, the state marginalised.
+    pub g: nalgebra::DVector<f64>,
+    /// J'J of the shared parameters, the state marginalised.
+    pub info: nalgebra::DMatrix<f64>,
+}
+
+impl Terms {
+    /// The sum of squares left after the shared parameters' Gauss-Newton step over all
+    /// `terms` (a minimum-norm step where the information is singular).
+    fn lambda<'a>(terms: impl IntoIterator<Item = &'a Terms>) -> f64 {
+        let mut it = terms.into_iter();
+        let Some(first) = it.next() else {
+            return 0.0;
+        };
+        let (mut ss, mut g, mut info) = (first.ss, first.g.clone(), first.info.clone());
+        for t in it {
+            ss += t.ss;
+            g += &t.g;
+            info += &t.info;
+        }
+        // Scale to unit diagonal: the parameters' units differ by orders of magnitude.
+        let d = info.diagonal().map(|v| if v > 0.0 { 1.0 / v.sqrt() } else { 0.0 });
+        let scaled = DMatrix::from_fn(info.nrows(), info.ncols(), |i, j| info[(i, j)] * d[i] * d[j]);
+        let gs = g.component_mul(&d);
+        let step = scaled
+            .svd(true, true)
+            .solve(&gs, 1e-10)
+            .unwrap_or_else(|_| DVector::zeros(gs.len()));
+        (ss - gs.dot(&step)).max(0.0)
+    }
 }
 
 impl Laws {
@@ -200,42 +245,92 @@ impl Laws {
                 }
             }
         }
+        let before = vec![None; pairs.len()];
         Some(Laws {
             candidates,
             pairs,
             rows,
+            before,
+            null: reference_rig(base, Law::Coulomb),
         })
     }
 
-    /// Every pair's separation by a recording of release `y0` (`None` for a pair whose
-    /// truth cannot be simulated from it).
+    /// Every pair's separation by a recording of release `y0` fitted together with the
+    /// recording already made (when its release is known): `None` for a pair whose truth
+    /// or rival cannot be run from it.
     pub fn separations(&self, ev: &Evaluator, y0: &State<f64>) -> Vec<Option<Separation>> {
         let ln_n = self.rows.max(2.0).ln();
-        let mut predicted: Vec<Option<Arc<Observations>>> = vec![None; self.candidates.len()];
-        for &(a, _) in &self.pairs {
-            if predicted[a].is_none() {
-                predicted[a] = predict(ev, &self.candidates[a].1, y0).map(Arc::new);
+        let now = self.recording_terms(ev, y0);
+        self.pairs
+            .iter()
+            .zip(&self.before)
+            .zip(now)
+            .map(|((&(a, b), before), now)| {
+                let lambda = Terms::lambda(before.iter().chain([&now?]));
+                Some(separation(self.candidates[a].0, self.candidates[b].0, lambda, ln_n))
+            })
+            .collect()
+    }
+
+    /// Each pair's terms from a recording of release `y0`: one run of each truth, and one
+    /// Jacobian of each rival at its null departure (the truths' common coefficient), the
+    /// truth's recording entering through the residuals alone.
+    fn recording_terms(&self, ev: &Evaluator, y0: &State<f64>) -> Vec<Option<Terms>> {
+        let n = self.candidates.len();
+        let mut truth: Vec<Option<DVector<f64>>> = vec![None; n];
+        let mut rival: Vec<Option<Option<(DVector<f64>, DMatrix<f64>)>>> = vec![None; n];
+        for &(a, b) in &self.pairs {
+            if truth[a].is_none() {
+                truth[a] = predict(ev, &self.candidates[a].1, y0);
+            }
+            if rival[b].is_none() {
+                rival[b] = Some(rival_jacobian(ev, &self.null, &self.candidates[b], y0));
             }
         }
+        let noise = ev.spec.camera.noise_m;
         self.pairs
             .iter()
             .map(|&(a, b)| {
-                let obs = predicted[a].clone()?;
-                let (la, lb) = (self.candidates[a].0, self.candidates[b].0);
-                let start = rival_start(&self.candidates[a].1, &self.candidates[b].1, lb);
-                let lambda = rival_chi2(ev, obs, start, y0, lb);
-                let dk = la.params().len() as f64 - lb.params().len() as f64;
-                let expected = lambda - dk * ln_n;
-                let sd = (2.0 * (dk.abs() + 2.0 * lambda)).max(1e-12).sqrt();
-                Some(Separation {
-                    truth: la,
-                    rival: lb,
-                    lambda,
-                    expected_delta_bic: expected,
-                    probability: normal_cdf((expected + dk.abs()) / sd),
-                })
+                let y = truth[a].as_ref()?;
+                let (r0, jac) = rival[b].as_ref()?.as_ref()?;
+                // The rival's weighted residuals against the truth's recording.
+                let r = r0 - y / noise;
+                let shared = 1 + self.candidates[b].0.params().len();
+                schur(jac.tr_mul(jac), jac.tr_mul(&r), r.norm_squared(), shared)
             })
             .collect()
+    }
+
+    /// The pairs' terms from the recording of release `y0` already made.
+    pub fn with_before(mut self, ev: &Evaluator, y0: &State<f64>) -> Laws {
+        self.before = self.recording_terms(ev, y0);
+        self
+    }
+
+    /// Every pair's separation by the recording already made alone.
+    pub fn before_only(&self) -> Vec<Option<Separation>> {
+        let ln_n = self.rows.max(2.0).ln();
+        self.pairs
+            .iter()
+            .zip(&self.before)
+            .map(|(&(a, b), t)| {
+                let lambda = Terms::lambda(t.iter());
+                Some(separation(self.candidates[a].0, self.candidates[b].0, lambda, ln_n))
+            })
+            .collect()
+    }
+
+    /// What the search maximises: the expected number of pairs the fit will resolve (the
+    /// sum of their chances), the worst pair's margin breaking ties on a log-like scale
+    /// (a box where no release separates some pair still ranks its releases); minus
+    /// infinity when a pair could not be computed.
+    pub fn score(separations: &[Option<Separation>]) -> f64 {
+        let worst = Laws::worst(separations);
+        if worst == f64::NEG_INFINITY {
+            return worst;
+        }
+        let resolved: f64 = separations.iter().flatten().map(|s| s.probability).sum();
+        resolved + 0.01 * (worst / 10.0).asinh()
     }
 
     /// The release's separation: the smallest expected BIC margin over the pairs (minus
@@ -248,31 +343,36 @@ impl Laws {
     }
 }
 
-/// The noise-free marker positions a release of `rig` predicts at the plan's frames.
-fn predict(ev: &Evaluator, rig: &Rig<f64>, y0: &State<f64>) -> Option<Observations> {
-    let base = ev.placeholder();
-    let mut problem = TrajectoryProblem::new(base.clone(), *rig, *y0, Vec::new(), ev.options);
+/// The noise-free marker coordinates a release of `rig` predicts at the plan's frames, in
+/// the rows' order (metres).
+fn predict(ev: &Evaluator, rig: &Rig<f64>, y0: &State<f64>) -> Option<DVector<f64>> {
+    let mut problem = TrajectoryProblem::new(ev.placeholder(), *rig, *y0, Vec::new(), ev.options);
     // The rig's own mu_static (a problem ties it to mu_kinetic unless told otherwise).
     problem.tie_static = false;
-    let values = problem
-        .raw_residuals(&nalgebra::DVector::zeros(0))
-        .ok()?;
-    let n = base.times.len();
-    let mut obs = Observations {
-        times: base.times.clone(),
-        slider: vec![None; n],
-        bob: vec![None; n],
-    };
     // The placeholder observes zeros, so each residual row is the predicted coordinate.
-    for (row, v) in problem.rows().zip(values) {
-        let track = if row.marker == 0 {
-            &mut obs.slider
-        } else {
-            &mut obs.bob
-        };
-        track[row.frame].get_or_insert([0.0; 2])[row.coord] = v;
-    }
-    obs.slider.iter().chain(&obs.bob).all(Option::is_some).then_some(obs)
+    let values = problem.raw_residuals(&DVector::zeros(0)).ok()?;
+    (values.len() == problem.n_rows()).then(|| DVector::from_vec(values))
+}
+
+/// The rival's weighted residuals against the placeholder (its predicted coordinates over
+/// the noise) and their Jacobian in its coefficient, law parameters and release, at its
+/// null departure from `null`.
+fn rival_jacobian(
+    ev: &Evaluator,
+    null: &Rig<f64>,
+    rival: &(Law, Rig<f64>),
+    y0: &State<f64>,
+) -> Option<(DVector<f64>, DMatrix<f64>)> {
+    let (law, reference) = rival;
+    let start = rival_start(null, reference, *law);
+    let mut free = vec![Param::MuKinetic];
+    free.extend_from_slice(law.params());
+    free.extend([Param::X, Param::Theta, Param::XDot, Param::ThetaDot]);
+    let mut problem = TrajectoryProblem::new(ev.placeholder(), start, *y0, free, ev.options);
+    problem.tie_static = !law.params().contains(&Param::MuStatic);
+    let noise = ev.spec.camera.noise_m;
+    problem.sigma = [noise, noise];
+    problem.jacobian(&problem.values()).ok()
 }
 
 /// The rival's starting rig: the truth's, under the rival's law, with each of the rival's
@@ -302,38 +402,38 @@ fn rival_start(truth: &Rig<f64>, reference: &Rig<f64>, rival: Law) -> Rig<f64> {
     rig
 }
 
-/// Gauss-Newton iterations of the rival's fit: lambda settles in two or three (the start is
-/// the truth's coefficient and release, one step from the optimum when the departure is
-/// small).
-const RIVAL_ITERATIONS: u64 = 4;
-
-/// The chi-square of the rival's best fit (its coefficient, law parameters and the release)
-/// to the recording `obs`, with the plan's camera noise.
-fn rival_chi2(
-    ev: &Evaluator,
-    obs: Arc<Observations>,
-    start: Rig<f64>,
-    y0: &State<f64>,
-    rival: Law,
-) -> f64 {
-    let mut free = vec![Param::MuKinetic];
-    free.extend_from_slice(rival.params());
-    free.extend([Param::X, Param::Theta, Param::XDot, Param::ThetaDot]);
-    let mut problem = TrajectoryProblem::new(obs, start, *y0, free, ev.options);
-    problem.tie_static = !matches!(rival, Law::Static | Law::Stribeck);
-    let noise = ev.spec.camera.noise_m;
-    problem.sigma = [noise, noise];
-    let p0 = problem.values();
-    let start_chi2 = problem
-        .normal_equations(&p0)
-        .map_or(f64::INFINITY, |n| 2.0 * n.cost);
-    let lm = crate::fit::solve::loose(Some(1e-6));
-    match crate::fit::solve::run_lm(&problem, p0, RIVAL_ITERATIONS, lm) {
-        Ok((_, cost, _, _)) => (2.0 * cost).min(start_chi2),
-        Err(_) => start_chi2,
+/// A pair's separation from its noncentrality `lambda`, with ln n the BIC's price of a
+/// parameter.
+fn separation(truth: Law, rival: Law, lambda: f64, ln_n: f64) -> Separation {
+    let dk = truth.params().len() as f64 - rival.params().len() as f64;
+    let expected = lambda - dk * ln_n;
+    let sd = (2.0 * (dk.abs() + 2.0 * lambda)).max(1e-12).sqrt();
+    Separation {
+        truth,
+        rival,
+        lambda,
+        expected_delta_bic: expected,
+        probability: normal_cdf((expected + dk.abs()) / sd),
     }
 }
 
+/// One recording's terms from the rival's normal equations (J'J, J'r, r'r) over its
+/// `shared` parameters first and its release after: the release marginalised (a Schur
+/// complement); `None` when the release is not identifiable.
+fn schur(jtj: DMatrix<f64>, jtr: DVector<f64>, rr: f64, shared: usize) -> Option<Terms> {
+    let k = jtj.nrows();
+    let a = jtj.view((0, 0), (shared, shared));
+    let b = jtj.view((0, shared), (shared, k - shared));
+    let c = jtj.view((shared, shared), (k - shared, k - shared)).into_owned();
+    let c_inv = c.cholesky()?.inverse();
+    let ga = jtr.rows(0, shared);
+    let gc = jtr.rows(shared, k - shared);
+    Some(Terms {
+        ss: rr - gc.dot(&(&c_inv * gc)),
+        g: ga - b * (&c_inv * gc),
+        info: a - b * &c_inv * b.transpose(),
+    })
+}
 
 /// What a fit's JSON says about the laws: the one it chose, each law's evidence, and the
 /// recording's release (a single fit's), for [`resolve`].
@@ -396,10 +496,15 @@ pub fn resolve(ev: &Evaluator, rows_planned: f64) -> (Option<Laws>, Vec<String>)
     let spec = ev.spec;
     let mut notes = Vec::new();
     if !spec.discriminate.is_empty() {
-        let rows = rows_planned + spec.prior.as_ref().and_then(|p| p.laws.as_ref()).map_or(0.0, |t| t.n_residuals);
-        let laws = Laws::new(&spec.rig, &spec.discriminate, rows);
+        let table = spec.prior.as_ref().and_then(|p| p.laws.as_ref());
+        let rows = rows_planned + table.map_or(0.0, |t| t.n_residuals);
+        let laws = Laws::new(&spec.rig, &spec.discriminate, rows)
+            .map(|l| match table.and_then(|t| t.initial) {
+                Some(y0) => l.with_before(ev, &y0),
+                None => l,
+            });
         notes.push(format!(
-            "telling apart the laws the plan names ({}): releases ranked by the worst pair's expected BIC margin",
+            "telling apart the laws the plan names ({}): releases ranked by the expected number of pairs the fit's BIC resolves",
             names(&spec.discriminate)
         ));
         return (laws, notes);
@@ -436,7 +541,7 @@ pub fn resolve(ev: &Evaluator, rows_planned: f64) -> (Option<Laws>, Vec<String>)
             if let Some(y0) = table.initial {
                 let first = Laws::new(&spec.rig, &[chosen, law], table.n_residuals);
                 let shown = first
-                    .map(|l| Laws::worst(&l.separations(ev, &y0)))
+                    .map(|l| Laws::worst(&l.with_before(ev, &y0).before_only()))
                     .unwrap_or(f64::NEG_INFINITY);
                 if shown >= STRONG {
                     told.push(format!(
@@ -460,9 +565,15 @@ pub fn resolve(ev: &Evaluator, rows_planned: f64) -> (Option<Laws>, Vec<String>)
         ));
         return (None, notes);
     }
-    let laws = Laws::new(&spec.rig, &open, rows);
+    let laws = Laws::new(&spec.rig, &open, rows).map(|l| match table.initial {
+        Some(y0) => l.with_before(ev, &y0),
+        None => l,
+    });
+    if table.initial.is_none() {
+        notes.push("the fit's JSON holds no release (a joint fit's): the laws are weighed on the planned recording alone, not together with the ones made".into());
+    }
     notes.push(format!(
-        "the fit chose {chosen} but its recording cannot tell it from {}: releases ranked by how surely they separate {} (the worst pair's expected BIC margin)",
+        "the fit chose {chosen} but its recording cannot tell it from {}: releases ranked by how surely the two recordings fitted together (--joint) separate {} (the expected number of pairs the fit's BIC resolves)",
         names(&open[1..]),
         names(&open)
     ));
@@ -471,4 +582,34 @@ pub fn resolve(ev: &Evaluator, rows_planned: f64) -> (Option<Laws>, Vec<String>)
 
 fn names(laws: &[Law]) -> String {
     laws.iter().map(|l| l.name()).collect::<Vec<_>>().join(", ")
+}
+
+/// What shows a law, for a note when no proposal separates it: the motion its departure
+/// acts on.
+pub fn what_shows(law: Law) -> &'static str {
+    match law {
+        Law::Coulomb => "any slide",
+        Law::Static => "a stuck slider that slips again (a larger swing or push that restarts it)",
+        Law::Stribeck => "slow slides that start from rest (gentle swings that restart the slider)",
+        Law::Direction => "slides both ways along the rail",
+        Law::Load => "a swing that varies the normal load (a larger swing)",
+    }
+}
+
+/// Notes for the pairs the best proposal leaves unresolved (chance below one half): which
+/// law, and what release would show it.
+pub fn unresolved_notes(best: &[Separation]) -> Vec<String> {
+    let mut out: Vec<String> = Vec::new();
+    for s in best.iter().filter(|s| s.probability < 0.5) {
+        let line = format!(
+            "the best proposal does not separate {} (true) from {} (expected BIC margin {:+.1}, chance {:.2}): {} shows it; widen the release ranges if the rig allows",
+            s.truth,
+            s.rival,
+            s.expected_delta_bic,
+            s.probability,
+            what_shows(s.truth)
+        );
+        out.push(line);
+    }
+    out
 }

@@ -49,7 +49,8 @@ pub struct Proposal {
     /// When the plan weighs laws: each pair's separation by this release (the planned
     /// recording added to what came before), worst first.
     pub separations: Vec<discriminate::Separation>,
-    /// The worst pair's expected BIC margin (NaN when the plan weighs no laws).
+    /// The expected number of pairs of laws a fit will resolve with this release (NaN when
+    /// the plan weighs no laws).
     pub separation: f64,
     /// Predicted standard errors of each weighed law's parameters (mu_kinetic and the
     /// law's own) from a recording of this release, the law at its reference departure:
@@ -278,6 +279,9 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
         .first()
         .map_or_else(Vec::new, |p| at_limit(&ranges, &p.initial));
     notes.extend(at_limit.iter().map(at_limit_note));
+    if let Some(best) = proposals.first() {
+        notes.extend(discriminate::unresolved_notes(&best.separations));
+    }
     let nearest = (!feasible).then(|| {
         let best = &unranked[0];
         Nearest {

@@ -114,11 +114,11 @@ impl<'a> Evaluator<'a> {
         self.obs.clone()
     }
 
-    /// The release's separation of the plan's laws (the worst pair's expected BIC margin),
+    /// The release's separation of the plan's laws ([`super::discriminate::Laws::score`]),
     /// NaN when the plan weighs no laws.
     pub fn separation(&self, p: &ReleaseValues) -> f64 {
         match &self.laws {
-            Some(laws) => super::discriminate::Laws::worst(&laws.separations(self, &self.initial(p))),
+            Some(laws) => super::discriminate::Laws::score(&laws.separations(self, &self.initial(p))),
             None => f64::NAN,
         }
     }
@@ -327,13 +327,10 @@ pub struct Candidate {
     pub robustness: f64,
     /// Predicted standard error of mu.
     pub stderr: f64,
-    /// The worst pair's expected BIC margin when the plan weighs laws (NaN when it does not).
+    /// When the plan weighs laws, the expected number of pairs of laws a fit will resolve
+    /// ([`super::discriminate::Laws::score`]); NaN when it does not.
     pub separation: f64,
 }
-
-/// The scale of the separation in the objective: asinh(margin / 10) grows as the log of a
-/// margin well above the fit's lines (2 and 6 in BIC) and stays ordered below them.
-const SEPARATION_SCALE: f64 = 10.0;
 
 impl Candidate {
     /// What the search minimises: log stderr, or, when the plan weighs laws, minus the
@@ -344,7 +341,7 @@ impl Candidate {
             self.stderr.ln()
         } else {
             // A separation never computed (-inf) ranks last, but finitely.
-            -(self.separation.max(-1e6) / SEPARATION_SCALE).asinh()
+            -self.separation.max(-1e6)
         };
         value + 20.0 * (min_robustness - self.robustness).max(0.0)
     }

@@ -108,13 +108,17 @@ fn proposal_json(report: &PlanReport, rank: Option<usize>, p: &Proposal) -> Valu
     v
 }
 
-/// A proposal's law fields: `separation` (the worst pair's expected BIC margin) and
+/// A proposal's law fields: `pairs_resolved` (the expected number of the `pairs` a fit will
+/// resolve), `worst_expected_delta_bic` and
 /// `discrimination` (each pair, worst first) when the plan weighs laws; `predicted_stderr`
 /// (law -> parameter -> predicted standard error) when it weighs laws or plans for a law
 /// with parameters beyond mu.
 fn law_json(v: &mut Value, p: &Proposal) {
     if !p.separation.is_nan() {
-        v["separation"] = finite(p.separation);
+        v["pairs_resolved"] = finite(p.separation);
+        v["pairs"] = json!(p.separations.len());
+        v["worst_expected_delta_bic"] =
+            finite(crate::plan::discriminate::Laws::worst(&p.separations.iter().cloned().map(Some).collect::<Vec<_>>()));
         v["discrimination"] = json!(p
             .separations
             .iter()
