@@ -14,8 +14,8 @@
 //! BIC's penalty, not the data, decides.
 
 use super::search::Evaluator;
-use crate::fit::{Param, TrajectoryProblem};
 use super::spec::normal_cdf;
+use crate::fit::{Param, TrajectoryProblem};
 use crate::model::{FrictionLaw, Rig, State};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
@@ -214,8 +214,12 @@ impl Terms {
             info += &t.info;
         }
         // Scale to unit diagonal: the parameters' units differ by orders of magnitude.
-        let d = info.diagonal().map(|v| if v > 0.0 { 1.0 / v.sqrt() } else { 0.0 });
-        let scaled = DMatrix::from_fn(info.nrows(), info.ncols(), |i, j| info[(i, j)] * d[i] * d[j]);
+        let d = info
+            .diagonal()
+            .map(|v| if v > 0.0 { 1.0 / v.sqrt() } else { 0.0 });
+        let scaled = DMatrix::from_fn(info.nrows(), info.ncols(), |i, j| {
+            info[(i, j)] * d[i] * d[j]
+        });
         let gs = g.component_mul(&d);
         let step = scaled
             .svd(true, true)
@@ -267,7 +271,12 @@ impl Laws {
             .zip(now)
             .map(|((&(a, b), before), now)| {
                 let lambda = Terms::lambda(before.iter().chain([&now?]));
-                Some(separation(self.candidates[a].0, self.candidates[b].0, lambda, ln_n))
+                Some(separation(
+                    self.candidates[a].0,
+                    self.candidates[b].0,
+                    lambda,
+                    ln_n,
+                ))
             })
             .collect()
     }
@@ -315,7 +324,12 @@ impl Laws {
             .zip(&self.before)
             .map(|(&(a, b), t)| {
                 let lambda = Terms::lambda(t.iter());
-                Some(separation(self.candidates[a].0, self.candidates[b].0, lambda, ln_n))
+                Some(separation(
+                    self.candidates[a].0,
+                    self.candidates[b].0,
+                    lambda,
+                    ln_n,
+                ))
             })
             .collect()
     }
@@ -338,7 +352,10 @@ impl Laws {
     pub fn worst(separations: &[Option<Separation>]) -> f64 {
         separations
             .iter()
-            .map(|s| s.as_ref().map_or(f64::NEG_INFINITY, |s| s.expected_delta_bic))
+            .map(|s| {
+                s.as_ref()
+                    .map_or(f64::NEG_INFINITY, |s| s.expected_delta_bic)
+            })
             .fold(f64::INFINITY, f64::min)
     }
 }
@@ -424,7 +441,9 @@ fn schur(jtj: DMatrix<f64>, jtr: DVector<f64>, rr: f64, shared: usize) -> Option
     let k = jtj.nrows();
     let a = jtj.view((0, 0), (shared, shared));
     let b = jtj.view((0, shared), (shared, k - shared));
-    let c = jtj.view((shared, shared), (k - shared, k - shared)).into_owned();
+    let c = jtj
+        .view((shared, shared), (k - shared, k - shared))
+        .into_owned();
     let c_inv = c.cholesky()?.inverse();
     let ga = jtr.rows(0, shared);
     let gc = jtr.rows(shared, k - shared);
@@ -461,12 +480,23 @@ impl LawTable {
             .iter()
             .filter_map(|r| {
                 let law = Law::from_name(r["law"].as_str()?)?;
-                Some((law, r["status"].as_str()?.to_owned(), r["delta_bic"].as_f64()))
+                Some((
+                    law,
+                    r["status"].as_str()?.to_owned(),
+                    r["delta_bic"].as_f64(),
+                ))
             })
             .collect();
         let i = &v["initial"];
-        let initial = (|| Some([i["x"].as_f64()?, i["theta"].as_f64()?, i["x_dot"].as_f64()?, i["theta_dot"].as_f64()?]))()
-            .filter(|s| s.iter().all(|x| x.is_finite()));
+        let initial = (|| {
+            Some([
+                i["x"].as_f64()?,
+                i["theta"].as_f64()?,
+                i["x_dot"].as_f64()?,
+                i["theta_dot"].as_f64()?,
+            ])
+        })()
+        .filter(|s| s.iter().all(|x| x.is_finite()));
         let n_residuals = v["n_residuals"]
             .as_f64()
             .or_else(|| {
@@ -479,7 +509,11 @@ impl LawTable {
             chosen: Law::from_name(chosen),
             rows,
             initial,
-            n_residuals: if n_residuals.is_finite() { n_residuals.max(0.0) } else { 0.0 },
+            n_residuals: if n_residuals.is_finite() {
+                n_residuals.max(0.0)
+            } else {
+                0.0
+            },
         })
     }
 }
@@ -498,11 +532,12 @@ pub fn resolve(ev: &Evaluator, rows_planned: f64) -> (Option<Laws>, Vec<String>)
     if !spec.discriminate.is_empty() {
         let table = spec.prior.as_ref().and_then(|p| p.laws.as_ref());
         let rows = rows_planned + table.map_or(0.0, |t| t.n_residuals);
-        let laws = Laws::new(&spec.rig, &spec.discriminate, rows)
-            .map(|l| match table.and_then(|t| t.initial) {
+        let laws = Laws::new(&spec.rig, &spec.discriminate, rows).map(|l| {
+            match table.and_then(|t| t.initial) {
                 Some(y0) => l.with_before(ev, &y0),
                 None => l,
-            });
+            }
+        });
         notes.push(format!(
             "telling apart the laws the plan names ({}): releases ranked by the expected number of pairs the fit's BIC resolves",
             names(&spec.discriminate)
@@ -513,7 +548,9 @@ pub fn resolve(ev: &Evaluator, rows_planned: f64) -> (Option<Laws>, Vec<String>)
         return (None, notes);
     };
     let Some(chosen) = table.chosen else {
-        notes.push("the fit's law is not one the planner weighs: planning for mu's precision".into());
+        notes.push(
+            "the fit's law is not one the planner weighs: planning for mu's precision".into(),
+        );
         return (None, notes);
     };
     let rows = rows_planned + table.n_residuals;

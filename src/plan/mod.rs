@@ -345,10 +345,10 @@ fn checked(ev: &Evaluator, check: &Draws, c: &Candidate) -> Result<Proposal, Pla
             message: "the nominal run failed".into(),
         })?;
     let robustness = search::robustness_lower_bound(passed, check.len());
-    let mut separations: Vec<discriminate::Separation> = ev
-        .laws
-        .as_ref()
-        .map_or_else(Vec::new, |l| l.separations(ev, &y0).into_iter().flatten().collect());
+    let mut separations: Vec<discriminate::Separation> =
+        ev.laws.as_ref().map_or_else(Vec::new, |l| {
+            l.separations(ev, &y0).into_iter().flatten().collect()
+        });
     separations.sort_by(|a, b| a.expected_delta_bic.total_cmp(&b.expected_delta_bic));
     Ok(Proposal {
         initial: y0,

@@ -118,7 +118,9 @@ impl<'a> Evaluator<'a> {
     /// NaN when the plan weighs no laws.
     pub fn separation(&self, p: &ReleaseValues) -> f64 {
         match &self.laws {
-            Some(laws) => super::discriminate::Laws::score(&laws.separations(self, &self.initial(p))),
+            Some(laws) => {
+                super::discriminate::Laws::score(&laws.separations(self, &self.initial(p)))
+            }
             None => f64::NAN,
         }
     }
@@ -244,7 +246,12 @@ impl<'a> Evaluator<'a> {
             None => vec![Param::MuKinetic],
         };
         let known = free.len();
-        free.extend(extra.iter().filter(|q| !free.contains(q)).collect::<Vec<_>>());
+        free.extend(
+            extra
+                .iter()
+                .filter(|q| !free.contains(q))
+                .collect::<Vec<_>>(),
+        );
         let rig_params = free.len();
         free.extend(state);
         let mut problem =
@@ -262,7 +269,12 @@ impl<'a> Evaluator<'a> {
             .jtj
             .view((rig_params, rig_params), (k - rig_params, k - rig_params))
             .into_owned();
-        let infinite = || free[..rig_params].iter().map(|&q| (q, f64::INFINITY)).collect();
+        let infinite = || {
+            free[..rig_params]
+                .iter()
+                .map(|&q| (q, f64::INFINITY))
+                .collect()
+        };
         let Some(c_inv) = c.cholesky().map(|ch| ch.inverse()) else {
             return Some(infinite());
         };
@@ -281,7 +293,14 @@ impl<'a> Evaluator<'a> {
                 .enumerate()
                 .map(|(i, &q)| {
                     let var = cov[(i, i)];
-                    (q, if var.is_finite() && var > 0.0 { var.sqrt() } else { f64::INFINITY })
+                    (
+                        q,
+                        if var.is_finite() && var > 0.0 {
+                            var.sqrt()
+                        } else {
+                            f64::INFINITY
+                        },
+                    )
                 })
                 .collect(),
         )

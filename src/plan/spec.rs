@@ -635,14 +635,31 @@ impl FrictionSpec {
                 // same for equal errors).
                 let sp = f.mu_kinetic_positive_sd.unwrap_or(0.0);
                 let sn = f.mu_kinetic_negative_sd.unwrap_or(0.0);
-                for (key, sd) in [("mu_kinetic_positive_sd", sp), ("mu_kinetic_negative_sd", sn)] {
+                for (key, sd) in [
+                    ("mu_kinetic_positive_sd", sp),
+                    ("mu_kinetic_negative_sd", sn),
+                ] {
                     if !(sd.is_finite() && (0.0..=RIG_MAX).contains(&sd)) {
-                        return Err(invalid(path, &format!("friction.{key}"), &format!("between 0 and {RIG_MAX:e} (as mu itself)"), sd));
+                        return Err(invalid(
+                            path,
+                            &format!("friction.{key}"),
+                            &format!("between 0 and {RIG_MAX:e} (as mu itself)"),
+                            sd,
+                        ));
                     }
                 }
                 let sd = 0.5 * sp.hypot(sn);
-                law.push((Param::FrictionSplit, Uncertain::Normal { mean: 0.5 * (p - n), sd }));
-                Uncertain::Normal { mean: 0.5 * (p + n), sd }
+                law.push((
+                    Param::FrictionSplit,
+                    Uncertain::Normal {
+                        mean: 0.5 * (p - n),
+                        sd,
+                    },
+                ));
+                Uncertain::Normal {
+                    mean: 0.5 * (p + n),
+                    sd,
+                }
             }
             _ if f.mu_kinetic_positive_sd.is_some() => return Err(missing("mu_kinetic_positive")),
             _ if f.mu_kinetic_negative_sd.is_some() => return Err(missing("mu_kinetic_negative")),
@@ -668,8 +685,20 @@ impl FrictionSpec {
             None => None,
         };
         for (q, key, value, sd, range) in [
-            (Param::StribeckVelocity, "stribeck_velocity", f.stribeck_velocity, f.stribeck_velocity_sd, f.stribeck_velocity_range),
-            (Param::LoadExponent, "load_exponent", f.load_exponent, f.load_exponent_sd, f.load_exponent_range),
+            (
+                Param::StribeckVelocity,
+                "stribeck_velocity",
+                f.stribeck_velocity,
+                f.stribeck_velocity_sd,
+                f.stribeck_velocity_range,
+            ),
+            (
+                Param::LoadExponent,
+                "load_exponent",
+                f.load_exponent,
+                f.load_exponent_sd,
+                f.load_exponent_range,
+            ),
         ] {
             match value {
                 Some(v) => {
@@ -702,12 +731,22 @@ impl FrictionSpec {
                 )
             })?;
             if laws.contains(&law) {
-                return Err(invalid(path, &format!("friction.discriminate[{i}]"), "a law not named before", name));
+                return Err(invalid(
+                    path,
+                    &format!("friction.discriminate[{i}]"),
+                    "a law not named before",
+                    name,
+                ));
             }
             laws.push(law);
         }
         if laws.len() < 2 {
-            return Err(invalid(path, "friction.discriminate", "at least two laws to tell apart", names));
+            return Err(invalid(
+                path,
+                "friction.discriminate",
+                "at least two laws to tell apart",
+                names,
+            ));
         }
         Ok(laws)
     }

@@ -117,8 +117,9 @@ fn law_json(v: &mut Value, p: &Proposal) {
     if !p.separation.is_nan() {
         v["pairs_resolved"] = finite(p.separation);
         v["pairs"] = json!(p.separations.len());
-        v["worst_expected_delta_bic"] =
-            finite(crate::plan::discriminate::Laws::worst(&p.separations.iter().cloned().map(Some).collect::<Vec<_>>()));
+        v["worst_expected_delta_bic"] = finite(crate::plan::discriminate::Laws::worst(
+            &p.separations.iter().cloned().map(Some).collect::<Vec<_>>(),
+        ));
         v["discrimination"] = json!(p
             .separations
             .iter()
@@ -134,9 +135,7 @@ fn law_json(v: &mut Value, p: &Proposal) {
     if !p.law_stderr.is_empty() {
         let mut m = serde_json::Map::new();
         for (law, q, se) in &p.law_stderr {
-            let e = m
-                .entry(law.name())
-                .or_insert_with(|| json!({}));
+            let e = m.entry(law.name()).or_insert_with(|| json!({}));
             e[q.name()] = finite(*se);
         }
         v["predicted_stderr"] = Value::Object(m);
