@@ -278,7 +278,12 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
     let at_limit = proposals
         .first()
         .map_or_else(Vec::new, |p| at_limit(&ranges, &p.initial));
-    notes.extend(at_limit.iter().map(at_limit_note));
+    let aim = if ev.laws.is_some() {
+        "tell the laws apart"
+    } else {
+        "pin mu down"
+    };
+    notes.extend(at_limit.iter().map(|a| at_limit_note(a, aim)));
     if let Some(best) = proposals.first() {
         notes.extend(discriminate::unresolved_notes(&best.separations));
     }
@@ -426,10 +431,10 @@ pub fn at_limit(ranges: &[[f64; 2]; 3], initial: &State<f64>) -> Vec<AtLimit> {
     out
 }
 
-/// The note of a limit the best proposal sits at.
-fn at_limit_note(a: &AtLimit) -> String {
+/// The note of a limit the best proposal sits at; `aim` is what the ranking seeks.
+fn at_limit_note(a: &AtLimit, aim: &str) -> String {
     format!(
-        "the best proposal (#1) lies at the {} limit of {} ({:.3}, the limit {:.3}): a release beyond it may pin mu down better; widen {} if the rig allows",
+        "the best proposal (#1) lies at the {} limit of {} ({:.3}, the limit {:.3}): a release beyond it may {aim} better; widen {} if the rig allows",
         a.limit, a.quantity, a.value, a.bound, a.quantity
     )
 }

@@ -147,7 +147,7 @@ fn law_lines(s: &mut String, p: &Proposal) {
     for sep in &p.separations {
         let _ = writeln!(
             s,
-            "   separates {} (true) from {}: chi-square {:.1} on average, expected BIC margin {:+.1}, chance the fit prefers {} {:.2}",
+            "   {} (true) against {}: the rival's best fit leaves chi-square {:.1} on average, expected BIC margin {:+.1}, chance the fit prefers {} {:.2}",
             sep.truth,
             sep.rival,
             sep.lambda,
