@@ -142,8 +142,11 @@ def binary_id(path):
 # --------------------------------------------------------------------------------------------
 # One case
 # --------------------------------------------------------------------------------------------
-def plan_file(rig):
-    return os.path.join(ROOT, "configs", f"plan_law_{rig}.toml")
+PLAN_PATTERN = os.path.join(ROOT, "configs", "plan_law_{rig}.toml")
+
+
+def plan_file(rig, pattern=PLAN_PATTERN):
+    return pattern.format(rig=rig)
 
 
 def release_errors(plan):
@@ -228,7 +231,8 @@ def run_case(c):
     if os.path.exists(res_path):
         with open(res_path) as fh:
             return json.load(fh)
-    with open(plan_file(rig), "rb") as fh:
+    pattern = c.get("plan", PLAN_PATTERN)
+    with open(plan_file(rig, pattern), "rb") as fh:
         plan_spec = tomllib.load(fh)
     errors = release_errors(plan_spec)
     rig_file = os.path.join(d, "rigs", f"{rig}.toml")
@@ -254,11 +258,12 @@ def run_case(c):
                                            delta_bic=r.get("delta_bic"))
                                       for r in fl.get("laws") or []]
     plan = cached_json(os.path.join(d, "plan.json"),
-                       [appell, "plan", plan_file(rig), "--after", fit_js, "--json"], T)
+                       [appell, "plan", plan_file(rig, pattern), "--after", fit_js, "--json"], T)
     nolaw_js = os.path.join(d, "fit_nolaws.json")
     strip_laws(fit_js, nolaw_js)
     plan0 = cached_json(os.path.join(d, "plan_nolaws.json"),
-                        [appell, "plan", plan_file(rig), "--after", nolaw_js, "--json"], T)
+                        [appell, "plan", plan_file(rig, pattern), "--after", nolaw_js,
+                         "--json"], T)
     out["plan_cpu_s"], out["plan_nolaws_cpu_s"] = plan["cpu_s"], plan0["cpu_s"]
     out["plan_wall_s"], out["plan_nolaws_wall_s"] = plan.get("wall_s"), plan0.get("wall_s")
     pj = plan.get("json")
@@ -431,6 +436,31 @@ def tables(rows, cpu_example, seeds):
             L.append(f"| **4 laws** | | {ntot} | | **{tot['planned']}** | **{tot['repeat']}** | "
                      f"**{tot['random']}** | | |")
     L.append("")
+    L.append("The joint fits of the four laws' cases, by release: identified; flagged (limited by "
+             "the model, failed or implausible); no JSON (the fit refused or failed, exit 1); "
+             "another law unflagged; a parameter it reports beyond 3 SE, unflagged (mu_kinetic "
+             "included; largest |z|):")
+    L.append("")
+    L.append("| release | n | identified | flagged | no JSON | another law, unflagged | beyond "
+             "3 SE, unflagged | largest unflagged abs(z) |")
+    L.append("|---|---|---|---|---|---|---|---|")
+    for k in KINDS:
+        es = [((r.get("releases") or {}).get(k) or {}).get("fit") or {}
+              for r in rows if r.get("case") in LAWS]
+        lw = [r["law"] for r in rows if r.get("case") in LAWS]
+        n = len(es)
+        ide = sum(bool(e.get("identified")) for e in es)
+        fl = sum(bool(e.get("flagged")) for e in es)
+        nj = sum(e.get("chosen") in ("error", "none", "sim-error", None) for e in es)
+        ok = [e for e in es if not e.get("flagged") and e.get("chosen") not in
+              ("error", "none", "sim-error", None)]
+        other = sum(e["chosen"] != law for e, law in zip(es, lw) if e in ok)
+        zmax = [max([abs(z) for z in (e.get("zs") or {}).values() if z is not None] or [0.0])
+                for e in ok]
+        beyond = sum(z > 3 for z in zmax)
+        L.append(f"| {k} | {n} | {ide} | {fl} | {nj} | {other} | {beyond} | "
+                 f"{f(max(zmax) if zmax else None, '.1f')} |")
+    L.append("")
     L.append("Laws the joint fits chose ((flag): limited by the model, failed or implausible; "
              "error: no JSON):")
     L.append("")
@@ -579,10 +609,15 @@ def main(argv=None):
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--timeout", type=float, default=900.0)
     ap.add_argument("--md", default=None, help="write the tables (markdown) here")
+    ap.add_argument("--plan", default=PLAN_PATTERN,
+                    help="plan files, {rig} for the rig's name (default "
+                         "configs/plan_law_{rig}.toml); another gets its own work directory")
     a = ap.parse_args(argv)
     appell = os.path.abspath(a.appell)
     bid = binary_id(appell)
     work = os.path.join(a.work, bid)
+    if a.plan != PLAN_PATTERN:
+        work += "_plan" + hashlib.sha256(a.plan.encode()).hexdigest()[:8]
     os.makedirs(work, exist_ok=True)
     seeds = parse_seeds(a.seeds)
     laws, rigs = a.laws.split(","), a.rigs.split(",")
@@ -596,7 +631,7 @@ def main(argv=None):
         cases += [dict(case=f"coulomb-{k}", law="coulomb", first=k, rig=rig, seed=s)
                   for s in seeds for k in ("informative", "push") for rig in rigs]
     for c in cases:
-        c.update(appell=appell, work=work, timeout=a.timeout)
+        c.update(appell=appell, work=work, timeout=a.timeout, plan=a.plan)
     rows = []
     with cf.ProcessPoolExecutor(a.jobs) as ex:
         futs = {ex.submit(run_case_safe, c): c for c in cases}
