@@ -36,7 +36,9 @@ default 2). Python 3 with numpy and scipy (the generator is imported).
     /tmp/venv-gen/bin/python scripts/sweeps/law_plan_sweep.py --appell /work/appell-law \
         --seeds 1..5 --work /tmp/law_plan_sweep --md /tmp/law_plan_tables.md
 Options: --laws static,stribeck,direction,load; --rigs light,equal,heavy; --no-coulomb;
---jobs 2; --timeout 900 (s, per command).
+--jobs 2; --timeout 900 (s, per command); --plan PATTERN (other plan files, {rig} in the
+name; their own work directory); --baseline APPELL (another binary, e.g. main before issue
+60: the same plans after the same fits and plan_example.toml, CPU seconds compared).
 """
 
 import sys
@@ -337,6 +339,18 @@ def run_case(c):
     return save(res_path, out)
 
 
+def baseline_case(c):
+    """The same plan after the same fit with another binary (--baseline): its CPU seconds."""
+    d = os.path.join(c["work"], f"{c['case']}_{c['rig']}_s{c['seed']}")
+    fit_js = os.path.join(d, "fit.json")
+    if not os.path.exists(fit_js):
+        return None
+    rec = cached_json(os.path.join(d, f"plan_baseline_{c['baseline_id']}.json"),
+                      [c["baseline"], "plan", plan_file(c["rig"], c.get("plan", PLAN_PATTERN)),
+                       "--after", fit_js, "--json"], c["timeout"])
+    return rec["cpu_s"] if rec.get("json") else None
+
+
 def save(path, out):
     with open(path + ".tmp", "w") as fh:
         json.dump(out, fh, indent=1)
@@ -406,7 +420,7 @@ def ratio_rows(rows, key, L):
              f"{len(allr)} |")
 
 
-def tables(rows, cpu_example, seeds):
+def tables(rows, cpu_example, seeds, base=None):
     L = []
     L.append(f"Seeds {seeds}. Identified: the joint fit (first + the release) chose exactly the "
              "true law and every parameter of it is within 3 SE of the truth.")
@@ -551,6 +565,27 @@ def tables(rows, cpu_example, seeds):
                  f"[{f(max(fits))}] | | |")
     if ff:
         L.append(f"| fit (first release) | {len(ff)} | {f(med(ff))} [{f(max(ff))}] | | |")
+    if base:
+        L.append("")
+        L.append(f"Against the baseline binary (SHA-256 {base['id']}), the same plan after the "
+                 "same fit, CPU seconds median [max]:")
+        L.append("")
+        L.append("| what | n | this binary | baseline | ratio median [max] |")
+        L.append("|---|---|---|---|---|")
+        for rig in RIGS:
+            rs = [r for r in rows if r["rig"] == rig and r.get("plan_cpu_s") is not None
+                  and r.get("plan_baseline_cpu_s")]
+            if not rs:
+                continue
+            a_ = [r["plan_cpu_s"] for r in rs]
+            b_ = [r["plan_baseline_cpu_s"] for r in rs]
+            q = [x / y for x, y in zip(a_, b_)]
+            L.append(f"| plan_law_{rig} --after | {len(rs)} | {f(med(a_))} [{f(max(a_))}] | "
+                     f"{f(med(b_))} [{f(max(b_))}] | {f(med(q))} [{f(max(q))}] |")
+        be = base["example"]
+        if cpu_example and be:
+            L.append(f"| plan_example.toml | {len(be)} | {f(med(cpu_example), '.3f')} | "
+                     f"{f(med(be), '.3f')} | {f(med(cpu_example) / med(be))} |")
     L.append("")
     errs = [r for r in rows if r.get("error")]
     if errs:
@@ -613,6 +648,9 @@ def main(argv=None):
     ap.add_argument("--jobs", type=int, default=2)
     ap.add_argument("--timeout", type=float, default=900.0)
     ap.add_argument("--md", default=None, help="write the tables (markdown) here")
+    ap.add_argument("--baseline", default=None,
+                    help="another appell binary (e.g. main before issue 60): the same plans "
+                         "after the same fits and plan_example.toml, for the CPU comparison")
     ap.add_argument("--plan", default=PLAN_PATTERN,
                     help="plan files, {rig} for the rig's name (default "
                          "configs/plan_law_{rig}.toml); another gets its own work directory")
@@ -650,20 +688,34 @@ def main(argv=None):
                   f"first {first_verdict(r)}; weighed "
                   f"{','.join((r.get('plan_laws') or {}).get('weighed') or []) or 'none'}; {ids}"
                   + (f"; ERROR {r['error'][:200]}" if r.get("error") else ""), flush=True)
-    # the planner's example, three times, one at a time
-    cpu_example = []
-    ex_path = os.path.join(work, "plan_example_cpu.json")
-    if os.path.exists(ex_path):
-        cpu_example = json.load(open(ex_path))
-    else:
+    # the planner's example, three times, one at a time (and with --baseline, interleaved)
+    def example(binary, path):
+        if os.path.exists(path):
+            return json.load(open(path))
+        cpus = []
         for _ in range(3):
-            rc, _, err, cpu, _, error = run([appell, "plan",
+            rc, _, err, cpu, _, error = run([binary, "plan",
                                              os.path.join(ROOT, "configs", "plan_example.toml")],
                                             a.timeout)
             if rc == 0 and not error:
-                cpu_example.append(cpu)
-        json.dump(cpu_example, open(ex_path, "w"))
-    text = tables(rows, cpu_example, seeds)
+                cpus.append(cpu)
+        json.dump(cpus, open(path, "w"))
+        return cpus
+    cpu_example = example(appell, os.path.join(work, "plan_example_cpu.json"))
+    base = None
+    if a.baseline:
+        b_path = os.path.abspath(a.baseline)
+        b_id = binary_id(b_path)
+        base = dict(id=b_id, example=example(b_path, os.path.join(
+            work, f"plan_example_cpu_baseline_{b_id}.json")))
+        bcases = [dict(c, baseline=b_path, baseline_id=b_id) for c in cases]
+        with cf.ProcessPoolExecutor(a.jobs) as ex:
+            bc = list(ex.map(baseline_case, bcases))
+        for r in rows:
+            for c, v in zip(bcases, bc):
+                if (c["case"], c["rig"], c["seed"]) == (r.get("case"), r["rig"], r["seed"]):
+                    r["plan_baseline_cpu_s"] = v
+    text = tables(rows, cpu_example, seeds, base)
     print()
     print(text)
     print(f"\nwall {time.monotonic() - t0:.0f} s")
