@@ -126,8 +126,20 @@ def make_rig(rig_name, mu=MU_K):
     return rg.Rig(p["m1"], p["m2"], L_ROD, 0.0, 0.0, G, mu)
 
 
-def make_model(law, rig_name, v_s=V_S, **kw):
+def set_truth(mu_s=None, v_s=None, mu_pos=None, mu_neg=None, load_exp=None):
+    """Other true values for every later recording of this process (e.g. the planner's
+    reference departures); None keeps a value."""
+    global MU_S, V_S, MU_POS, MU_NEG, LOAD_EXP
+    MU_S = MU_S if mu_s is None else mu_s
+    V_S = V_S if v_s is None else v_s
+    MU_POS = MU_POS if mu_pos is None else mu_pos
+    MU_NEG = MU_NEG if mu_neg is None else mu_neg
+    LOAD_EXP = LOAD_EXP if load_exp is None else load_exp
+
+
+def make_model(law, rig_name, v_s=None, **kw):
     """The law's model on the rig; kw overrides mu_k, mu_s, mu_pos, mu_neg, exp."""
+    v_s = V_S if v_s is None else v_s
     mu_k, mu_s = kw.get("mu_k", MU_K), kw.get("mu_s", MU_S)
     if law == "coulomb":
         return mg.Model(make_rig(rig_name, mu_k))
@@ -143,8 +155,9 @@ def make_model(law, rig_name, v_s=V_S, **kw):
     raise ValueError(law)
 
 
-def law_truth(law, v_s=V_S):
+def law_truth(law, v_s=None):
     """The true values under the fit's parameter names (docs/fit.md, "The friction law")."""
+    v_s = V_S if v_s is None else v_s
     t = dict(law=law, mu_kinetic=MU_K, mu_static=MU_K)
     if law in ("static", "stribeck"):
         t["mu_static"] = MU_S
@@ -231,10 +244,11 @@ def write_rig(out, rig_name):
 
 
 def generate(law, rig_name, nominal, errors, seed, stream, out, name, fps=None,
-             duration=DURATION, noise=NOISE, v_s=V_S, exact=False):
+             duration=DURATION, noise=NOISE, v_s=None, exact=False):
     """Simulate one release (its errors drawn unless `exact`), write <out>/<name>.csv, .json
     and rigs/<rig>.toml; return the truth dict (with `ok`: every self-check passed)."""
     os.makedirs(out, exist_ok=True)
+    v_s = V_S if v_s is None else v_s
     fps = fps or RIGS[rig_name]["fps"]
     ts = frame_times(fps, duration)
     if exact:
@@ -357,7 +371,7 @@ def main(argv=None):
     ap.add_argument("--fps", type=float, default=None)
     ap.add_argument("--duration", type=float, default=DURATION)
     ap.add_argument("--noise", type=float, default=NOISE)
-    ap.add_argument("--stribeck-velocity", type=float, default=V_S)
+    ap.add_argument("--stribeck-velocity", type=float, default=None, help=f"default {V_S}")
     ap.add_argument("--out", default="/tmp/lawrel")
     ap.add_argument("--name", default="release")
     a = ap.parse_args(argv)
