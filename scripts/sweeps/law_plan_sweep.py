@@ -596,6 +596,12 @@ def tables(rows, cpu_example, seeds, base=None):
             L.append(f"| plan_example.toml | {len(be)} | {f(med(cpu_example), '.3f')} | "
                      f"{f(med(be), '.3f')} | {f(med(cpu_example) / med(be))} |")
     L.append("")
+    badrec = [r for r in rows if r.get("recordings_failing_checks")]
+    nrec = sum(1 + len(r.get("releases") or {}) for r in rows)
+    L.append(f"Recordings whose generator self-checks failed: {sum(len(r['recordings_failing_checks']) for r in badrec)} of {nrec}"
+             + ("".join(f"; {r.get('case')} {r['rig']} s{r['seed']}: "
+                        + ",".join(r["recordings_failing_checks"]) for r in badrec)))
+    L.append("")
     errs = [r for r in rows if r.get("error")]
     if errs:
         L.append("Cases that did not finish:")
@@ -707,6 +713,17 @@ def main(argv=None):
                   f"first {first_verdict(r)}; weighed "
                   f"{','.join((r.get('plan_laws') or {}).get('weighed') or []) or 'none'}; {ids}"
                   + (f"; ERROR {r['error'][:200]}" if r.get("error") else ""), flush=True)
+    # the generator's self-checks of every recording of every case
+    for r in rows:
+        d = os.path.join(work, f"{r.get('case')}_{r['rig']}_s{r['seed']}")
+        bad = []
+        for name in ["first"] + KINDS:
+            path = os.path.join(d, f"{name}.json")
+            if os.path.exists(path):
+                with open(path) as fh:
+                    if not json.load(fh).get("ok"):
+                        bad.append(name)
+        r["recordings_failing_checks"] = bad
     # the planner's example, three times, one at a time (and with --baseline, interleaved)
     def example(binary, path):
         if os.path.exists(path):
