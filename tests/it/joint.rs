@@ -317,6 +317,7 @@ fn plan_after_adds_information_as_the_closed_form_says() {
         covariance: DMatrix::from_element(1, 1, s0 * s0),
         information: DMatrix::from_element(1, 1, 1.0 / (s0 * s0)),
         section: "shared",
+        laws: None,
     };
     for s0 in [0.5 * s1, s1, 3.0 * s1] {
         let mut with = spec.clone();
