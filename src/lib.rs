@@ -9,6 +9,8 @@
 //!   hybrid run (`hybrid/`: take a step, check the guards, locate the event, decide the next mode,
 //!   jump, emit samples), returning a solution with its events and statistics.
 //! - `scene.rs`: scene and rig files (TOML), checked key by key.
+//! - `numbers.rs`: numbers as text reports print them (a value with its uncertainty to the
+//!   digits the uncertainty carries).
 //! - `output.rs`: writing files whole (temporary file and rename) and never over an input.
 //! - `data/`: recordings in and out: the CSV family one file per tool (`table/`), HDF5
 //!   (`hdf5/`), XML (`tracker_project.rs`, `kinovea_xml.rs`), MCAP (`mcap/`), calibration into the
@@ -32,6 +34,7 @@ pub mod cpu;
 pub mod data;
 pub mod fit;
 pub mod model;
+pub mod numbers;
 pub mod output;
 pub mod pipeline;
 pub mod plan;

@@ -3,7 +3,8 @@
 
 use super::Failure;
 use anyhow::anyhow;
-use appell::plan::prior::Prior;
+use appell::plan::prior::{self, Prior};
+use appell::plan::rig_match;
 use appell::plan::{plan_with_progress, PlanSpec};
 use appell::report::plan::{plan_json, plan_table, PlanFigure};
 use appell::report::plot::{render, ImageFormat};
@@ -39,7 +40,14 @@ pub fn run(args: Args) -> Result<(), Failure> {
     }
     let mut spec = PlanSpec::from_path(&args.plan).map_err(|e| Failure::Input(e.into()))?;
     if let Some(fit) = &args.after {
-        let prior = Prior::from_path(fit).map_err(|e| Failure::Input(e.into()))?;
+        let json = prior::read_json(fit).map_err(|e| Failure::Input(e.into()))?;
+        // A fit of another rig is refused before its values enter the plan's rig.
+        let notes = rig_match::check(&json, fit, &spec.rig_file, &args.plan)
+            .map_err(|e| Failure::Input(e.into()))?;
+        for n in notes {
+            note!("note: {n}");
+        }
+        let prior = Prior::from_json(&json, fit).map_err(|e| Failure::Input(e.into()))?;
         prior
             .apply(&mut spec)
             .map_err(|e| Failure::Input(e.into()))?;

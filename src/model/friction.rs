@@ -68,6 +68,25 @@ impl<T: Scalar> Rig<T> {
         (self.slider_mass + self.bob_mass) * self.gravity
     }
 
+    /// The load law's factor (|N| / N_0)^(n - 1) at the load ratio `u` = |N| / N_0: its
+    /// coefficients at a load are those at the static load times this (exactly 1 at n = 1).
+    #[inline(always)]
+    pub fn load_factor(&self, u: T) -> T {
+        ((self.load_exponent - 1.0) * u.ln()).exp()
+    }
+
+    /// The sliding coefficient |F| / |N| at the normal force `normal` (N; its size counts):
+    /// mu_k (|N| / N_0)^(n - 1) under the load law, and [`Rig::mu_kinetic`] under the others,
+    /// whose coefficient does not depend on the load.
+    pub fn load_coefficient(&self, normal: T) -> T {
+        match self.friction_law {
+            FrictionLaw::Load => {
+                self.mu_kinetic * self.load_factor(normal.abs() / self.static_load())
+            }
+            _ => self.mu_kinetic,
+        }
+    }
+
     /// Stick margin, positive while the pendulum model holds: the most friction the rail
     /// holds minus the friction needed, |c|. The slider would slip toward sign(c), so the
     /// direction law takes that direction's static coefficient; the load law holds
@@ -83,7 +102,7 @@ impl<T: Scalar> Rig<T> {
                     return -sh.c.abs();
                 }
                 // mu_s |b| (|b| / N_0)^(n - 1): exactly mu_s |b| at n = 1.
-                let factor = ((self.load_exponent - 1.0) * (b / self.static_load()).ln()).exp();
+                let factor = self.load_factor(b / self.static_load());
                 sh.stick_margin(self.mu_static * factor)
             }
         }
@@ -154,7 +173,7 @@ impl<T: Scalar> Rig<T> {
         let h = d * u + a_s * mu * (n * u.ln()).exp() - rhs;
         let slope = d.re() + a_s.re() * mu.re() * n.re() * u0.powf(n.re() - 1.0);
         let u = u - h / slope;
-        mu * ((n - 1.0) * u.ln()).exp()
+        mu * self.load_factor(u)
     }
 }
 

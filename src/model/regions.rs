@@ -569,6 +569,100 @@ impl RegionSummary {
     }
 }
 
+/// The normal loads a swing meets in `window` with the bob below the rail (theta in 0..180
+/// degrees, |theta'| up to the window's `w_max`): the least and the largest |b|, the stuck
+/// pendulum's normal force, over a grid of the half plane (every half degree, 121 values of
+/// theta'). On a level undamped rig these are m1 g (the rod along the rail, at rest) and
+/// (m1 + m2) g + m2 l w_max^2 (hanging, at the window's fastest swing). With the bob above the
+/// rail |N| falls to zero on the curve Q = 0, where no coefficient of the load law is bounded.
+pub fn swing_loads(rig: &Rig<f64>, window: &PlaneWindow) -> [f64; 2] {
+    let (nt, nw) = (361, 121);
+    let mut lo = f64::INFINITY;
+    let mut hi = 0.0f64;
+    for i in 0..nt {
+        let theta = PI * i as f64 / (nt - 1) as f64;
+        for j in 0..nw {
+            let w = window.w_max * (2.0 * j as f64 / (nw - 1) as f64 - 1.0);
+            let b = Shorthands::new(rig, theta, w).b.abs();
+            lo = lo.min(b);
+            hi = hi.max(b);
+        }
+    }
+    [lo, hi]
+}
+
+/// One coefficient of the rig's friction law and the paradox band it opens: each direction's
+/// under the direction law, at rest and sliding fast under Stribeck's, at the smallest, the
+/// static and the largest load a swing meets under the load law ([`swing_loads`]), the one
+/// coefficient under Coulomb's.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LawBand {
+    /// Which coefficient: `coulomb`, `+x`, `-x`, `at rest`, `sliding fast`, `smallest load`,
+    /// `static load`, `largest load`.
+    pub label: &'static str,
+    /// The slide direction it applies to (`+x` or `-x`), or `None` for both.
+    pub direction: Option<&'static str>,
+    /// The sliding coefficient mu.
+    pub mu: f64,
+    /// The normal load |N| it is taken at (N), under the load law.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub normal_load: Option<f64>,
+    /// Its band within 0..180 degrees, `[lo, hi]` pairs (mu |a| > D); empty when mu <= mu*.
+    pub paradox_band_deg: Vec<[f64; 2]>,
+}
+
+impl LawBand {
+    /// Whether it applies to slides in direction `s` (+1 or -1).
+    pub fn applies_to(&self, s: f64) -> bool {
+        match self.direction {
+            Some(d) => (d == "+x") == (s > 0.0),
+            None => true,
+        }
+    }
+}
+
+/// The paradox bands of `rig`'s friction law, one per coefficient it has ([`LawBand`]), the
+/// load law's at the loads of `window` ([`swing_loads`]). Every coefficient comes from the
+/// model's friction functions; every band from [`paradox_band`].
+pub fn law_bands(rig: &Rig<f64>, window: &PlaneWindow) -> Vec<LawBand> {
+    let r = rig.mass_ratio();
+    let band = |label, direction, mu: f64, normal_load| LawBand {
+        label,
+        direction,
+        mu,
+        normal_load,
+        paradox_band_deg: band_deg(r, mu),
+    };
+    match rig.friction_law {
+        FrictionLaw::Coulomb => vec![band("coulomb", None, rig.friction_mu(1.0, 0.0), None)],
+        FrictionLaw::Direction => vec![
+            band("+x", Some("+x"), rig.friction_mu(1.0, 0.0), None),
+            band("-x", Some("-x"), rig.friction_mu(-1.0, 0.0), None),
+        ],
+        FrictionLaw::Stribeck => vec![
+            band("at rest", None, rig.friction_mu(1.0, 0.0), None),
+            band(
+                "sliding fast",
+                None,
+                rig.friction_mu(1.0, f64::INFINITY),
+                None,
+            ),
+        ],
+        FrictionLaw::Load => {
+            let [lo, hi] = swing_loads(rig, window);
+            let n0 = rig.static_load();
+            [
+                ("smallest load", lo),
+                ("static load", n0),
+                ("largest load", hi),
+            ]
+            .into_iter()
+            .map(|(label, n)| band(label, None, rig.load_coefficient(n), Some(n)))
+            .collect()
+        }
+    }
+}
+
 /// Everything a region plot shows, as data: the summary, the window, the stick boundary, the
 /// curve Q = 0 and the band edges (theta, rad) inside the window.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -583,6 +677,8 @@ pub struct RegionMap {
     pub q_zero: Vec<Curve>,
     /// Band edges inside the window (rad), where mu_k |a| = D.
     pub band_edges: Vec<f64>,
+    /// The bands of each coefficient of the friction law ([`law_bands`]).
+    pub law_bands: Vec<LawBand>,
 }
 
 impl RegionMap {
@@ -599,6 +695,7 @@ impl RegionMap {
                 window.theta_min,
                 window.theta_max,
             ),
+            law_bands: law_bands(rig, window),
         }
     }
 }

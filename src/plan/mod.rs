@@ -9,6 +9,7 @@
 pub mod criteria;
 pub mod discriminate;
 pub mod prior;
+pub mod rig_match;
 pub mod search;
 pub mod spec;
 

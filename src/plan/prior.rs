@@ -91,6 +91,15 @@ pub struct Prior {
     pub laws: Option<super::discriminate::LawTable>,
 }
 
+/// A fit's JSON (`appell fit --json`, single or `--joint`), read whole (at most 16 MiB).
+pub fn read_json(path: &Path) -> Result<Value, SceneError> {
+    let text = crate::scene::read_text(path, MAX_FIT_JSON)?;
+    serde_json::from_str(text.trim()).map_err(|e| SceneError::Parse {
+        path: path.to_owned(),
+        message: format!("not the JSON of `appell fit --json`: {e}"),
+    })
+}
+
 fn invalid(path: &Path, message: String) -> SceneError {
     SceneError::Invalid {
         path: path.to_owned(),
@@ -101,12 +110,7 @@ fn invalid(path: &Path, message: String) -> SceneError {
 impl Prior {
     /// Read the JSON of `appell fit --json` (one recording) or `appell fit --joint --json`.
     pub fn from_path(path: &Path) -> Result<Prior, SceneError> {
-        let text = crate::scene::read_text(path, MAX_FIT_JSON)?;
-        let v: Value = serde_json::from_str(text.trim()).map_err(|e| SceneError::Parse {
-            path: path.to_owned(),
-            message: format!("not the JSON of `appell fit --json`: {e}"),
-        })?;
-        Prior::from_json(&v, path)
+        Prior::from_json(&read_json(path)?, path)
     }
 
     /// The prior in a fit's JSON `v` (read from `path`, for messages).

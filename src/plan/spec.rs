@@ -335,20 +335,10 @@ impl Uncertain {
 impl fmt::Display for Uncertain {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match *self {
-            // A fit's mean to its deviation's second digit (0.17998 +- 0.00032), not an f64's
-            // seventeen digits; a typed value as typed.
-            Uncertain::Normal { mean, sd } if sd > 0.0 && sd.is_finite() && mean.is_finite() => {
-                let decimals = (1 - sd.log10().floor() as i32).clamp(0, 17) as usize;
-                let mean = format!("{mean:.decimals$}");
-                let typed = format!("{}", mean.parse::<f64>().unwrap_or(f64::NAN));
-                let mean = if typed.len() < mean.len() {
-                    typed
-                } else {
-                    mean
-                };
-                write!(f, "{mean} +- {} (sd)", crate::data::inspect::sig(sd, 2))
+            // At the deviation's precision (0.17998 +- 0.00032), not an f64's seventeen digits.
+            Uncertain::Normal { mean, sd } => {
+                write!(f, "{} (sd)", crate::numbers::value_pm(mean, sd))
             }
-            Uncertain::Normal { mean, sd } => write!(f, "{mean} +- {sd} (sd)"),
             Uncertain::Uniform { lo, hi } => write!(f, "[{lo}, {hi}]"),
         }
     }
@@ -430,6 +420,8 @@ pub struct Goal {
 pub struct PlanSpec {
     /// The rig at the nominal friction.
     pub rig: Rig<f64>,
+    /// The `[rig]` section as the file gives it (an earlier fit's rig is compared with it).
+    pub rig_file: PlanRigSpec,
     /// mu_kinetic and its uncertainty.
     pub mu_kinetic: Uncertain,
     /// mu_static and its uncertainty; `None`: equal to mu_kinetic in every draw.
@@ -594,6 +586,7 @@ impl PlanFile {
         self.search.check_counts(path)?;
         let spec = PlanSpec {
             rig,
+            rig_file: self.rig,
             mu_kinetic,
             mu_static,
             law_uncertain,
@@ -1109,7 +1102,7 @@ mod tests {
             mean: 0.25,
             sd: 0.05,
         };
-        assert_eq!(typed.to_string(), "0.25 +- 0.050 (sd)");
+        assert_eq!(typed.to_string(), "0.250 +- 0.050 (sd)");
     }
 
     const GOOD: &str = r#"

@@ -79,6 +79,9 @@ pub fn joint_json(rep: &JointReport) -> Value {
         "nuisances": rep.nuisances.iter().map(|n| n.name()).collect::<Vec<_>>(),
         "friction_law": rep.friction,
         "implausible": rep.implausible,
+        "rig_measured": {
+            "keys": rep.rig_keys.iter().map(|(k, v, sd, source)| json!({"key": k, "value": v, "sd": sd, "stated": *source == "stated", "source": source})).collect::<Vec<_>>(),
+        },
         "releases": rep.releases,
         "set_aside": rep.set_aside,
         "left_out": rep.left_out.iter().map(|(n, w)| json!({"recording": n, "error": w})).collect::<Vec<_>>(),

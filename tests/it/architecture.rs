@@ -50,7 +50,7 @@ use std::path::Path;
 /// The layers of `src/`, bottom first, by top-level module (`cli` stands for the binary:
 /// `main.rs` and `cli/`). A file may import its own layer and the layers below it.
 const LAYERS: [&[&str]; 11] = [
-    &["output", "cpu"],
+    &["output", "cpu", "numbers"],
     &["model"],
     &["sim"],
     &["scene"],

@@ -190,3 +190,108 @@ fn unsupported_plot_format_exits_2_and_writes_nothing() {
     assert_eq!(out.status.code(), Some(2));
     assert!(!path.exists());
 }
+
+/// A rig file written to a scratch directory.
+fn rig_file(name: &str, body: &str) -> Scratch {
+    let path = scratch(name);
+    std::fs::write(
+        &path,
+        format!(
+            "[rig]\nslider_mass = 0.01\nbob_mass = 0.20\nrod_length = 0.30\ngravity = 9.81\n{body}"
+        ),
+    )
+    .unwrap();
+    path
+}
+
+fn bands(v: &serde_json::Value, field: &str) -> Vec<[f64; 2]> {
+    serde_json::from_value(v[field].clone()).unwrap()
+}
+
+/// Issue 60, item 4: each direction's band is the Coulomb rig's at that direction's
+/// coefficient, drawn in its own panel, and the numbers print at seven digits at most.
+#[test]
+fn direction_rig_draws_each_directions_coulomb_band() {
+    let svg = scratch("direction.svg");
+    let v = json_of(&appell(&[
+        "regions",
+        &config("rig_direction.toml"),
+        "--json",
+        "--plot",
+        svg.to_str().unwrap(),
+        "--trajectories",
+        "0",
+    ]));
+    let law = v["law_bands"].as_array().unwrap();
+    assert_eq!(law.len(), 2);
+    for (b, (dir, mu)) in law.iter().zip([("+x", 0.65), ("-x", 0.5)]) {
+        assert_eq!(b["direction"], dir);
+        let coulomb = rig_file("c.toml", &format!("mu_kinetic = {mu}\n"));
+        let c = json_of(&appell(&[
+            "regions",
+            coulomb.to_str().unwrap(),
+            "--json",
+            "--trajectories",
+            "0",
+        ]));
+        let (a, b) = (bands(b, "paradox_band_deg"), bands(&c, "paradox_band_deg"));
+        assert_eq!(a.len(), 2, "{dir}");
+        for (x, y) in a.iter().zip(&b) {
+            assert!(
+                (x[0] - y[0]).abs() < 1e-9 && (x[1] - y[1]).abs() < 1e-9,
+                "{dir}: {a:?} {b:?}"
+            );
+        }
+    }
+    check_svg(&svg);
+    let text = crate::helpers::svg_text(&std::fs::read_to_string(&svg).unwrap());
+    assert!(
+        text.contains("sliding toward +x: mu_k+ = 0.65: paradox band 62.1..84.9"),
+        "{text}"
+    );
+    assert!(
+        text.contains("sliding toward -x: mu_k- = 0.5: paradox band 71.6..81.9"),
+        "{text}"
+    );
+    // The means of 0.47 and 0.43 are 0.45, not the 0.44999999999999996 of an f64.
+    let split = rig_file(
+        "d.toml",
+        "friction_law = \"direction\"\nmu_kinetic_positive = 0.47\nmu_kinetic_negative = 0.43\n",
+    );
+    let out = appell(&["regions", split.to_str().unwrap(), "--trajectories", "0"]);
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("(means 0.45 and 0.45)"), "{text}");
+    assert!(!text.contains("999999"), "{text}");
+}
+
+/// Issue 60, item 4: the load law's bands at the smallest, static and largest load a swing
+/// meets; the shipped rig opens one at the light load only.
+#[test]
+fn load_rig_draws_the_band_of_each_load() {
+    let png = scratch("load.png");
+    let v = json_of(&appell(&[
+        "regions",
+        &config("rig_load.toml"),
+        "--json",
+        "--plot",
+        png.to_str().unwrap(),
+        "--trajectories",
+        "2",
+    ]));
+    let law = v["law_bands"].as_array().unwrap();
+    let labels: Vec<&str> = law.iter().map(|b| b["label"].as_str().unwrap()).collect();
+    assert_eq!(labels, ["smallest load", "static load", "largest load"]);
+    let n0 = 0.21 * 9.81;
+    for b in law {
+        let (n, mu) = (
+            b["normal_load"].as_f64().unwrap(),
+            b["mu"].as_f64().unwrap(),
+        );
+        assert!((mu - 0.42 * (n / n0).powf(-0.2)).abs() < 1e-12, "{b}");
+    }
+    assert!((law[0]["normal_load"].as_f64().unwrap() - 0.01 * 9.81).abs() < 1e-12);
+    assert!(!bands(&law[0], "paradox_band_deg").is_empty());
+    assert!(bands(&law[1], "paradox_band_deg").is_empty());
+    // Two panels: a band opens at some load a swing meets.
+    assert_eq!(png_size(&std::fs::read(&png).unwrap()), (1400, 1100));
+}

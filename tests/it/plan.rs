@@ -385,3 +385,74 @@ fn best_release_at_a_limit_of_the_box_is_noted() {
         assert_eq!(limits.is_empty(), !at_limit, "{v}");
     }
 }
+
+/// Issue 60, item 3: `plan --after` refuses a fit of another rig (the shipped example's
+/// slider/bob 2.5 against the example plan's 1.0) with exit code 2, naming both files, the
+/// field and both values with their deviations; the same fit with a plan of its own rig runs.
+#[test]
+fn plan_after_a_fit_of_another_rig_is_refused() {
+    let tmp = tempfile::tempdir().unwrap();
+    let repo = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let out = appell(&[
+        "fit",
+        repo.join("data/example_recording.mcap").to_str().unwrap(),
+        "--rig",
+        config("rig_example.toml").to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let fit = tmp.path().join("fit.json");
+    std::fs::write(&fit, &out.stdout).unwrap();
+    let example = config("plan_example.toml");
+    let out = appell(&[
+        "plan",
+        example.to_str().unwrap(),
+        "--after",
+        fit.to_str().unwrap(),
+    ]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("fit.json") && err.contains("plan_example.toml"),
+        "{err}"
+    );
+    assert!(err.contains("another rig"), "{err}");
+    // The slider: 0.5 kg +- 3 % against 0.1 kg +- 3 %, 26 combined deviations apart.
+    assert!(
+        err.contains("slider_mass: the fit's 0.500 +- 0.015 kg"),
+        "{err}"
+    );
+    assert!(
+        err.contains("the plan's 0.1000 +- 0.0030 kg (rig.slider_mass"),
+        "{err}"
+    );
+    assert!(out.stdout.is_empty());
+    // The plan of the fit's own rig (the example plan with rig_example.toml's [rig]).
+    let text = std::fs::read_to_string(&example).unwrap();
+    let own = text.replacen(
+        "slider_mass = 0.10   # kg\nbob_mass = 0.10      # kg",
+        "slider_mass = 0.5\nbob_mass = 0.2",
+        1,
+    );
+    assert_ne!(own, text);
+    let matched = tmp.path().join("own_rig.toml");
+    std::fs::write(&matched, own).unwrap();
+    let out = appell(&[
+        "plan",
+        matched.to_str().unwrap(),
+        "--after",
+        fit.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    assert!(v["proposals"].as_array().is_some_and(|p| !p.is_empty()));
+}

@@ -443,3 +443,139 @@ fn level_rig_slide_directions_are_mirror_images_and_tilt_breaks_the_mirror() {
     }
     assert!(differ > 0, "a tilted rig is not mirror-symmetric");
 }
+
+/// The band of friction `mu` at mass ratio `r` within 0..180 degrees from docs/physics.md's
+/// closed form, written out here: |tan theta| between (mu -+ sqrt(mu^2 - 4 r (1 + r))) / (2 r).
+fn band_closed_form(r: f64, mu: f64) -> Vec<[f64; 2]> {
+    let disc = mu * mu - 4.0 * r * (1.0 + r);
+    if disc <= 0.0 {
+        return Vec::new();
+    }
+    let lo = ((mu - disc.sqrt()) / (2.0 * r)).atan().to_degrees();
+    let hi = ((mu + disc.sqrt()) / (2.0 * r)).atan().to_degrees();
+    vec![[lo, hi], [180.0 - hi, 180.0 - lo]]
+}
+
+fn assert_bands_eq(a: &[[f64; 2]], b: &[[f64; 2]], what: &str) {
+    assert_eq!(a.len(), b.len(), "{what}: {a:?} against {b:?}");
+    for (x, y) in a.iter().zip(b) {
+        assert!(
+            (x[0] - y[0]).abs() < 1e-9 && (x[1] - y[1]).abs() < 1e-9,
+            "{what}: {a:?} against {b:?}"
+        );
+    }
+}
+
+/// The bands `appell regions` draws for a rig's law, by label.
+fn law_bands_of(rig: &Rig<f64>) -> Vec<(String, f64, Vec<[f64; 2]>)> {
+    use appell::model::regions::law_bands;
+    let window = appell::report::regions::figure_window(rig);
+    law_bands(rig, &window)
+        .into_iter()
+        .map(|b| (b.label.to_owned(), b.mu, b.paradox_band_deg))
+        .collect()
+}
+
+fn coulomb_band(m1: f64, m2: f64, mu: f64) -> Vec<[f64; 2]> {
+    paradox_band_deg(&rig_with(m1, m2, mu))
+}
+
+#[test]
+fn direction_law_draws_the_coulomb_band_of_each_direction_and_its_mirror_swaps_them() {
+    let (m1, m2) = (0.01, 0.2);
+    for (plus, minus) in [(0.65, 0.5), (0.5, 0.65), (0.3, 0.7), (0.47, 0.43)] {
+        let mean = 0.5 * (plus + minus);
+        let rig = rig_with(m1, m2, mean).with_direction_split(0.5 * (plus - minus), 0.0);
+        let bands = law_bands_of(&rig);
+        assert_eq!(bands.len(), 2);
+        for ((label, mu, band), want) in bands.iter().zip([plus, minus]) {
+            assert!((mu - want).abs() < 1e-15, "{label}: {mu} against {want}");
+            assert_bands_eq(band, &coulomb_band(m1, m2, want), label);
+            assert_bands_eq(band, &band_closed_form(m1 / m2, want), label);
+        }
+        assert_eq!((bands[0].0.as_str(), bands[1].0.as_str()), ("+x", "-x"));
+        // Mirrored (the split's sign flipped): the bands swap directions.
+        let mirror = rig_with(m1, m2, mean).with_direction_split(0.5 * (minus - plus), 0.0);
+        let m = law_bands_of(&mirror);
+        assert_bands_eq(&m[0].2, &bands[1].2, "mirror +x");
+        assert_bands_eq(&m[1].2, &bands[0].2, "mirror -x");
+        // And the solution counts the panels shade: a slide toward s on the rig at (theta, w)
+        // counts as the mirrored slide on the mirrored rig at (pi - theta, -w).
+        for k in 0..=180 {
+            let theta = (k as f64).to_radians();
+            for w in [-6.0, -1.0, 0.0, 2.5, 9.0] {
+                for s in [1.0, -1.0] {
+                    assert_eq!(
+                        slide_solution_count(&rig, theta, w, s),
+                        slide_solution_count(&mirror, PI - theta, -w, -s),
+                        "theta {k} deg, w {w}, s {s}, split {plus}/{minus}"
+                    );
+                }
+            }
+        }
+    }
+}
+
+#[test]
+fn stribeck_draws_the_coulomb_bands_at_rest_and_sliding_fast() {
+    let (m1, m2) = (0.01, 0.2);
+    let mut rig = rig_with(m1, m2, 0.5).with_stribeck(0.05);
+    rig.mu_static = 0.65;
+    let bands = law_bands_of(&rig);
+    let labels: Vec<&str> = bands.iter().map(|b| b.0.as_str()).collect();
+    assert_eq!(labels, ["at rest", "sliding fast"]);
+    assert_bands_eq(&bands[0].2, &coulomb_band(m1, m2, 0.65), "at rest");
+    assert_bands_eq(&bands[1].2, &coulomb_band(m1, m2, 0.5), "sliding fast");
+    assert_bands_eq(&bands[1].2, &band_closed_form(0.05, 0.5), "sliding fast");
+}
+
+#[test]
+fn load_law_draws_the_bands_of_the_loads_a_swing_meets() {
+    use appell::model::regions::swing_loads;
+    let (m1, m2, l, g) = (0.01, 0.2, 0.3, 9.81);
+    let n0 = (m1 + m2) * g;
+    // Exponent 1 is Coulomb's law: every load's band is the Coulomb rig's.
+    let one = rig_with(m1, m2, 0.6).with_load_exponent(1.0);
+    let bands = law_bands_of(&one);
+    assert_eq!(bands.len(), 3);
+    for (label, mu, band) in &bands {
+        assert_eq!(*mu, 0.6, "{label}");
+        assert_bands_eq(band, &coulomb_band(m1, m2, 0.6), label);
+    }
+    // n = 0.8: the loads of a level undamped rig with the bob below the rail are m1 g (the rod
+    // along the rail, at rest) to (m1 + m2) g + m2 l w_max^2 (hanging at the window's fastest
+    // swing), and the coefficient there is mu_k (|N| / N_0)^(n - 1).
+    let rig = rig_with(m1, m2, 0.42).with_load_exponent(0.8);
+    let window = appell::report::regions::figure_window(&rig);
+    let [lo, hi] = swing_loads(&rig, &window);
+    let want_hi = n0 + m2 * l * window.w_max * window.w_max;
+    assert!((lo - m1 * g).abs() < 1e-12 * n0, "{lo}");
+    assert!(
+        (hi - want_hi).abs() < 1e-12 * want_hi,
+        "{hi} against {want_hi}"
+    );
+    let bands = law_bands_of(&rig);
+    let labels: Vec<&str> = bands.iter().map(|b| b.0.as_str()).collect();
+    assert_eq!(labels, ["smallest load", "static load", "largest load"]);
+    for ((label, mu, band), load) in bands.iter().zip([m1 * g, n0, want_hi]) {
+        let want = 0.42 * (load / n0).powf(-0.2);
+        assert!((mu - want).abs() < 1e-12, "{label}: {mu} against {want}");
+        assert_bands_eq(band, &band_closed_form(m1 / m2, want), label);
+    }
+    // The light load opens a band the static load does not (0.77 and 0.42 against mu* 0.458).
+    assert!(!bands[0].2.is_empty() && bands[1].2.is_empty() && bands[2].2.is_empty());
+}
+
+#[test]
+fn load_coefficient_is_the_load_laws_and_constant_under_the_others() {
+    let rig = rig_with(0.1, 0.1, 0.3).with_load_exponent(0.85);
+    let n0 = rig.static_load();
+    assert_eq!(rig.load_coefficient(n0), 0.3);
+    for u in [0.1f64, 0.5, 2.0, 7.0] {
+        let want = 0.3 * u.powf(-0.15);
+        assert!((rig.load_coefficient(u * n0) - want).abs() < 1e-14);
+        // The sign of N does not count, only its size.
+        assert_eq!(rig.load_coefficient(-u * n0), rig.load_coefficient(u * n0));
+        assert_eq!(rig_with(0.1, 0.1, 0.3).load_coefficient(u * n0), 0.3);
+    }
+}

@@ -140,6 +140,10 @@ pub fn fit_joint(
         warnings.insert(0, format!("the joint fit failed: {why}"));
     }
     Ok(JointReport {
+        rig_keys: settings
+            .measured
+            .as_ref()
+            .map_or_else(Vec::new, |m| m.keys.clone()),
         implausible,
         parts: model.problem.parts.clone(),
         friction,

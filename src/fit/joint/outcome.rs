@@ -96,4 +96,7 @@ pub struct JointReport {
     /// The joint model's values no real rig has (a tilt on a levelled rail, ...), a sentence
     /// each: the result is then limited by the model, as a single fit's would be.
     pub implausible: Vec<String>,
+    /// The rig file's measured keys: key, value, standard deviation, where it came from
+    /// (`"stated"`, `"default"` or `"--latitude"`), as a single fit's report lists them.
+    pub rig_keys: Vec<(&'static str, f64, f64, &'static str)>,
 }

@@ -4,9 +4,11 @@
 
 use super::Trajectory;
 use crate::model::regions::{
-    in_paradox_band, slide_count_intervals, stick_intervals, Curve, PlaneWindow, RegionMap,
+    band_edges, in_paradox_band, slide_count_intervals, stick_intervals, Curve, LawBand,
+    PlaneWindow, RegionMap,
 };
-use crate::model::{Direction, Mode, Rig, THETA, THETA_DOT};
+use crate::model::{Direction, FrictionLaw, Mode, Rig, THETA, THETA_DOT};
+use crate::numbers::plain;
 use crate::report::plot::{draw_side_legend, side_legend_height, Figure, PlotError, Swatch};
 use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
@@ -30,6 +32,9 @@ const TWO_FILL: RGBColor = RGBColor(195, 205, 248);
 const BOUNDARY: RGBColor = RGBColor(0, 120, 0);
 const Q_ZERO: RGBColor = RGBColor(150, 0, 150);
 const EDGE: RGBColor = RGBColor(90, 90, 90);
+/// The band edges of a law's second and third coefficients (Stribeck's mu_k; the load law's
+/// static and largest loads), after [`EDGE`].
+const EDGES: [RGBColor; 3] = [EDGE, RGBColor(215, 120, 0), RGBColor(0, 150, 170)];
 const OTHER_SLIDE: RGBColor = RGBColor(175, 175, 175);
 const JUMP: RGBColor = RGBColor(200, 0, 0);
 const RELEASE_BOX: RGBColor = RGBColor(160, 110, 0);
@@ -91,6 +96,45 @@ impl<'a> RegionFigure<'a> {
     /// s somewhere in the plane, that is when there is a paradox band.
     pub fn two_panels(&self) -> bool {
         self.map.summary.paradox_possible()
+            || self
+                .map
+                .law_bands
+                .iter()
+                .any(|b| !b.paradox_band_deg.is_empty())
+    }
+
+    /// A law band's coefficient in words, e.g. `sliding toward +x: mu_k+ = 0.47`.
+    fn band_words(&self, b: &LawBand) -> String {
+        let what = match (self.rig.friction_law, b.label) {
+            (FrictionLaw::Coulomb, _) => "mu_k".to_owned(),
+            (FrictionLaw::Direction, d) => format!("sliding toward {d}: mu_k{}", &d[..1]),
+            (FrictionLaw::Stribeck, "at rest") => "at rest: mu_s".to_owned(),
+            (FrictionLaw::Stribeck, _) => "sliding fast: mu_k".to_owned(),
+            (FrictionLaw::Load, label) => format!(
+                "{label} |N| = {} N: mu",
+                plain(b.normal_load.unwrap_or(f64::NAN))
+            ),
+        };
+        format!("{what} = {}", plain(b.mu))
+    }
+
+    /// The law bands with their edge colours, those that open a band only.
+    fn drawn_bands(&self) -> Vec<(&LawBand, RGBColor)> {
+        self.map
+            .law_bands
+            .iter()
+            .enumerate()
+            .filter(|(_, b)| !b.paradox_band_deg.is_empty())
+            .map(|(i, b)| {
+                // The direction law's two bands are in panels of their own: one colour.
+                let k = if self.rig.friction_law == FrictionLaw::Direction {
+                    0
+                } else {
+                    i.min(EDGES.len() - 1)
+                };
+                (b, EDGES[k])
+            })
+            .collect()
     }
 
     /// The key numbers printed beside the panels (a fitted rig's values to 7 digits, not 17).
@@ -99,12 +143,11 @@ impl<'a> RegionFigure<'a> {
         let mut out = match self.rig.pendulum {
             Some(_) => vec![
                 format!(
-                    "rigid pendulum: r' = {:.3}, L = {:.4} m, l = {} m, mu_k = {}, mu_s = {}",
+                    "rigid pendulum: r' = {:.3}, L = {:.4} m, l = {} m, {}",
                     s.mass_ratio,
                     self.rig.rod_length,
-                    short(self.rig.marker_length),
-                    short(s.mu_kinetic),
-                    short(s.mu_static)
+                    plain(self.rig.marker_length),
+                    self.friction_words()
                 ),
                 format!(
                     "mu* = 2 sqrt(r' (1 + r')) = {:.3}, theta* = {:.1} deg",
@@ -113,11 +156,10 @@ impl<'a> RegionFigure<'a> {
             ],
             None => vec![
                 format!(
-                    "m1/m2 = {:.3}, l = {} m, mu_k = {}, mu_s = {}",
+                    "m1/m2 = {:.3}, l = {} m, {}",
                     s.mass_ratio,
-                    short(self.rig.rod_length),
-                    short(s.mu_kinetic),
-                    short(s.mu_static)
+                    plain(self.rig.rod_length),
+                    self.friction_words()
                 ),
                 format!(
                     "mu* = 2 sqrt(r (1 + r)) = {:.3}, theta* = {:.1} deg",
@@ -134,17 +176,31 @@ impl<'a> RegionFigure<'a> {
                 self.rig.rail_tilt.to_degrees()
             ));
         }
-        if s.paradox_possible() {
-            let bands: Vec<String> = s
-                .paradox_band_deg
-                .iter()
-                .map(|[lo, hi]| format!("{lo:.1}..{hi:.1}"))
-                .collect();
-            out.push(format!(
-                "paradox band (mu_k |a| > D): {} deg (and the same |tan theta| below 0 and above 180 deg)",
-                bands.join(" and ")
-            ));
-            if self.rig.rail_tilt == 0.0 {
+        if self.rig.friction_law == FrictionLaw::Load {
+            out.push(
+                "load law: mu = mu_k (|N| / N_0)^(n - 1) at the stuck normal force |b| a swing meets with the bob below the rail in this window (smallest and largest) and at N_0 = (m1 + m2) g; shading: the sign rule at N_0"
+                    .to_owned(),
+            );
+        }
+        if self.two_panels() {
+            for b in &self.map.law_bands {
+                let band = if b.paradox_band_deg.is_empty() {
+                    "no band (mu <= mu*)".to_owned()
+                } else {
+                    let parts: Vec<String> = b
+                        .paradox_band_deg
+                        .iter()
+                        .map(|[lo, hi]| format!("{lo:.1}..{hi:.1}"))
+                        .collect();
+                    format!("paradox band {} deg", parts.join(" and "))
+                };
+                out.push(format!("{}: {band}", self.band_words(b)));
+            }
+            out.push(
+                "(each band: mu |a| > D, the same |tan theta| below 0 and above 180 deg)"
+                    .to_owned(),
+            );
+            if self.rig.rail_tilt == 0.0 && self.rig.friction_law != FrictionLaw::Direction {
                 out.push(
                     "level rig: the s = -1 panel is the s = +1 panel mirrored, (theta, theta') -> (180 deg - theta, -theta')"
                         .to_owned(),
@@ -157,6 +213,31 @@ impl<'a> RegionFigure<'a> {
             );
         }
         out
+    }
+
+    /// The friction law's coefficients, numbers at seven significant digits.
+    fn friction_words(&self) -> String {
+        let r = self.rig;
+        let (k, st) = (plain(r.mu_kinetic), plain(r.mu_static));
+        match r.friction_law {
+            FrictionLaw::Coulomb => format!("mu_k = {k}, mu_s = {st}"),
+            FrictionLaw::Stribeck => format!(
+                "Stribeck: mu_k = {k}, mu_s = {st}, v_s = {} m/s",
+                plain(r.stribeck_velocity)
+            ),
+            FrictionLaw::Direction => format!(
+                "direction law: mu_k+ = {}, mu_k- = {}, mu_s+ = {}, mu_s- = {}",
+                plain(r.friction_mu(1.0, 0.0)),
+                plain(r.friction_mu(-1.0, 0.0)),
+                plain(r.static_mu(1.0)),
+                plain(r.static_mu(-1.0))
+            ),
+            FrictionLaw::Load => format!(
+                "load law: mu_k = {k}, mu_s = {st} at N_0 = {} N, n = {}",
+                plain(r.static_load()),
+                plain(r.load_exponent)
+            ),
+        }
     }
 
     /// The rig's key numbers, then the figure's own notes.
@@ -183,7 +264,7 @@ impl<'a> RegionFigure<'a> {
                 "Q = 0: the rail reaction N changes sign while sliding".to_owned(),
             ));
         }
-        if self.two_panels() {
+        if self.map.summary.paradox_possible() {
             out.push((
                 Swatch::Fill(NONE_FILL),
                 "sliding in direction s: no solution".to_owned(),
@@ -192,7 +273,14 @@ impl<'a> RegionFigure<'a> {
                 Swatch::Fill(TWO_FILL),
                 "sliding in direction s: two solutions".to_owned(),
             ));
-            out.push((Swatch::Dashed(EDGE), "band edge mu_k |a| = D".to_owned()));
+        }
+        if self.two_panels() {
+            for (b, color) in self.drawn_bands() {
+                out.push((
+                    Swatch::Dashed(color),
+                    format!("band edge mu |a| = D, {}", self.band_words(b)),
+                ));
+            }
         }
         if self.release_box.is_some() {
             out.push((
@@ -409,14 +497,19 @@ impl RegionFigure<'_> {
         let to_deg = |c: &Curve| -> Vec<(f64, f64)> {
             c.points.iter().map(|p| (p[0].to_degrees(), p[1])).collect()
         };
-        if s.is_some() {
-            for &e in &self.map.band_edges {
+        let win = &self.map.window;
+        for (b, color) in self.drawn_bands() {
+            if !s.is_none_or(|s| b.applies_to(s)) {
+                continue;
+            }
+            let edges = band_edges(self.rig.mass_ratio(), b.mu, win.theta_min, win.theta_max);
+            for e in edges {
                 let e = e.to_degrees();
                 chart.draw_series(DashedLineSeries::new(
                     vec![(e, -w), (e, w)],
                     6,
                     4,
-                    EDGE.stroke_width(1),
+                    color.stroke_width(if color == EDGE { 1 } else { 2 }),
                 ))?;
             }
         }
@@ -545,9 +638,4 @@ impl Figure for RegionFigure<'_> {
             LEGEND_WRAP,
         )
     }
-}
-
-/// A value as typed (0.3) or, for a fitted one, to 7 significant digits.
-fn short(x: f64) -> String {
-    crate::data::calibrate::significant(x)
 }

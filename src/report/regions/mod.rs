@@ -9,7 +9,8 @@ mod figure;
 pub use figure::{figure_window, mode_color, RegionFigure};
 
 use crate::model::regions::{slide_solution_count, Curve, RegionMap};
-use crate::model::{Mode, Rig, State, THETA, THETA_DOT};
+use crate::model::{FrictionLaw, Mode, Rig, State, THETA, THETA_DOT};
+use crate::numbers::plain;
 use crate::sim::{simulate, Options, Request, Sample};
 use serde_json::{json, Value};
 use std::f64::consts::PI;
@@ -140,6 +141,7 @@ pub fn regions_json(map: &RegionMap, trajectories: &[Trajectory]) -> Value {
     out["window"] = json!(map.window);
     out["stick_boundary"] = curves_json(&map.stick_boundary);
     out["q_zero"] = curves_json(&map.q_zero);
+    out["law_bands"] = json!(map.law_bands);
     out["band_edges_deg"] = json!(map
         .band_edges
         .iter()
@@ -170,24 +172,32 @@ pub fn regions_json(map: &RegionMap, trajectories: &[Trajectory]) -> Value {
 pub fn regions_summary(rig: &Rig<f64>, map: &RegionMap, trajectories: &[Trajectory]) -> String {
     let s = &map.summary;
     let mut out = String::new();
+    let friction = friction_words(rig);
     match rig.pendulum {
         Some(p) => {
             let _ = writeln!(
                 out,
-                "rig: m1 = {} kg, rigid pendulum m_p = {:.6} kg, d = {:.5} m, J = {:.6e} kg m^2, l = {} m (bob centre), g = {} m/s^2, mu_k = {}, mu_s = {}",
-                p.slider_mass, p.mass, p.com, p.inertia, rig.marker_length, rig.gravity, s.mu_kinetic, s.mu_static
+                "rig: m1 = {} kg, rigid pendulum m_p = {} kg, d = {} m, J = {} kg m^2, l = {} m (bob centre), g = {} m/s^2, {friction}",
+                plain(p.slider_mass), plain(p.mass), plain(p.com), plain(p.inertia), plain(rig.marker_length), plain(rig.gravity)
             );
             let _ = writeln!(
                 out,
-                "equivalent point rig: slider {:.5} kg, bob m_e = {:.5} kg, L = {:.5} m (r' = {:.4})",
-                rig.slider_mass, rig.bob_mass, rig.rod_length, s.mass_ratio
+                "equivalent point rig: slider {} kg, bob m_e = {} kg, L = {} m (r' = {})",
+                plain(rig.slider_mass),
+                plain(rig.bob_mass),
+                plain(rig.rod_length),
+                plain(s.mass_ratio)
             );
         }
         None => {
             let _ = writeln!(
                 out,
-                "rig: m1 = {} kg, m2 = {} kg (r = m1/m2 = {:.4}), l = {} m, g = {} m/s^2, mu_k = {}, mu_s = {}",
-                rig.slider_mass, rig.bob_mass, s.mass_ratio, rig.rod_length, rig.gravity, s.mu_kinetic, s.mu_static
+                "rig: m1 = {} kg, m2 = {} kg (r = m1/m2 = {}), l = {} m, g = {} m/s^2, {friction}",
+                plain(rig.slider_mass),
+                plain(rig.bob_mass),
+                plain(s.mass_ratio),
+                plain(rig.rod_length),
+                plain(rig.gravity)
             );
         }
     }
@@ -213,30 +223,7 @@ fn paradox_lines(out: &mut String, rig: &Rig<f64>, map: &RegionMap) {
         "critical friction mu* = {:.4} at theta* = {:.2} deg{point}",
         s.mu_critical, s.theta_critical_deg
     );
-    for d in &s.by_direction {
-        let band = if d.paradox_band_deg.is_empty() {
-            format!("no paradox band (mu_k <= mu* = {:.4})", s.mu_critical)
-        } else {
-            let b: Vec<String> = d
-                .paradox_band_deg
-                .iter()
-                .map(|[lo, hi]| format!("{lo:.2}..{hi:.2} deg"))
-                .collect();
-            format!("paradox band {}", b.join(" and "))
-        };
-        let _ = writeln!(
-            out,
-            "sliding toward {}: mu_k = {:.4}, mu_s = {:.4}, {band}",
-            d.direction, d.mu_kinetic, d.mu_static
-        );
-    }
-    if rig.friction_law == crate::model::FrictionLaw::Load {
-        let _ = writeln!(
-            out,
-            "load law (n = {}): the band below is the static load's; the coefficient mu_k (|N| / N_0)^(n - 1) differs where |N| is far from N_0 = (m1 + m2) g",
-            rig.load_exponent
-        );
-    }
+    law_band_lines(out, rig, map);
     if s.paradox_possible() {
         let bands: Vec<String> = s
             .paradox_band_deg
@@ -245,7 +232,8 @@ fn paradox_lines(out: &mut String, rig: &Rig<f64>, map: &RegionMap) {
             .collect();
         let _ = writeln!(
             out,
-            "paradox band (mu_k |a| > D): {} (and the same |tan theta| in every quadrant)",
+            "paradox band at the largest coefficient a slide meets, mu = {} (mu |a| > D): {} (and the same |tan theta| in every quadrant)",
+            plain(rig.mu_slide_max()),
             bands.join(" and ")
         );
         let _ = writeln!(
@@ -264,8 +252,8 @@ fn paradox_lines(out: &mut String, rig: &Rig<f64>, map: &RegionMap) {
     } else {
         let _ = writeln!(
             out,
-            "paradox band: none (mu_k = {} <= mu* = {:.4}): the sliding equation has exactly one solution everywhere",
-            s.mu_kinetic, s.mu_critical
+            "paradox band: none (the largest coefficient a slide meets, mu = {}, <= mu* = {:.4}): the sliding equation has exactly one solution everywhere",
+            plain(rig.mu_slide_max()), s.mu_critical
         );
     }
     let ratio = if rig.pendulum.is_some() {
@@ -275,8 +263,9 @@ fn paradox_lines(out: &mut String, rig: &Rig<f64>, map: &RegionMap) {
     };
     let _ = writeln!(
         out,
-        "largest {ratio} with a paradox band at mu_k = {}: {:.4}",
-        s.mu_kinetic, s.max_mass_ratio_for_paradox
+        "largest {ratio} with a paradox band at mu = {}: {:.4}",
+        plain(rig.mu_slide_max()),
+        s.max_mass_ratio_for_paradox
     );
     let _ = writeln!(
         out,
@@ -287,6 +276,70 @@ fn paradox_lines(out: &mut String, rig: &Rig<f64>, map: &RegionMap) {
         map.window.theta_max.to_degrees(),
         map.window.w_max
     );
+}
+
+/// The friction law and its coefficients in words, numbers at seven significant digits.
+fn friction_words(rig: &Rig<f64>) -> String {
+    let (k, st) = (plain(rig.mu_kinetic), plain(rig.mu_static));
+    match rig.friction_law {
+        FrictionLaw::Coulomb => format!("mu_k = {k}, mu_s = {st}"),
+        FrictionLaw::Stribeck => format!(
+            "Stribeck's law: mu_k = {k} sliding fast, mu_s = {st} at rest, v_s = {} m/s",
+            plain(rig.stribeck_velocity)
+        ),
+        FrictionLaw::Direction => format!(
+            "direction law: toward +x mu_k+ = {}, mu_s+ = {}; toward -x mu_k- = {}, mu_s- = {} (means {k} and {st})",
+            plain(rig.friction_mu(1.0, 0.0)),
+            plain(rig.static_mu(1.0)),
+            plain(rig.friction_mu(-1.0, 0.0)),
+            plain(rig.static_mu(-1.0))
+        ),
+        FrictionLaw::Load => format!(
+            "load law: mu_k = {k}, mu_s = {st} at the static load N_0 = (m1 + m2) g = {} N, exponent n = {}",
+            plain(rig.static_load()),
+            plain(rig.load_exponent)
+        ),
+    }
+}
+
+/// One line per coefficient of the friction law with the paradox band it opens, and what the
+/// load law's loads are.
+fn law_band_lines(out: &mut String, rig: &Rig<f64>, map: &RegionMap) {
+    let s = &map.summary;
+    if rig.friction_law == FrictionLaw::Load {
+        let [lo, hi] = crate::model::regions::swing_loads(rig, &map.window);
+        let _ = writeln!(
+            out,
+            "load law: the coefficient mu_k (|N| / N_0)^(n - 1) at the loads a swing meets in the window with the bob below the rail (the stuck normal force |b| for |theta'| <= {:.2} rad/s): {} to {} N, N_0 = {} N; with the bob above the rail |N| falls to 0 where Q = 0",
+            map.window.w_max,
+            plain(lo),
+            plain(hi),
+            plain(rig.static_load())
+        );
+    }
+    for b in &map.law_bands {
+        let what = match (rig.friction_law, b.label) {
+            (FrictionLaw::Coulomb, _) => "Coulomb, mu_k".to_owned(),
+            (FrictionLaw::Direction, d) => format!("sliding toward {d}, mu_k{}", &d[..1]),
+            (FrictionLaw::Stribeck, "at rest") => "at rest (v -> 0), mu_s".to_owned(),
+            (FrictionLaw::Stribeck, _) => "sliding fast (v >> v_s), mu_k".to_owned(),
+            (FrictionLaw::Load, label) => format!(
+                "{label} |N| = {} N, mu",
+                plain(b.normal_load.unwrap_or(f64::NAN))
+            ),
+        };
+        let band = if b.paradox_band_deg.is_empty() {
+            format!("no paradox band (mu <= mu* = {:.4})", s.mu_critical)
+        } else {
+            let parts: Vec<String> = b
+                .paradox_band_deg
+                .iter()
+                .map(|[lo, hi]| format!("{lo:.2}..{hi:.2} deg"))
+                .collect();
+            format!("paradox band {}", parts.join(" and "))
+        };
+        let _ = writeln!(out, "{what} = {}: {band}", plain(b.mu));
+    }
 }
 
 /// One line per trajectory: its release, its modes in turn (the first eight of a long
