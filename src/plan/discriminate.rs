@@ -420,15 +420,18 @@ struct Common {
     jtj: DMatrix<f64>,
 }
 
+/// The columns every rival shares: mu, then the release.
+const COMMON_COLUMNS: [Param; 5] = [
+    Param::MuKinetic,
+    Param::X,
+    Param::Theta,
+    Param::XDot,
+    Param::ThetaDot,
+];
+
 impl Common {
     fn new(ev: &Evaluator, frames: &Frames, null: &Rig<f64>, y0: &State<f64>) -> Option<Common> {
-        let free = vec![
-            Param::MuKinetic,
-            Param::X,
-            Param::Theta,
-            Param::XDot,
-            Param::ThetaDot,
-        ];
+        let free = COMMON_COLUMNS.to_vec();
         let (r0, jac) = jacobian(ev, frames, *null, y0, free, true)?;
         Some(Common {
             jtj: jac.tr_mul(&jac),
@@ -933,13 +936,7 @@ mod tests {
         let predicted = lambda(&ev, &truth, [Law::Coulomb, Law::Direction], &SWING);
         let y = predict(&ev, &Frames::new(&ev, usize::MAX), &truth, &SWING).unwrap();
         let noise = spec.camera.noise_m;
-        let free = vec![
-            Param::MuKinetic,
-            Param::X,
-            Param::Theta,
-            Param::XDot,
-            Param::ThetaDot,
-        ];
+        let free = COMMON_COLUMNS.to_vec();
         let null = reference_rig(&truth, Law::Coulomb);
         let mut problem = TrajectoryProblem::new(ev.placeholder(), null, SWING, free, ev.options);
         problem.sigma = [noise, noise];
