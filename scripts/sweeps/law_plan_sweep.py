@@ -673,34 +673,34 @@ def main(argv=None):
     ap.add_argument("--plan", default=PLAN_PATTERN,
                     help="plan files, {rig} for the rig's name (default "
                          "configs/plan_law_{rig}.toml); another gets its own work directory")
-    a = ap.parse_args(argv)
-    appell = os.path.abspath(a.appell)
+    args = ap.parse_args(argv)
+    appell = os.path.abspath(args.appell)
     bid = binary_id(appell)
-    work = os.path.join(a.work, bid)
-    if a.plan != PLAN_PATTERN:
-        work += "_plan" + hashlib.sha256(a.plan.encode()).hexdigest()[:8]
-    if a.truth == "reference":
+    work = os.path.join(args.work, bid)
+    if args.plan != PLAN_PATTERN:
+        work += "_plan" + hashlib.sha256(args.plan.encode()).hexdigest()[:8]
+    if args.truth == "reference":
         # src/plan/discriminate.rs, REFERENCE_*: the departures the planner assumes
         mu = lrg.MU_K
         lrg.set_truth(mu_s=round(1.1 * mu, 12), v_s=0.05, mu_pos=round(1.025 * mu, 12),
                       mu_neg=round(0.975 * mu, 12), load_exp=0.9)
         work += "_reftruth"
     os.makedirs(work, exist_ok=True)
-    seeds = parse_seeds(a.seeds)
-    laws, rigs = a.laws.split(","), a.rigs.split(",")
+    seeds = parse_seeds(args.seeds)
+    laws, rigs = args.laws.split(","), args.rigs.split(",")
     t0 = time.monotonic()
     print(f"appell {appell} (sha256 {bid}, mtime "
           f"{time.strftime('%Y-%m-%d %H:%M:%S', time.gmtime(os.path.getmtime(appell)))} UTC); "
           f"work {work}", flush=True)
     cases = [dict(case=law, law=law, rig=rig, seed=s) for s in seeds for law in laws
              for rig in rigs]
-    if not a.no_coulomb:
+    if not args.no_coulomb:
         cases += [dict(case=f"coulomb-{k}", law="coulomb", first=k, rig=rig, seed=s)
                   for s in seeds for k in ("informative", "push") for rig in rigs]
     for c in cases:
-        c.update(appell=appell, work=work, timeout=a.timeout, plan=a.plan)
+        c.update(appell=appell, work=work, timeout=args.timeout, plan=args.plan)
     rows = []
-    with cf.ProcessPoolExecutor(a.jobs) as ex:
+    with cf.ProcessPoolExecutor(args.jobs) as ex:
         futs = {ex.submit(run_case_safe, c): c for c in cases}
         for fu in cf.as_completed(futs):
             r = fu.result()
@@ -732,20 +732,20 @@ def main(argv=None):
         for _ in range(3):
             rc, _, err, cpu, _, error = run([binary, "plan",
                                              os.path.join(ROOT, "configs", "plan_example.toml")],
-                                            a.timeout)
+                                            args.timeout)
             if rc == 0 and not error:
                 cpus.append(cpu)
         json.dump(cpus, open(path, "w"))
         return cpus
     cpu_example = example(appell, os.path.join(work, "plan_example_cpu.json"))
     base = None
-    if a.baseline:
-        b_path = os.path.abspath(a.baseline)
+    if args.baseline:
+        b_path = os.path.abspath(args.baseline)
         b_id = binary_id(b_path)
         base = dict(id=b_id, example=example(b_path, os.path.join(
             work, f"plan_example_cpu_baseline_{b_id}.json")))
         bcases = [dict(c, baseline=b_path, baseline_id=b_id) for c in cases]
-        with cf.ProcessPoolExecutor(a.jobs) as ex:
+        with cf.ProcessPoolExecutor(args.jobs) as ex:
             bc = list(ex.map(baseline_case, bcases))
         for r in rows:
             for c, v in zip(bcases, bc):
@@ -758,8 +758,8 @@ def main(argv=None):
     tsv(rows, os.path.join(work, "rows.tsv"))
     with open(os.path.join(work, "rows.json"), "w") as fh:
         json.dump(rows, fh, indent=1)
-    if a.md:
-        with open(a.md, "w") as fh:
+    if args.md:
+        with open(args.md, "w") as fh:
             fh.write(text + "\n")
     return 0
 
