@@ -65,10 +65,25 @@ pub fn value_pm(value: f64, sd: f64) -> String {
 /// assert_eq!(plain(2.5e-7), "2.5e-7");
 /// ```
 pub fn plain(x: f64) -> String {
+    significant(x, 7)
+}
+
+/// A number to `digits` significant digits (at least one), as briefly as that allows, in the
+/// notation of [`plain`]: for a derived figure whose own spread is a few per cent (an
+/// expected chi-square, a chance), where seven digits would claim a precision it lacks.
+///
+/// ```
+/// use appell::numbers::significant;
+/// assert_eq!(significant(1234.5678, 2), "1200");
+/// assert_eq!(significant(0.0123456, 2), "0.012");
+/// assert_eq!(significant(3.0e7, 2), "3e7");
+/// ```
+pub fn significant(x: f64, digits: usize) -> String {
     if x == 0.0 || !x.is_finite() {
         return format!("{}", if x == 0.0 { 0.0 } else { x });
     }
-    let rounded: f64 = format!("{x:.6e}").parse().unwrap_or(x);
+    let d = digits.max(1) - 1;
+    let rounded: f64 = format!("{x:.d$e}").parse().unwrap_or(x);
     if (-4..6).contains(&exponent(rounded)) {
         format!("{rounded}")
     } else {

@@ -101,7 +101,7 @@ enum Command {
     /// Write a synthetic recording of a scene (CSV or MCAP) with noise, dropouts, outliers.
     Synth(synth::Args),
     /// Plan releases that make the wanted mode transitions observable, ranked by how well
-    /// they pin down mu.
+    /// they pin down mu or, with friction laws to weigh, tell the laws apart.
     Plan(plan::Args),
 }
 

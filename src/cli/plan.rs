@@ -1,5 +1,6 @@
-//! `appell plan PLAN.toml [--json] [--plot FILE.svg|FILE.png]`: releases that make the wanted
-//! transitions observable, ranked by the predicted standard error of mu.
+//! `appell plan PLAN.toml [--json] [--plot FILE.svg|FILE.png] [--after FIT.json]`: releases
+//! that make the wanted transitions observable, ranked by the predicted standard error of mu
+//! or, when friction laws are weighed, by how surely a fit would tell them apart.
 
 use super::Failure;
 use anyhow::anyhow;
@@ -24,8 +25,10 @@ pub struct Args {
     plot: Option<PathBuf>,
     /// Plan the next release after a fit (`appell fit --json`, single or `--joint`): its mu
     /// and standard error for the robustness draws, its chosen nuisances in the simulated
-    /// rig, and its covariance as what is already known; releases are ranked by mu's
-    /// standard error after adding them.
+    /// rig, and its covariance as what is already known. When the fit left friction laws
+    /// open (its law table), releases are ranked by how many pairs of those laws a joint fit
+    /// of both recordings is expected to tell apart; otherwise by mu's standard error after
+    /// adding them (docs/plan.md, "Telling laws apart").
     #[arg(long, value_name = "FIT.json")]
     after: Option<PathBuf>,
 }

@@ -133,6 +133,15 @@ pub struct RigidPendulum {
 }
 
 impl RigidPendulum {
+    /// Whether the pendulum is a point bob on a massless rod (all its mass at the marker,
+    /// J = m_p l^2 to rounding): a rig file that writes out `rod_mass = 0` and
+    /// `bob_radius = 0` says the pendulum is known, not that it is rigid.
+    pub fn is_point(&self) -> bool {
+        let l = self.marker_length;
+        (self.com - l).abs() <= 1e-12 * l
+            && (self.inertia - self.mass * l * l).abs() <= 1e-12 * self.mass * l * l
+    }
+
     /// A uniform rod of mass `rod_mass` from the pivot to the bob's centre (length `l`) and a
     /// solid sphere bob of mass `bob_mass` and radius `radius` centred at `l`:
     /// m_p = m2 + m_r, m_p d = m2 l + m_r l / 2, J = m2 (l^2 + 2 R^2 / 5) + m_r l^2 / 3.

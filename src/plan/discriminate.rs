@@ -13,143 +13,14 @@
 //! Stribeck's as v_s -> 0) are not weighed: there the rival fits the truth exactly and the
 //! BIC's penalty, not the data, decides.
 
+use super::law::{reference_rig, Law, STRONG};
 use super::search::Evaluator;
 use super::spec::normal_cdf;
 use crate::fit::{Observations, Param, TrajectoryProblem};
-use crate::model::{FrictionLaw, Rig, State};
+use crate::model::{Rig, State};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
 use std::sync::Arc;
-
-/// A friction law the plan can weigh: the fit's names (`static` is Coulomb's law with a
-/// static coefficient above the kinetic one).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, PartialOrd, Ord)]
-#[serde(rename_all = "lowercase")]
-pub enum Law {
-    /// One coefficient, mu_s = mu_k.
-    Coulomb,
-    /// Coulomb's law with mu_s > mu_k.
-    Static,
-    /// mu(v) falling from mu_s to mu_k over the Stribeck speed v_s.
-    Stribeck,
-    /// Coefficients that differ by sliding direction.
-    Direction,
-    /// Friction growing as a power n of the normal load.
-    Load,
-}
-
-impl Law {
-    /// Every law, in the order reports list them.
-    pub const ALL: [Law; 5] = [
-        Law::Coulomb,
-        Law::Static,
-        Law::Stribeck,
-        Law::Direction,
-        Law::Load,
-    ];
-
-    /// The name in plan files, fits and reports.
-    pub fn name(self) -> &'static str {
-        match self {
-            Law::Coulomb => "coulomb",
-            Law::Static => "static",
-            Law::Stribeck => "stribeck",
-            Law::Direction => "direction",
-            Law::Load => "load",
-        }
-    }
-
-    /// The law of a name (the fit's names; `+viscous` and the like are not laws here).
-    pub fn from_name(s: &str) -> Option<Law> {
-        Law::ALL.into_iter().find(|l| l.name() == s)
-    }
-
-    /// The law's parameters beyond mu_kinetic, as the fit frees them.
-    pub fn params(self) -> &'static [Param] {
-        match self {
-            Law::Coulomb => &[],
-            Law::Static => &[Param::MuStatic],
-            Law::Stribeck => &[Param::MuStatic, Param::StribeckVelocity],
-            Law::Direction => &[Param::FrictionSplit],
-            Law::Load => &[Param::LoadExponent],
-        }
-    }
-
-    /// The law the simulator runs.
-    pub fn friction_law(self) -> FrictionLaw {
-        match self {
-            Law::Coulomb | Law::Static => FrictionLaw::Coulomb,
-            Law::Stribeck => FrictionLaw::Stribeck,
-            Law::Direction => FrictionLaw::Direction,
-            Law::Load => FrictionLaw::Load,
-        }
-    }
-
-    /// Whether this law describes every rail `other` does (so a recording can never weigh
-    /// against it when `other` is true): each law contains Coulomb's, Stribeck's contains
-    /// static friction (v_s -> 0).
-    pub fn contains(self, other: Law) -> bool {
-        self == other || other == Law::Coulomb || (self == Law::Stribeck && other == Law::Static)
-    }
-
-    /// The law of a rig (static when mu_s is above mu_k under Coulomb's law).
-    pub fn of_rig(rig: &Rig<f64>) -> Law {
-        match rig.friction_law {
-            FrictionLaw::Coulomb if rig.mu_static > rig.mu_kinetic => Law::Static,
-            FrictionLaw::Coulomb => Law::Coulomb,
-            FrictionLaw::Stribeck => Law::Stribeck,
-            FrictionLaw::Direction => Law::Direction,
-            FrictionLaw::Load => Law::Load,
-        }
-    }
-}
-
-impl std::fmt::Display for Law {
-    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.write_str(self.name())
-    }
-}
-
-/// The reference departures: the smallest departure from Coulomb's law a dry-rail lab
-/// reports, used for a law the plan file does not give values for. Static friction 10 %
-/// above kinetic; Stribeck's hump 10 % above kinetic over 0.05 m/s; coefficients 5 % apart
-/// by direction (a split of 2.5 % of mu); a load exponent of 0.9.
-pub const REFERENCE_STATIC_RATIO: f64 = 1.1;
-/// Stribeck speed of the reference departure (m/s).
-pub const REFERENCE_STRIBECK_VELOCITY: f64 = 0.05;
-/// Half the relative difference of the direction law's coefficients at the reference.
-pub const REFERENCE_SPLIT_FRACTION: f64 = 0.025;
-/// Load exponent of the reference departure.
-pub const REFERENCE_LOAD_EXPONENT: f64 = 0.9;
-
-/// The rig under `law` at its reference departure from `base` (whose law's own values are
-/// kept when it is that law: a plan file's or a fit's).
-pub fn reference_rig(base: &Rig<f64>, law: Law) -> Rig<f64> {
-    let mut rig = *base;
-    let own = Law::of_rig(base) == law;
-    let mu = base.mu_kinetic;
-    rig.friction_law = law.friction_law();
-    if !own {
-        rig.mu_static = mu;
-        rig.kinetic_split = 0.0;
-        rig.static_split = 0.0;
-        rig.load_exponent = 1.0;
-        match law {
-            Law::Coulomb => {}
-            Law::Static => rig.mu_static = REFERENCE_STATIC_RATIO * mu,
-            Law::Stribeck => {
-                rig.mu_static = REFERENCE_STATIC_RATIO * mu;
-                rig.stribeck_velocity = REFERENCE_STRIBECK_VELOCITY;
-            }
-            Law::Direction => {
-                rig.kinetic_split = REFERENCE_SPLIT_FRACTION * mu;
-                rig.static_split = rig.kinetic_split;
-            }
-            Law::Load => rig.load_exponent = REFERENCE_LOAD_EXPONENT,
-        }
-    }
-    rig
-}
 
 /// How far a recording would separate one law, taken as true, from a rival.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -188,6 +59,12 @@ pub struct Laws {
     /// The most frames a recording's separation is computed from ([`LAW_FRAMES`]).
     pub max_frames: usize,
 }
+
+/// The expected BIC margin beyond which a larger one no longer breaks ties: twice the fit's
+/// strong evidence ([`STRONG`]). The pair's chance (which still counts, in full) is then
+/// about 0.9 or more and rises to 1 as the margin grows; past that, a larger margin buys
+/// nothing a lab can use, and mu's precision ranks the releases.
+pub const MARGIN_CAP: f64 = 2.0 * STRONG;
 
 /// Frames the law criterion samples from a recording: every k-th frame, its rows weighted
 /// by k. The rival's misfit is smooth in time (kinks at mode switches), so the sum over a
@@ -389,14 +266,17 @@ impl Laws {
     /// What the search maximises: the expected number of pairs the fit will resolve (the
     /// sum of their chances), the worst pair's margin breaking ties on a log-like scale
     /// (a box where no release separates some pair still ranks its releases); minus
-    /// infinity when a pair could not be computed.
+    /// infinity when a pair could not be computed. The margin counts only up to
+    /// [`MARGIN_CAP`]: beyond it every pair is resolved and a larger margin buys nothing,
+    /// so releases that all tell the laws apart are ranked by mu's precision instead
+    /// ([`super::search::Candidate::objective`]).
     pub fn score(separations: &[Option<Separation>]) -> f64 {
         let worst = Laws::worst(separations);
         if worst == f64::NEG_INFINITY {
             return worst;
         }
         let resolved: f64 = separations.iter().flatten().map(|s| s.probability).sum();
-        resolved + 0.01 * (worst / 10.0).asinh()
+        resolved + 0.01 * (worst.min(MARGIN_CAP) / 10.0).asinh()
     }
 
     /// The release's separation: the smallest expected BIC margin over the pairs (minus
@@ -596,73 +476,6 @@ fn schur(jtj: DMatrix<f64>, jtr: DVector<f64>, rr: f64, shared: usize) -> Option
     })
 }
 
-/// What a fit's JSON says about the laws: the one it chose, each law's evidence, and the
-/// recording's release (a single fit's), for [`resolve`].
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct LawTable {
-    /// The law chosen (`None`: a law this planner does not weigh, e.g. with viscous friction
-    /// alone).
-    pub chosen: Option<Law>,
-    /// Each law's status (`fitted`, `screened`, `not tried`) and BIC against the chosen.
-    pub rows: Vec<(Law, String, Option<f64>)>,
-    /// The fitted release of a single recording's fit (a joint fit's are not in its JSON).
-    pub initial: Option<State<f64>>,
-    /// Residual rows the fit used.
-    pub n_residuals: f64,
-}
-
-impl LawTable {
-    /// The table in a fit's JSON (`friction_law`, `initial`, `n_residuals`); `None` when the
-    /// JSON has no friction law section.
-    pub fn from_json(v: &serde_json::Value) -> Option<LawTable> {
-        let f = &v["friction_law"];
-        let chosen = f["chosen"].as_str()?;
-        let rows = f["laws"]
-            .as_array()?
-            .iter()
-            .filter_map(|r| {
-                let law = Law::from_name(r["law"].as_str()?)?;
-                Some((
-                    law,
-                    r["status"].as_str()?.to_owned(),
-                    r["delta_bic"].as_f64(),
-                ))
-            })
-            .collect();
-        let i = &v["initial"];
-        let initial = (|| {
-            Some([
-                i["x"].as_f64()?,
-                i["theta"].as_f64()?,
-                i["x_dot"].as_f64()?,
-                i["theta_dot"].as_f64()?,
-            ])
-        })()
-        .filter(|s| s.iter().all(|x| x.is_finite()));
-        let n_residuals = v["n_residuals"]
-            .as_f64()
-            .or_else(|| {
-                v["releases"]
-                    .as_array()
-                    .map(|rs| rs.iter().filter_map(|r| r["n_residuals"].as_f64()).sum())
-            })
-            .unwrap_or(0.0);
-        Some(LawTable {
-            chosen: Law::from_name(chosen),
-            rows,
-            initial,
-            n_residuals: if n_residuals.is_finite() {
-                n_residuals.max(0.0)
-            } else {
-                0.0
-            },
-        })
-    }
-}
-
-/// The fit's line for strong evidence (docs/fit.md, "Friction law"): a BIC difference of 6.
-pub const STRONG: f64 = 6.0;
-
 /// The laws a plan weighs, and why, in plain sentences: the plan file's `discriminate` list
 /// when given; after a fit, the law it chose and every law the recording left open (not
 /// fitted, or fitted and worse by less than [`STRONG`] in its chi-square, and, for a law
@@ -781,10 +594,10 @@ pub fn unresolved_notes(best: &[Separation]) -> Vec<String> {
     let mut out: Vec<String> = Vec::new();
     for s in best.iter().filter(|s| s.probability < 0.5) {
         let line = format!(
-            "the best proposal does not separate {} (true) from {} (expected BIC margin {:+.1}, chance {:.2}): {} shows it; widen the release ranges if the rig allows",
+            "the best proposal does not separate {} (true) from {} (expected BIC margin {}, chance {:.2}): a release with {} would show it; widen the release ranges if the rig allows",
             s.truth,
             s.rival,
-            s.expected_delta_bic,
+            crate::numbers::significant(s.expected_delta_bic, 2),
             s.probability,
             what_shows(s.truth)
         );
@@ -796,6 +609,8 @@ pub fn unresolved_notes(best: &[Separation]) -> Vec<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::FrictionLaw;
+    use crate::plan::law::{LawTable, REFERENCE_SPLIT_FRACTION};
     use crate::plan::spec::PlanSpec;
     use std::path::Path;
 

@@ -8,6 +8,7 @@
 
 pub mod criteria;
 pub mod discriminate;
+pub mod law;
 pub mod prior;
 pub mod rig_match;
 pub mod search;
@@ -56,7 +57,7 @@ pub struct Proposal {
     /// Predicted standard errors of each weighed law's parameters (mu_kinetic and the
     /// law's own) from a recording of this release, the law at its reference departure:
     /// (law, parameter, stderr).
-    pub law_stderr: Vec<(discriminate::Law, Param, f64)>,
+    pub law_stderr: Vec<(law::Law, Param, f64)>,
     /// Samples of the nominal run at the frame rate (for figures).
     pub samples: Vec<Sample<f64>>,
 }
@@ -150,7 +151,7 @@ pub struct PlanReport {
     /// standard error is mu's after adding it to that knowledge.
     pub prior_mu_stderr: Option<f64>,
     /// The laws weighed (empty: the plan ranks by mu's precision).
-    pub laws: Vec<discriminate::Law>,
+    pub laws: Vec<law::Law>,
     /// Why these laws, or why none, in plain sentences.
     pub law_notes: Vec<String>,
 }
@@ -178,7 +179,7 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
     let mut ev = Evaluator::new(spec);
     let planned_rows = 4.0 * spec.camera.frame_times().len() as f64;
     let (laws, law_notes) = discriminate::resolve(&ev, planned_rows);
-    let weighed: Vec<discriminate::Law> = laws
+    let weighed: Vec<law::Law> = laws
         .as_ref()
         .map_or_else(Vec::new, |l| l.candidates.iter().map(|c| c.0).collect());
     ev.laws = laws;
@@ -258,7 +259,17 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
     let (mut proposals, mut failed): (Vec<Proposal>, Vec<Proposal>) =
         all.into_iter().partition(Proposal::ranked);
     if ev.laws.is_some() {
-        proposals.sort_by(|a, b| b.separation.total_cmp(&a.separation));
+        // The search's own order: the separation, then mu's precision.
+        let key = |p: &Proposal| {
+            Candidate {
+                release: search::release_values(&p.initial),
+                robustness: 1.0,
+                stderr: p.predicted_mu_stderr,
+                separation: p.separation,
+            }
+            .objective(0.0)
+        };
+        proposals.sort_by(|a, b| key(a).total_cmp(&key(b)));
     } else {
         proposals.sort_by(|a, b| a.predicted_mu_stderr.total_cmp(&b.predicted_mu_stderr));
     }
@@ -279,7 +290,13 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
     let at_limit = proposals
         .first()
         .map_or_else(Vec::new, |p| at_limit(&ranges, &p.initial));
-    let aim = if ev.laws.is_some() {
+    // Once the best release tells every pair apart, the ranking is mu's precision.
+    let saturated = proposals.first().is_some_and(|p| {
+        p.separations
+            .iter()
+            .all(|s| s.expected_delta_bic >= discriminate::MARGIN_CAP)
+    });
+    let aim = if ev.laws.is_some() && !saturated {
         "tell the laws apart"
     } else {
         "pin mu down"
@@ -445,7 +462,7 @@ fn paradox_notes(spec: &PlanSpec) -> Vec<String> {
     let r = spec.rig.mass_ratio();
     let mu_star = mu_critical(r);
     let [_, mu_hi] = spec.mu_kinetic.span();
-    let ratio = match spec.rig.pendulum {
+    let ratio = match spec.rig.pendulum.filter(|p| !p.is_point()) {
         Some(p) => format!(
             "rigid pendulum: equivalent mass ratio r' = (m1 + m_p - m_e)/m_e = {r:.3} (L = {:.4} m; the point rig's r = m1/m_p = {:.3} would give mu* = {:.3})",
             spec.rig.rod_length,
@@ -468,7 +485,7 @@ fn sudden_stop_advice(spec: &PlanSpec) -> String {
     let r = spec.rig.mass_ratio();
     let mu = spec.rig.mu_kinetic;
     let r_max = max_mass_ratio_for_paradox(mu);
-    if spec.rig.pendulum.is_some() {
+    if spec.rig.pendulum.is_some_and(|p| !p.is_point()) {
         // A rigid pendulum's masses enter through r' = (m1 + m_p - m_e) / m_e alone.
         return format!(
             "sudden_stop needs mu above mu* = {:.3} (rigid pendulum, r' = {r:.3}); with mu = {mu} an equivalent mass ratio r' below {r_max:.4} brings mu* below mu (a lighter slider, or a pendulum with more of its mass at the bob and less in the rod)",

@@ -88,7 +88,7 @@ pub struct Prior {
     /// Where the values are in the JSON: `shared` (a joint fit) or `parameters`.
     pub section: &'static str,
     /// What the fit said about the friction laws (for a plan that tells them apart).
-    pub laws: Option<super::discriminate::LawTable>,
+    pub laws: Option<super::law::LawTable>,
 }
 
 /// A fit's JSON (`appell fit --json`, single or `--joint`), read whole (at most 16 MiB).
@@ -234,7 +234,7 @@ impl Prior {
             covariance,
             information,
             section,
-            laws: super::discriminate::LawTable::from_json(v),
+            laws: super::law::LawTable::from_json(v),
         })
     }
 

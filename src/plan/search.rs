@@ -309,8 +309,8 @@ impl<'a> Evaluator<'a> {
     /// Predicted standard errors of each weighed law's parameters (mu_kinetic and its own,
     /// at its reference departure) from a recording of this release; without laws to weigh,
     /// those of the plan's own law when it has parameters beyond mu.
-    pub fn law_stderr(&self, p: &ReleaseValues) -> Vec<(super::discriminate::Law, Param, f64)> {
-        use super::discriminate::{reference_rig, Law};
+    pub fn law_stderr(&self, p: &ReleaseValues) -> Vec<(super::law::Law, Param, f64)> {
+        use super::law::{reference_rig, Law};
         let laws: Vec<(Law, Rig<f64>)> = match &self.laws {
             Some(l) => l.candidates.clone(),
             None => {
@@ -351,18 +351,24 @@ pub struct Candidate {
     pub separation: f64,
 }
 
+/// One pair of laws told apart, in the units of [`Candidate::objective`]: a hundred
+/// e-folds of mu's standard error.
+const PAIR: f64 = 100.0;
+
 impl Candidate {
-    /// What the search minimises: log stderr, or, when the plan weighs laws, minus the
-    /// separation on a log-like scale; plus a steep penalty for every bit of robustness
-    /// missing (a constraint softened so Nelder-Mead can feel its way back).
+    /// What the search minimises: log stderr, or, when the plan weighs laws, log stderr
+    /// minus a hundred times the separation (so releases that tell the laws apart equally
+    /// well are ranked by mu's precision, and a tenth of a pair outweighs any precision a box
+    /// offers); plus a steep penalty for every bit of robustness missing (a constraint
+    /// softened so Nelder-Mead can feel its way back), worth twenty units of the ranking
+    /// (twenty e-folds of stderr, or twenty pairs).
     pub fn objective(&self, min_robustness: f64) -> f64 {
-        let value = if self.separation.is_nan() {
-            self.stderr.ln()
-        } else {
-            // A separation never computed (-inf) ranks last, but finitely.
-            -self.separation.max(-1e6)
-        };
-        value + 20.0 * (min_robustness - self.robustness).max(0.0)
+        let missing = (min_robustness - self.robustness).max(0.0);
+        if self.separation.is_nan() {
+            return self.stderr.ln() + 20.0 * missing;
+        }
+        // A separation never computed (-inf) ranks last, but finitely.
+        PAIR * (20.0 * missing - self.separation.max(-1e6)) + self.stderr.ln().clamp(-1e3, 1e3)
     }
 
     /// Whether the search can use it: mu identifiable, and under a law plan its separation

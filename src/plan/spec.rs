@@ -442,7 +442,7 @@ pub struct PlanSpec {
     pub prior: Option<super::prior::Prior>,
     /// Laws to tell apart (`friction.discriminate`); empty: those an earlier fit left open,
     /// or none.
-    pub discriminate: Vec<super::discriminate::Law>,
+    pub discriminate: Vec<super::law::Law>,
 }
 
 fn invalid(path: &Path, key: &str, expected: &str, value: impl fmt::Debug) -> SceneError {
@@ -708,8 +708,8 @@ impl FrictionSpec {
     }
 
     /// The laws of `discriminate`, each named once.
-    fn discriminate(&self, path: &Path) -> Result<Vec<super::discriminate::Law>, SceneError> {
-        use super::discriminate::Law;
+    fn discriminate(&self, path: &Path) -> Result<Vec<super::law::Law>, SceneError> {
+        use super::law::Law;
         let Some(names) = &self.discriminate else {
             return Ok(Vec::new());
         };

@@ -142,23 +142,44 @@ fn law_json(v: &mut Value, p: &Proposal) {
     }
 }
 
+/// The expected number of pairs of laws a fit of the proposal resolves (the sum of the
+/// pairs' chances): what a plan weighing laws ranks by.
+fn resolved(p: &Proposal) -> f64 {
+    p.separations.iter().map(|s| s.probability).sum()
+}
+
 /// The lines of a proposal's law separation and the laws' predicted errors.
 fn law_lines(s: &mut String, p: &Proposal) {
-    for sep in &p.separations {
+    use crate::numbers::significant;
+    if !p.separations.is_empty() {
         let _ = writeln!(
             s,
-            "   {} (true) against {}: the rival's best fit leaves chi-square {:.1} on average, expected BIC margin {:+.1}, chance the fit prefers {} {:.2}",
+            "   pairs of laws the fit is expected to resolve: {} of {}",
+            significant(resolved(p), 2),
+            p.separations.len()
+        );
+    }
+    // Two digits: an expected chi-square's own spread, sqrt(2 (k + 2 lambda)), is larger.
+    for sep in &p.separations {
+        let margin = significant(sep.expected_delta_bic, 2);
+        let _ = writeln!(
+            s,
+            "   {} (true) against {}: the rival's best fit leaves chi-square {} on average, expected BIC margin {}{margin}, chance the fit prefers {} {:.2}",
             sep.truth,
             sep.rival,
-            sep.lambda,
-            sep.expected_delta_bic,
+            significant(sep.lambda, 2),
+            if sep.expected_delta_bic > 0.0 { "+" } else { "" },
             sep.truth,
             sep.probability
         );
     }
-    let mut by_law: Vec<(crate::plan::discriminate::Law, Vec<String>)> = Vec::new();
+    let mut by_law: Vec<(crate::plan::law::Law, Vec<String>)> = Vec::new();
     for (law, q, se) in &p.law_stderr {
-        let text = format!("{} {:.2e}", q.name(), se);
+        let text = if se.is_finite() {
+            format!("{} {:.2e}", q.name(), se)
+        } else {
+            format!("{} not shown by this release", q.name())
+        };
         match by_law.iter_mut().find(|(l, _)| l == law) {
             Some((_, v)) => v.push(text),
             None => by_law.push((*law, vec![text])),
@@ -251,6 +272,9 @@ pub fn plan_table(report: &PlanReport) -> String {
             report.min_robustness
         );
     }
+    // The column the proposals are ranked by: mu's predicted error, or, when the plan weighs
+    // laws, the pairs of laws a fit is expected to resolve.
+    let weighs = !report.laws.is_empty();
     let _ = writeln!(
         s,
         "{:>4} {:>11} {:>13} {:>10} {:>11} {:>14} {:>10} {:>10}",
@@ -259,7 +283,7 @@ pub fn plan_table(report: &PlanReport) -> String {
         "theta' [r/s]",
         "x' [m/s]",
         "robustness",
-        "stderr(mu)",
+        if weighs { "pairs told" } else { "stderr(mu)" },
         "rail [mm]",
         "events"
     );
@@ -280,7 +304,11 @@ pub fn plan_table(report: &PlanReport) -> String {
             y[3],
             y[2],
             format!("{:.3}", p.robustness),
-            format!("{:.3e}", p.predicted_mu_stderr),
+            if weighs {
+                format!("{:.2} of {}", resolved(p), p.separations.len())
+            } else {
+                format!("{:.3e}", p.predicted_mu_stderr)
+            },
             1e3 * p.nominal.rail_margin_m,
             p.events.len()
         );

@@ -456,3 +456,102 @@ fn plan_after_a_fit_of_another_rig_is_refused() {
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
     assert!(v["proposals"].as_array().is_some_and(|p| !p.is_empty()));
 }
+
+/// docs/plan.md's worked example of telling laws apart: a first release that slides once
+/// and sticks for good (data/laws/, static friction 0.26 above kinetic 0.22) leaves every law
+/// open, and the release planned after its fit is one that does what the first could not:
+/// at the true law, the slider restarts after sticking (static friction shows) and slides
+/// both ways (a direction split would show).
+#[test]
+fn the_worked_law_example_weighs_every_law_the_first_release_left_open() {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let laws = root.join("data/laws");
+    let fit = Command::new(env!("CARGO_BIN_EXE_appell"))
+        .arg("fit")
+        .arg(laws.join("first_release.csv"))
+        .arg("--rig")
+        .arg(laws.join("rig.toml"))
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(
+        fit.status.success(),
+        "{}",
+        String::from_utf8_lossy(&fit.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&fit.stdout).unwrap();
+    assert_eq!(v["friction_law"]["chosen"], "coulomb");
+    let tmp = tempfile::tempdir().unwrap();
+    let fit_json = tmp.path().join("fit.json");
+    std::fs::write(&fit_json, &fit.stdout).unwrap();
+    let p = plan_json_after(&config("plan_law_light.toml"), &fit_json);
+    let weighed: Vec<&str> = p["laws"]["weighed"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l.as_str().unwrap())
+        .collect();
+    assert_eq!(
+        weighed,
+        ["coulomb", "static", "stribeck", "direction", "load"]
+    );
+    let best = &p["proposals"][0];
+    // Every ordered pair whose rival does not contain its truth: Coulomb's law is in every
+    // rival and static friction in Stribeck's, so 3 rivals for static and 4 each for
+    // Stribeck, direction and load.
+    assert_eq!(best["pairs"], 15);
+    assert!(best["pairs_resolved"].as_f64().unwrap() > 14.5, "{best}");
+    // The true rig from the recording's truth, released as planned.
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(laws.join("truth.json")).unwrap()).unwrap();
+    let f = |k: &str| truth[k].as_f64().unwrap();
+    let law = &truth["parameters"];
+    let rig = Rig::new(
+        f("m1"),
+        f("m2"),
+        f("rod_length"),
+        f("gravity"),
+        law["mu_kinetic"].as_f64().unwrap(),
+        law["mu_static"].as_f64(),
+    )
+    .unwrap();
+    let i = &best["initial"];
+    let y0 = [
+        i["x"].as_f64().unwrap(),
+        i["theta"].as_f64().unwrap(),
+        i["x_dot"].as_f64().unwrap(),
+        i["theta_dot"].as_f64().unwrap(),
+    ];
+    let sol = simulate(&rig, &y0, 2.0, &Options::default(), &Request::default()).unwrap();
+    let stuck_then_slipped = sol
+        .events
+        .iter()
+        .skip_while(|e| e.kind != EventKind::Stick)
+        .any(|e| e.kind == EventKind::Slip);
+    assert!(stuck_then_slipped, "{:?}", sol.events);
+    let ways: std::collections::BTreeSet<&str> = sol
+        .events
+        .iter()
+        .map(|e| e.to.name())
+        .filter(|m| m.starts_with("slide"))
+        .collect();
+    assert!(ways.len() == 2, "slides {ways:?}");
+}
+
+/// `appell plan PLAN --after FIT --json`, parsed.
+fn plan_json_after(plan: &Path, fit: &Path) -> serde_json::Value {
+    let out = Command::new(env!("CARGO_BIN_EXE_appell"))
+        .arg("plan")
+        .arg(plan)
+        .arg("--after")
+        .arg(fit)
+        .arg("--json")
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    serde_json::from_slice(&out.stdout).unwrap()
+}

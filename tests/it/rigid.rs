@@ -691,3 +691,24 @@ fn the_pendulum_found_is_reported_in_the_bodys_quantities() {
     assert!((found.inertia.stderr / var.sqrt() - 1.0).abs() < 1e-5);
     assert!((found.equivalent_length.stderr - 2e-5).abs() < 1e-15);
 }
+
+/// A rod and sphere of zero mass and size is a point bob (a rig file that writes the zeros
+/// out), and any rod mass or radius makes it rigid: reports call only the latter a rigid
+/// pendulum.
+#[test]
+fn zero_rod_and_radius_are_a_point_pendulum() {
+    use appell::model::RigidPendulum;
+    assert!(RigidPendulum::rod_and_sphere(0.045, 0.15, 0.0, 0.0, 0.3).is_point());
+    assert!(!RigidPendulum::rod_and_sphere(0.045, 0.15, 1e-3, 0.0, 0.3).is_point());
+    assert!(!RigidPendulum::rod_and_sphere(0.045, 0.15, 0.0, 0.01, 0.3).is_point());
+    // The point rig's plan prints the point mass ratio, not an equivalent one.
+    let out = std::process::Command::new(env!("CARGO_BIN_EXE_appell"))
+        .args(["plan", "--json"])
+        .arg(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/plan_law_suspect.toml"))
+        .output()
+        .unwrap();
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let notes = v["notes"].to_string();
+    assert!(notes.contains("mass ratio r = m1/m2 = 0.300"), "{notes}");
+    assert!(!notes.contains("rigid"), "{notes}");
+}

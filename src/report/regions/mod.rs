@@ -256,7 +256,7 @@ fn paradox_lines(out: &mut String, rig: &Rig<f64>, map: &RegionMap) {
             plain(rig.mu_slide_max()), s.mu_critical
         );
     }
-    let ratio = if rig.pendulum.is_some() {
+    let ratio = if rig.pendulum.is_some_and(|p| !p.is_point()) {
         "equivalent ratio r'"
     } else {
         "m1/m2"
