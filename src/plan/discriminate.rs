@@ -14,13 +14,12 @@
 //! BIC's penalty, not the data, decides.
 
 use super::law::{reference_rig, Law, STRONG};
-use super::search::Evaluator;
+use super::search::{Evaluator, Frames};
 use super::spec::normal_cdf;
-use crate::fit::{Observations, Param, TrajectoryProblem};
+use crate::fit::{Param, TrajectoryProblem};
 use crate::model::{Rig, State};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
-use std::sync::Arc;
 
 /// How far a recording would separate one law, taken as true, from a rival.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -71,38 +70,6 @@ pub const MARGIN_CAP: f64 = 2.0 * STRONG;
 /// sample is the whole recording's to a few per cent (tested), at a fraction of the cost of
 /// evaluating markers at every frame.
 pub const LAW_FRAMES: usize = 256;
-
-/// A sample of the plan's frames (observations of zeros) and the noise that weights each
-/// sampled row as the frames it stands for.
-struct Frames {
-    obs: Arc<Observations>,
-    noise: f64,
-}
-
-impl Frames {
-    fn new(ev: &Evaluator, max_frames: usize) -> Frames {
-        let all = ev.placeholder();
-        let n = all.times.len();
-        let stride = n.div_ceil(max_frames.max(1)).max(1);
-        if stride == 1 {
-            return Frames {
-                obs: all,
-                noise: ev.spec.camera.noise_m,
-            };
-        }
-        let pick = |v: &[Option<[f64; 2]>]| v.iter().step_by(stride).copied().collect();
-        let obs = Observations {
-            times: all.times.iter().step_by(stride).copied().collect(),
-            slider: pick(&all.slider),
-            bob: pick(&all.bob),
-        };
-        let weight = n as f64 / obs.times.len() as f64;
-        Frames {
-            obs: Arc::new(obs),
-            noise: ev.spec.camera.noise_m / weight.sqrt(),
-        }
-    }
-}
 
 /// One recording's part of a rival's linearised fit to the truth's predictions, its own
 /// release marginalised: the sum of squares left, and the gradient and information about

@@ -381,7 +381,13 @@ fn checked(ev: &Evaluator, check: &Draws, c: &Candidate) -> Result<Proposal, Pla
         meets_min_robustness: robustness >= spec.goal.min_robustness,
         robustness_observed: passed as f64 / check.len() as f64,
         draws: check.len(),
-        predicted_mu_stderr: c.stderr,
+        // The search's own value when it ranked by it; under laws it took a sample of the
+        // frames, and the report gives every frame's.
+        predicted_mu_stderr: if ev.laws.is_some() {
+            ev.mu_stderr(&c.release)
+        } else {
+            c.stderr
+        },
         separations,
         separation: c.separation,
         law_stderr: ev.law_stderr(&c.release),

@@ -65,6 +65,43 @@ impl Draws {
     }
 }
 
+/// A sample of the plan's frames (observations of zeros) and the noise that weights each
+/// sampled row as the frames it stands for: every k-th frame, its rows weighted by k. A
+/// Jacobian's sums over such a sample are the whole recording's to a few per cent (tested in
+/// [`super::discriminate`]) at a fraction of the cost.
+pub struct Frames {
+    /// The sampled frames.
+    pub obs: Arc<Observations>,
+    /// The camera's noise divided by the square root of the stride.
+    pub noise: f64,
+}
+
+impl Frames {
+    /// At most `max_frames` of `ev`'s frames (all of them when there are no more).
+    pub fn new(ev: &Evaluator, max_frames: usize) -> Frames {
+        let all = ev.placeholder();
+        let n = all.times.len();
+        let stride = n.div_ceil(max_frames.max(1)).max(1);
+        if stride == 1 {
+            return Frames {
+                obs: all,
+                noise: ev.spec.camera.noise_m,
+            };
+        }
+        let pick = |v: &[Option<[f64; 2]>]| v.iter().step_by(stride).copied().collect();
+        let obs = Observations {
+            times: all.times.iter().step_by(stride).copied().collect(),
+            slider: pick(&all.slider),
+            bob: pick(&all.bob),
+        };
+        let weight = n as f64 / obs.times.len() as f64;
+        Frames {
+            obs: Arc::new(obs),
+            noise: ev.spec.camera.noise_m / weight.sqrt(),
+        }
+    }
+}
+
 /// A release the mechanism can set: (theta rad, theta' rad/s, x' m/s); x is the plan's.
 pub type ReleaseValues = [f64; 3];
 
@@ -129,7 +166,12 @@ impl<'a> Evaluator<'a> {
     /// when the plan weighs laws and the release can be ranked, its separation.
     pub fn candidate(&self, p: &ReleaseValues, draws: &Draws) -> Candidate {
         let robustness = self.passes(p, draws) as f64 / draws.len() as f64;
-        let stderr = self.mu_stderr(p);
+        // Under laws mu's error only breaks ties: the sampled frames will do (a proposal's
+        // printed error is every frame's, [`super::checked`]).
+        let stderr = match &self.laws {
+            Some(laws) => self.mu_stderr_on(&Frames::new(self, laws.max_frames), p),
+            None => self.mu_stderr(p),
+        };
         // Releases far from robust are priced out by the penalty anyway: no rival fits.
         let separation = if robustness >= 0.5 * self.spec.goal.min_robustness {
             self.separation(p)
@@ -221,13 +263,26 @@ impl<'a> Evaluator<'a> {
     /// its own initial state marginalised (a Schur complement), is added to the fit's, and
     /// the error is mu's after both. Infinite when mu is not identifiable.
     pub fn mu_stderr(&self, p: &ReleaseValues) -> f64 {
+        self.mu_stderr_on(&self.all_frames(), p)
+    }
+
+    /// [`Evaluator::mu_stderr`] from the frames `frames`.
+    pub fn mu_stderr_on(&self, frames: &Frames, p: &ReleaseValues) -> f64 {
         let extra: &[Param] = match (&self.spec.prior, &self.spec.mu_static) {
             (None, Some(_)) => &[Param::MuStatic],
             _ => &[],
         };
-        self.stderrs(&self.spec.rig, &self.initial(p), extra)
+        self.stderrs_on(frames, &self.spec.rig, &self.initial(p), extra)
             .and_then(|v| v.into_iter().find(|(q, _)| *q == Param::MuKinetic))
             .map_or(f64::INFINITY, |(_, se)| se)
+    }
+
+    /// Every frame of the plan's camera.
+    fn all_frames(&self) -> Frames {
+        Frames {
+            obs: self.obs.clone(),
+            noise: self.spec.camera.noise_m,
+        }
     }
 
     /// Predicted standard errors of the rig's parameters (mu_kinetic, an earlier fit's
@@ -236,6 +291,17 @@ impl<'a> Evaluator<'a> {
     /// the recording cannot pin down, `None` when the run fails.
     pub fn stderrs(
         &self,
+        rig: &Rig<f64>,
+        y0: &State<f64>,
+        extra: &[Param],
+    ) -> Option<Vec<(Param, f64)>> {
+        self.stderrs_on(&self.all_frames(), rig, y0, extra)
+    }
+
+    /// [`Evaluator::stderrs`] from the frames `frames`.
+    fn stderrs_on(
+        &self,
+        frames: &Frames,
         rig: &Rig<f64>,
         y0: &State<f64>,
         extra: &[Param],
@@ -255,9 +321,9 @@ impl<'a> Evaluator<'a> {
         let rig_params = free.len();
         free.extend(state);
         let mut problem =
-            TrajectoryProblem::new(self.obs.clone(), *rig, *y0, free.clone(), self.options);
+            TrajectoryProblem::new(frames.obs.clone(), *rig, *y0, free.clone(), self.options);
         problem.tie_static = !free.contains(&Param::MuStatic);
-        let noise = self.spec.camera.noise_m;
+        let noise = frames.noise;
         problem.sigma = [noise, noise];
         let normal = problem.normal_equations(&problem.values()).ok()?;
         let k = free.len();
