@@ -57,6 +57,8 @@ pub struct Laws {
     pub null: Rig<f64>,
     /// The most frames a recording's separation is computed from ([`LAW_FRAMES`]).
     pub max_frames: usize,
+    /// The release of the recording already made, when known.
+    pub before_release: Option<State<f64>>,
 }
 
 /// The expected BIC margin beyond which a larger one no longer breaks ties: twice the fit's
@@ -142,6 +144,7 @@ impl Laws {
             before,
             null: reference_rig(base, Law::Coulomb),
             max_frames: LAW_FRAMES,
+            before_release: None,
         })
     }
 
@@ -209,7 +212,35 @@ impl Laws {
     /// The pairs' terms from the recording of release `y0` already made.
     pub fn with_before(mut self, ev: &Evaluator, y0: &State<f64>) -> Laws {
         self.before = self.recording_terms(ev, y0);
+        self.before_release = Some(*y0);
         self
+    }
+
+    /// Every pair's lambda from the rival's full fit, not its linearisation: the rival's
+    /// coefficient, law parameters and each recording's release fitted by the fit's own
+    /// Levenberg-Marquardt to the truth's noise-free recordings (the one already made, when
+    /// its release is known, and release `y0`'s). The one-step lambda ranks releases cheaply;
+    /// this checks a proposal's claim where a rival can move far from Coulomb's law (a
+    /// static coefficient that shifts a slip to mimic a Stribeck hump). `None` for a pair
+    /// whose fit fails.
+    pub fn verified(&self, ev: &Evaluator, y0: &State<f64>) -> Vec<Option<Separation>> {
+        use rayon::prelude::*;
+        let ln_n = self.rows.max(2.0).ln();
+        let frames = Frames::new(ev, self.max_frames);
+        let releases: Vec<State<f64>> = self.before_release.iter().copied().chain([*y0]).collect();
+        self.pairs
+            .par_iter()
+            .map(|&(a, b)| {
+                let (truth, rival) = (&self.candidates[a], &self.candidates[b]);
+                let start = rival_start(&truth.1, &rival.1, rival.0);
+                let parts = releases
+                    .iter()
+                    .map(|y| rival_problem(ev, &frames, &truth.1, &start, rival.0, y))
+                    .collect::<Option<Vec<_>>>()?;
+                let lambda = fit_rival(parts)?;
+                Some(separation(truth.0, rival.0, lambda, ln_n))
+            })
+            .collect()
     }
 
     /// Every pair's separation by the recording already made alone.
@@ -347,6 +378,67 @@ impl Own {
         });
         (jtj, jtr)
     }
+}
+
+/// The rival's problem on the truth's noise-free recording of release `y0`: its
+/// coefficient, its law's parameters and the release free, started at `start` (from the
+/// true release).
+fn rival_problem(
+    ev: &Evaluator,
+    frames: &Frames,
+    truth: &Rig<f64>,
+    start: &Rig<f64>,
+    rival: Law,
+    y0: &State<f64>,
+) -> Option<TrajectoryProblem> {
+    let y = predict(ev, frames, truth, y0)?;
+    let n = frames.obs.times.len();
+    if y.len() != 4 * n {
+        return None;
+    }
+    // The placeholder sees every marker in every frame: rows are slider x, y, bob x, y.
+    let obs = crate::fit::Observations {
+        times: frames.obs.times.clone(),
+        slider: (0..n).map(|i| Some([y[4 * i], y[4 * i + 1]])).collect(),
+        bob: (0..n).map(|i| Some([y[4 * i + 2], y[4 * i + 3]])).collect(),
+    };
+    let free: Vec<Param> = std::iter::once(Param::MuKinetic)
+        .chain(rival.params().iter().copied())
+        .chain([Param::X, Param::Theta, Param::XDot, Param::ThetaDot])
+        .collect();
+    let mut problem =
+        TrajectoryProblem::new(std::sync::Arc::new(obs), *start, *y0, free, ev.options);
+    problem.tie_static = !rival.params().contains(&Param::MuStatic);
+    problem.sigma = [frames.noise, frames.noise];
+    Some(problem)
+}
+
+/// The chi-square the rival's best fit leaves over `parts` (one recording, or several fitted
+/// together with the rival's parameters shared), by the fit's Levenberg-Marquardt.
+fn fit_rival(parts: Vec<TrajectoryProblem>) -> Option<f64> {
+    use crate::fit::lm::{LeastSquares, LevenbergMarquardt};
+    use crate::fit::solve::run_lm;
+    const ITERS: u64 = 50;
+    let cost = if parts.len() == 1 {
+        let p0 = parts[0].values();
+        run_lm(&parts[0], p0, ITERS, LevenbergMarquardt::default())
+            .ok()?
+            .1
+    } else {
+        let joint = crate::fit::joint::JointProblem::new(parts, true);
+        let s = joint.shared.len();
+        let mut p0: Vec<f64> = joint.parts[0].values().as_slice()[..s].to_vec();
+        for part in &joint.parts {
+            p0.extend_from_slice(&part.values().as_slice()[s..]);
+        }
+        let p0 = DVector::from_vec(p0);
+        // A start the solver cannot evaluate is no fit.
+        joint.cost(&p0)?.ok()?;
+        run_lm(&joint, p0, ITERS, LevenbergMarquardt::default())
+            .ok()?
+            .1
+    };
+    cost.is_finite().then_some(2.0 * cost)
 }
 
 /// The noise-free marker coordinates a release of `rig` predicts at the plan's frames, in

@@ -368,10 +368,18 @@ fn checked(ev: &Evaluator, check: &Draws, c: &Candidate) -> Result<Proposal, Pla
             message: "the nominal run failed".into(),
         })?;
     let robustness = search::robustness_lower_bound(passed, check.len());
-    let mut separations: Vec<discriminate::Separation> =
-        ev.laws.as_ref().map_or_else(Vec::new, |l| {
-            l.separations(ev, &y0).into_iter().flatten().collect()
-        });
+    // The claim is the rivals' full fits, not the search's linearisation (which a rival that
+    // moves far from Coulomb's law can beat).
+    let verified: Vec<Option<discriminate::Separation>> = ev
+        .laws
+        .as_ref()
+        .map_or_else(Vec::new, |l| l.verified(ev, &y0));
+    let separation = if ev.laws.is_some() {
+        discriminate::Laws::score(&verified)
+    } else {
+        c.separation
+    };
+    let mut separations: Vec<discriminate::Separation> = verified.into_iter().flatten().collect();
     separations.sort_by(|a, b| a.expected_delta_bic.total_cmp(&b.expected_delta_bic));
     Ok(Proposal {
         initial: y0,
@@ -389,7 +397,7 @@ fn checked(ev: &Evaluator, check: &Draws, c: &Candidate) -> Result<Proposal, Pla
             c.stderr
         },
         separations,
-        separation: c.separation,
+        separation,
         law_stderr: ev.law_stderr(&c.release),
         samples: sol.samples,
     })

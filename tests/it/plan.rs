@@ -500,7 +500,21 @@ fn the_worked_law_example_weighs_every_law_the_first_release_left_open() {
     // rival and static friction in Stribeck's, so 3 rivals for static and 4 each for
     // Stribeck, direction and load.
     assert_eq!(best["pairs"], 15);
-    assert!(best["pairs_resolved"].as_f64().unwrap() > 14.5, "{best}");
+    // Every pair is told apart by the rivals' full fits but Stribeck's hump (at the 0.01 m/s
+    // reference) against a static step, which this box's releases cannot show; when it is
+    // left open a note says so.
+    for d in best["discrimination"].as_array().unwrap() {
+        let hard = d["truth"] == "stribeck" && d["rival"] == "static";
+        let chance = d["probability"].as_f64().unwrap();
+        assert!(hard || chance > 0.99, "{d}");
+        if hard && chance < 0.5 {
+            let notes = p["notes"].to_string();
+            assert!(
+                notes.contains("does not separate stribeck (true) from static"),
+                "{notes}"
+            );
+        }
+    }
     // The true rig from the recording's truth, released as planned.
     let truth: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(laws.join("truth.json")).unwrap()).unwrap();
