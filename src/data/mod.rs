@@ -26,6 +26,8 @@
 //!   rod-length check that flags outlier frames.
 //! - `recording.rs`: the formats, the calibrated `Recording` with its provenance, and the
 //!   canonical CSV it writes; `error.rs`: the one error type, `DataError`.
+//! - `overlay_csv.rs`: a model's markers written back in a recording's own units and layout
+//!   (`fit --overlay FILE.csv`), through the calibration's inverse.
 //! - `synth.rs`: synthetic recordings with a known mu.
 //! - `inspect/`: what a file holds before the options a reader needs are known (`appell
 //!   inspect`): markers, times, units, the pair that moves like the slider and the bob, and the
@@ -41,6 +43,7 @@ pub mod inspect;
 mod kinovea_xml;
 pub mod mcap;
 mod options;
+pub mod overlay_csv;
 mod parsed;
 mod recording;
 mod ros_cdr;
@@ -333,6 +336,8 @@ fn assemble(
             time_origin_ns: parsed
                 .time_base_ns
                 .map(|base| base.saturating_add((t0 * 1e9).round() as i64)),
+            frame_rate: parsed.frame_rate,
+            plane: parsed.plane,
             notes: parsed.notes,
             warnings: parsed.warnings,
             metadata: parsed.metadata,

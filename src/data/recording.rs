@@ -165,6 +165,12 @@ pub struct Provenance {
     pub time_origin: f64,
     /// The same in integer nanoseconds, exact, when the file's clock counts them (MCAP).
     pub time_origin_ns: Option<i64>,
+    /// The rate the file numbers its frames at (Hz), when it numbers them: DeepLabCut's and
+    /// SLEAP's `--fps`, Motive's `Export Frame Rate`; a frame's number is its file time
+    /// ([`Provenance::time_origin`] + t) times this rate.
+    pub frame_rate: Option<f64>,
+    /// The plane a 3-D file's positions were projected onto (`None`: the file is 2-D).
+    pub plane: Option<super::Plane>,
     /// Scale, flip and rail-frame transform.
     pub calibration: Calibration,
     /// Rod length check.

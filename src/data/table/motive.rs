@@ -76,6 +76,7 @@ pub(super) fn read_motive(
         joined,
         warnings: join_warning.into_iter().collect(),
         plane: Some(plane),
+        frame_rate: rate_hz,
         ..Parsed::default()
     })
 }
