@@ -764,8 +764,9 @@ struct OutFrame<'a> {
     markers: Vec<OutMarker<'a>>,
 }
 
-/// JSON Schema of the frame messages [`write_json`] writes (schema `lab.MarkerFrame2D`).
-pub const FRAME_SCHEMA: &str = r#"{"title":"lab.MarkerFrame2D","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"frame_id":{"type":"string"},"markers":{"type":"array","items":{"type":"object","properties":{"id":{"type":"string"},"x":{"type":"number"},"y":{"type":"number"}}}}}}"#;
+/// JSON Schema of the frame messages [`write_json`] writes (schema `lab.MarkerFrame2D`); a
+/// marker not seen has null x and y, which the schema allows (a validator refused it).
+pub const FRAME_SCHEMA: &str = r#"{"title":"lab.MarkerFrame2D","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"frame_id":{"type":"string"},"markers":{"type":"array","items":{"type":"object","properties":{"id":{"type":"string"},"x":{"type":["number","null"]},"y":{"type":["number","null"]}}}}}}"#;
 
 /// One `lab.MarkerFrame2D` JSON frame at `ns` (a missing marker with null x and y) into `buf`.
 fn frame_json(
