@@ -34,12 +34,7 @@ pub fn write_fit_overlay_with_input(
     origin_ns: u64,
     input: Option<&[u8]>,
 ) -> Result<(), OverlayError> {
-    let run = ModelRun {
-        rig: &rep.rig,
-        initial: &rep.initial,
-        camera: &rep.camera,
-        options: &rep.problem.options,
-    };
+    let run = fit_run(rep);
     model_overlay(
         w,
         obs,
@@ -76,13 +71,28 @@ pub fn write_release_overlay(
         &mut |_| {},
     )?
     .events;
-    let run = ModelRun {
+    let run = part_run(part);
+    model_overlay(w, obs, &run, &events, answer, origin_ns, None)
+}
+
+/// The fitted model a fit's overlays sample: its rig, start, camera and integrator options.
+fn fit_run(rep: &FitReport) -> ModelRun<'_> {
+    ModelRun {
+        rig: &rep.rig,
+        initial: &rep.initial,
+        camera: &rep.camera,
+        options: &rep.problem.options,
+    }
+}
+
+/// The joint model at its optimum for one release (`part`), as its overlays sample it.
+fn part_run(part: &crate::fit::TrajectoryProblem) -> ModelRun<'_> {
+    ModelRun {
         rig: &part.rig,
         initial: &part.initial,
         camera: &part.camera,
         options: &part.options,
-    };
-    model_overlay(w, obs, &run, &events, answer, origin_ns, None)
+    }
 }
 
 /// A recording and a model's run over its frames, with the model's events and an answer line.
@@ -152,12 +162,7 @@ pub fn write_fit_overlay_csv(
     rep: &FitReport,
     prov: &crate::data::Provenance,
 ) -> Result<(), OverlayError> {
-    let run = ModelRun {
-        rig: &rep.rig,
-        initial: &rep.initial,
-        camera: &rep.camera,
-        options: &rep.problem.options,
-    };
+    let run = fit_run(rep);
     model_csv(w, &obs.times, &run, prov)
 }
 
@@ -168,12 +173,7 @@ pub fn write_release_overlay_csv(
     part: &crate::fit::TrajectoryProblem,
     prov: &crate::data::Provenance,
 ) -> Result<(), OverlayError> {
-    let run = ModelRun {
-        rig: &part.rig,
-        initial: &part.initial,
-        camera: &part.camera,
-        options: &part.options,
-    };
+    let run = part_run(part);
     model_csv(w, &part.observations().times, &run, prov)
 }
 
