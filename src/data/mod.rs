@@ -258,6 +258,13 @@ fn crop(rec: &mut Recording, start: f64, end: f64, label: &Path) -> Result<(), D
     };
     let t0 = rec.times[first];
     rec.times = keep.iter().map(|&i| rec.times[i] - t0).collect();
+    // The first frame kept is the recording's first now: its clock starts there, so that an
+    // overlay is stamped (and numbered) at the frames it holds.
+    let p = &mut rec.provenance;
+    p.time_origin += t0;
+    p.time_origin_ns = p
+        .time_origin_ns
+        .map(|ns| ns.saturating_add((t0 * 1e9).round() as i64));
     rec.slider = keep.iter().map(|&i| rec.slider[i]).collect();
     rec.bob = keep.iter().map(|&i| rec.bob[i]).collect();
     rec.provenance.notes.push(format!(

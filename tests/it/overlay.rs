@@ -918,3 +918,49 @@ fn overlay_with_input_keeps_the_recordings_topics() {
     }
     assert!(!csv.exists() && !mcap_out.exists());
 }
+
+/// A fit of part of a recording (`--t-start`) writes its overlay in the file's own clock: the
+/// table's first frame number is the first frame kept (DeepLabCut at 100 fps from 0.5 s:
+/// frame 50), and the MCAP overlay's first stamp is the recording's stamp of that frame.
+#[test]
+fn an_overlay_of_a_time_window_keeps_the_files_clock() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("w.csv");
+    let dlc = Shipped {
+        flags: &[
+            "--fps",
+            "100",
+            "--rod-length",
+            "0.251",
+            "--rail-frame",
+            "--t-start",
+            "0.5",
+        ],
+        ..shipped().swap_remove(1)
+    };
+    fit_with_overlay(&dlc, &csv);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let first = text.lines().nth(3).unwrap();
+    assert!(first.starts_with("50,"), "{first}");
+
+    let out = dir.path().join("w.mcap");
+    let rec = root(RECORDING);
+    let example = Shipped {
+        flags: &["--t-start", "0.5"],
+        ..shipped().swap_remove(4)
+    };
+    fit_with_overlay(&example, &out);
+    let msgs = read_checked(&std::fs::read(&out).unwrap());
+    let stamps: Vec<u64> = mcap::MessageStream::new(&std::fs::read(&rec).unwrap())
+        .unwrap()
+        .map(|m| m.unwrap().log_time)
+        .collect();
+    let want = stamps[0] + 500_000_000;
+    assert!(stamps.contains(&want));
+    let first = msgs
+        .iter()
+        .find(|m| m.topic == ov::TOPIC_MARKERS)
+        .unwrap()
+        .log_time;
+    assert_eq!(first, want);
+}
