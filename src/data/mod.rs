@@ -328,6 +328,7 @@ fn assemble(
     for t in &mut times {
         *t -= t0;
     }
+    let off_plane = [&slider_name, &bob_name].map(|n| parsed.off_plane.get(n).copied());
     let mut rec = Recording {
         times,
         slider,
@@ -345,6 +346,7 @@ fn assemble(
                 .map(|base| base.saturating_add((t0 * 1e9).round() as i64)),
             frame_rate: parsed.frame_rate,
             plane: parsed.plane,
+            off_plane,
             notes: parsed.notes,
             warnings: parsed.warnings,
             metadata: parsed.metadata,

@@ -21,8 +21,8 @@ pub enum CsvStyle {
     /// import as labels or predictions).
     DeepLabCut,
     /// OptiTrack Motive's CSV export (1.23 headers): `Frame,Time (Seconds),X,Y,Z` a marker in
-    /// the take's length units, the plane's two axes filled and the third 0 (Motive
-    /// recordings).
+    /// the take's length units, the plane's two axes filled and the third at the recorded
+    /// marker's mean depth off the plane (Motive recordings).
     Motive,
     /// appell's wide CSV in the file's units: `t` (the file's seconds) or `t_ns` (an MCAP
     /// recording's nanosecond stamps), `NAME_x,NAME_y` a marker (every other format).
@@ -59,6 +59,7 @@ pub struct CsvOverlay<'w> {
     style: CsvStyle,
     calibration: Calibration,
     plane: Option<Plane>,
+    off_plane: [f64; 2],
     time_origin: f64,
     origin_ns: Option<i64>,
     frame_rate: Option<f64>,
@@ -101,6 +102,7 @@ impl<'w> CsvOverlay<'w> {
             style,
             calibration: prov.calibration.clone(),
             plane: prov.plane,
+            off_plane: prov.off_plane.map(|d| d.unwrap_or(0.0)),
             time_origin: prov.time_origin,
             origin_ns: prov.time_origin_ns,
             frame_rate: prov.frame_rate.filter(|r| r.is_finite() && *r > 0.0),
@@ -227,11 +229,11 @@ impl<'w> CsvOverlay<'w> {
                     Some(r) => ok(write!(w, "{frame},{:.6}", frame as f64 / r)),
                     None => ok(write!(w, "{frame},{}", self.time_origin + t)),
                 }
-                for p in points.iter().flatten() {
+                for (p, depth) in points.iter().flatten().zip(self.off_plane) {
                     let xyz = match self.plane.unwrap_or(Plane::Xy) {
-                        Plane::Xy => [p[0], p[1], 0.0],
-                        Plane::Xz => [p[0], 0.0, p[1]],
-                        Plane::Yz => [0.0, p[0], p[1]],
+                        Plane::Xy => [p[0], p[1], depth],
+                        Plane::Xz => [p[0], depth, p[1]],
+                        Plane::Yz => [depth, p[0], p[1]],
                     };
                     ok(write!(w, ",{},{},{}", xyz[0], xyz[1], xyz[2]));
                 }

@@ -171,6 +171,10 @@ pub struct Provenance {
     pub frame_rate: Option<f64>,
     /// The plane a 3-D file's positions were projected onto (`None`: the file is 2-D).
     pub plane: Option<super::Plane>,
+    /// The slider's and the bob's mean coordinate off that plane (file units, unscaled), where
+    /// the reader keeps it (Motive): a table written back in the file's three axes puts the
+    /// model's markers at that depth.
+    pub off_plane: [Option<f64>; 2],
     /// Scale, flip and rail-frame transform.
     pub calibration: Calibration,
     /// Rod length check.

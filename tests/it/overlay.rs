@@ -785,6 +785,27 @@ fn csv_overlays_map_back_through_the_calibration_to_the_fitted_markers() {
             s.files
         );
 
+        // Motive's third axis: the model's markers at the recorded markers' depth off the
+        // plane (the take's Z, plane xy), within a few noise deviations (0.15 mm).
+        if s.format == "motive" {
+            let z = |path: &Path, col: usize| -> f64 {
+                let text = std::fs::read_to_string(path).unwrap();
+                let v: Vec<f64> = text
+                    .lines()
+                    .skip(7)
+                    .filter_map(|l| l.split(',').nth(col)?.parse().ok())
+                    .collect();
+                v.iter().sum::<f64>() / v.len() as f64
+            };
+            for col in [4, 7] {
+                let (got, want) = (z(&csv, col), z(&inputs[0], col));
+                assert!(
+                    (got - want).abs() < 0.5,
+                    "Z column {col}: {got} against {want} mm"
+                );
+            }
+        }
+
         // `convert` reads it again, in the tool's layout, with the recording's flags.
         let out = dir.path().join(format!("c{k}.csv"));
         let mut args = vec!["convert", csv.to_str().unwrap(), out.to_str().unwrap()];
