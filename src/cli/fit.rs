@@ -11,6 +11,7 @@ use appell::model::Rig;
 use appell::pipeline::{self, provenance, FitArgs, FitFailure, FitSetup, RecordingArgs};
 use appell::report::fit::{answer, fit_json, fit_text, FitFigure, FrictionFigure};
 use appell::report::joint::{joint_json, joint_text, JointFigure};
+use appell::report::overlay::{self, OverlayFormat};
 use appell::report::plot::render;
 use indicatif::{ProgressBar, ProgressStyle};
 use rayon::prelude::*;
@@ -57,10 +58,15 @@ pub struct Args {
     #[arg(long, value_name = "FILE.svg")]
     friction_plot: Option<PathBuf>,
     /// Write the fit back beside the recording: `.mcap` for Foxglove (recorded and fitted
-    /// markers, residuals, modes, forces, events and the answer in the recording's clock;
-    /// docs/overlay.md).
-    #[arg(long, value_name = "FILE.mcap")]
+    /// markers, residuals, modes, forces, events and the answer in the recording's clock), or
+    /// `.csv`, the model's markers in the recording's own units, axes and time column, as its
+    /// tool's table (Tracker, DeepLabCut, Motive; docs/overlay.md).
+    #[arg(long, value_name = "FILE.mcap|FILE.csv")]
     overlay: Option<PathBuf>,
+    /// With an `.mcap` overlay of a recording read from MCAP: copy the recording's own topics
+    /// (channels, schemas and messages as they are) into the overlay beside its own.
+    #[arg(long, requires = "overlay")]
+    overlay_with_input: bool,
     #[command(flatten)]
     fit: FitArgs,
     #[command(flatten)]
@@ -155,8 +161,10 @@ pub fn run(args: Args) -> Result<(), Failure> {
         appell::report::plot::ImageFormat::from_path(p).map_err(|e| Failure::Input(e.into()))?;
     }
     if let Some(p) = &args.overlay {
-        appell::report::overlay::OverlayFormat::from_path(p)
-            .map_err(|e| Failure::Input(e.into()))?;
+        let format = OverlayFormat::from_path(p).map_err(|e| Failure::Input(e.into()))?;
+        if args.overlay_with_input {
+            with_input_allowed(&args, p, format, &opts)?;
+        }
     }
     let settings = &setup.settings;
     if args.joint {
@@ -266,10 +274,27 @@ pub fn run(args: Args) -> Result<(), Failure> {
     }
     if let Some(p) = &args.overlay {
         let origin = recording.origin_ns();
-        let r = appell::output::write_atomic(p, |w| {
-            Ok(appell::report::overlay::write_fit_overlay(
-                w, &obs, &rep, origin,
-            )?)
+        // The recording's own file, copied into the overlay (checked to be one MCAP file).
+        let input = match args.overlay_with_input {
+            true => Some(std::fs::read(&args.inputs[0]).map_err(|e| {
+                Failure::Run(anyhow!(
+                    "--overlay-with-input: reading {} again: {e} (the report above is complete; only the overlay is missing)",
+                    args.inputs[0].display()
+                ))
+            })?),
+            false => None,
+        };
+        let r = appell::output::write_atomic(p, |w| match OverlayFormat::from_path(p) {
+            Ok(OverlayFormat::Csv) => {
+                Ok(overlay::write_fit_overlay_csv(w, &obs, &rep, &recording)?)
+            }
+            _ => Ok(overlay::write_fit_overlay_with_input(
+                w,
+                &obs,
+                &rep,
+                origin,
+                input.as_deref(),
+            )?),
         });
         let r = r.map_err(|e| format!("writing {}: {e}", p.display()));
         saved(p, r, args.json, "overlay")?;
@@ -277,6 +302,52 @@ pub fn run(args: Args) -> Result<(), Failure> {
     // A failed result is reported in full, and is no answer: exit 1 with the reason.
     if let Some(why) = &rep.failed {
         return Err(Failure::Run(anyhow!("{why}")));
+    }
+    Ok(())
+}
+
+/// `--overlay-with-input` before any work: it copies one MCAP recording's topics into an
+/// `.mcap` overlay, so a table overlay, a recording in another format, several files or a
+/// joint fit's releases are refused (exit 2) saying why.
+fn with_input_allowed(
+    args: &Args,
+    overlay: &Path,
+    format: OverlayFormat,
+    opts: &ReadOptions,
+) -> Result<(), Failure> {
+    let refuse = |why: String| Err(Failure::Input(anyhow!("--overlay-with-input: {why}")));
+    if format != OverlayFormat::Mcap {
+        return refuse(format!(
+            "{} is a table (.csv), which holds the model's markers only: give an .mcap overlay to keep the recording's topics beside it",
+            overlay.display()
+        ));
+    }
+    if args.joint {
+        return refuse(
+            "a joint fit writes one overlay a release: the flag takes one recording".into(),
+        );
+    }
+    let [input] = args.inputs.as_slice() else {
+        return refuse(format!(
+            "{} files given: the flag copies one MCAP recording's topics",
+            args.inputs.len()
+        ));
+    };
+    if input.is_dir() {
+        return refuse(format!(
+            "{} is a directory: the flag copies one MCAP recording's topics",
+            input.display()
+        ));
+    }
+    let format = match opts.format {
+        Some(f) => f,
+        None => appell::data::detect(input).map_err(|e| Failure::Input(e.into()))?,
+    };
+    if format != appell::data::Format::Mcap {
+        return refuse(format!(
+            "{} is a {format} recording, not MCAP: only an MCAP recording's topics can be copied into the overlay",
+            input.display()
+        ));
     }
     Ok(())
 }
@@ -339,7 +410,7 @@ fn run_joint(args: &Args, opts: &ReadOptions, setup: &FitSetup) -> Result<(), Fa
     let overlays: Vec<PathBuf> = match &args.overlay {
         Some(out) => paths
             .iter()
-            .map(|p| appell::report::overlay::release_overlay_path(out, p))
+            .map(|p| overlay::release_overlay_path(out, p))
             .collect(),
         None => Vec::new(),
     };
@@ -409,14 +480,17 @@ fn run_joint(args: &Args, opts: &ReadOptions, setup: &FitSetup) -> Result<(), Fa
                 continue;
             };
             let out = &overlays[k];
-            let r = pipeline::origin_ns(&paths[k], opts).and_then(|origin| {
-                appell::output::write_atomic(out, |w| {
-                    Ok(appell::report::overlay::write_release_overlay(
+            let r = pipeline::read_provenance(&paths[k], opts).and_then(|prov| {
+                appell::output::write_atomic(out, |w| match OverlayFormat::from_path(out) {
+                    Ok(OverlayFormat::Csv) => {
+                        Ok(overlay::write_release_overlay_csv(w, part, &prov)?)
+                    }
+                    _ => Ok(overlay::write_release_overlay(
                         w,
                         part,
                         answer.clone(),
-                        origin,
-                    )?)
+                        prov.origin_ns(),
+                    )?),
                 })
                 .map_err(anyhow::Error::from)
             });

@@ -47,16 +47,14 @@ pub fn calibrate(
             "the scale must be a finite number > 0, got {scale}"
         ));
     }
-    // Millimetres and centimetres divide by 1000 and 100, so decimal values stay exact.
-    let inv = (1.0 / scale).round();
-    let exact_inverse = inv > 1.0 && ((1.0 / scale) - inv).abs() < 1e-9 * inv;
-    let flip = if y_down { -1.0 } else { 1.0 };
+    let mut cal = Calibration {
+        scale,
+        scale_source: source,
+        y_flipped: y_down,
+        ..Calibration::default()
+    };
     for p in rec.slider.iter_mut().chain(rec.bob.iter_mut()).flatten() {
-        *p = if exact_inverse {
-            [p[0] / inv, flip * p[1] / inv]
-        } else {
-            [p[0] * scale, flip * p[1] * scale]
-        };
+        *p = cal.scaled(*p);
     }
     for (role, track) in [("slider", &rec.slider), ("bob", &rec.bob)] {
         if let Some((i, p)) = track.iter().enumerate().find_map(|(i, p)| {
@@ -69,22 +67,14 @@ pub fn calibrate(
             ));
         }
     }
-    let mut cal = Calibration {
-        scale,
-        scale_source: source,
-        y_flipped: y_down,
-        ..Calibration::default()
-    };
     if opts.rail_frame {
         let (angle, origin, rms) = fit_rail(rec)?;
-        let (s, c) = (-angle).sin_cos();
-        for p in rec.slider.iter_mut().chain(rec.bob.iter_mut()).flatten() {
-            let (dx, dy) = (p[0] - origin[0], p[1] - origin[1]);
-            *p = [c * dx - s * dy, s * dx + c * dy];
-        }
         cal.rail_angle = Some(angle);
         cal.origin = Some(origin);
         cal.rail_rms = Some(rms);
+        for p in rec.slider.iter_mut().chain(rec.bob.iter_mut()).flatten() {
+            *p = cal.turned(*p);
+        }
         rec.provenance.notes.push(format!(
             "rail axis fitted to {} slider positions: {:.4} deg from the file's x, rms off the line {:.3e} m",
             rec.slider.iter().flatten().count(),
@@ -108,6 +98,74 @@ pub fn calibrate(
         }
     }
     Ok(())
+}
+
+/// The calibration as a map between the file's units and the rail frame, both ways: one
+/// formula for the readers ([`calibrate`]) and for what is written back in the file's units
+/// (`fit --overlay FILE.csv`), so that the two cannot drift apart.
+impl Calibration {
+    /// The whole file units a metre holds, when the scale is their exact inverse (millimetres
+    /// 1000, centimetres 100, or pixels at a whole number a metre): then dividing by it keeps
+    /// decimal values exact where multiplying by 0.001 would not.
+    fn whole_per_metre(&self) -> Option<f64> {
+        let inv = (1.0 / self.scale).round();
+        (inv > 1.0 && ((1.0 / self.scale) - inv).abs() < 1e-9 * inv).then_some(inv)
+    }
+
+    fn flip(&self) -> f64 {
+        if self.y_flipped {
+            -1.0
+        } else {
+            1.0
+        }
+    }
+
+    /// A point in file units scaled to metres with y up (the first step of [`calibrate`]).
+    pub fn scaled(&self, p: [f64; 2]) -> [f64; 2] {
+        let flip = self.flip();
+        match self.whole_per_metre() {
+            Some(inv) => [p[0] / inv, flip * p[1] / inv],
+            None => [p[0] * self.scale, flip * p[1] * self.scale],
+        }
+    }
+
+    /// A scaled point (metres, y up) shifted to the rail's origin and turned onto its axis
+    /// (the second step, with `--rail-frame`; the identity without it).
+    pub fn turned(&self, p: [f64; 2]) -> [f64; 2] {
+        let (Some(angle), Some(origin)) = (self.rail_angle, self.origin) else {
+            return p;
+        };
+        let (s, c) = (-angle).sin_cos();
+        let (dx, dy) = (p[0] - origin[0], p[1] - origin[1]);
+        [c * dx - s * dy, s * dx + c * dy]
+    }
+
+    /// A point in file units in the rail frame (metres, x along the rail, y up): what the
+    /// readers give.
+    pub fn to_rail(&self, p: [f64; 2]) -> [f64; 2] {
+        self.turned(self.scaled(p))
+    }
+
+    /// A rail-frame point (metres) back in the file's units and axes: the inverse of
+    /// [`Calibration::to_rail`] (turned back, shifted back, y flipped back, unscaled), to
+    /// rounding.
+    pub fn to_file(&self, p: [f64; 2]) -> [f64; 2] {
+        let q = match (self.rail_angle, self.origin) {
+            (Some(angle), Some(origin)) => {
+                let (s, c) = angle.sin_cos();
+                [
+                    c * p[0] - s * p[1] + origin[0],
+                    s * p[0] + c * p[1] + origin[1],
+                ]
+            }
+            _ => p,
+        };
+        let flip = self.flip();
+        match self.whole_per_metre() {
+            Some(inv) => [q[0] * inv, flip * q[1] * inv],
+            None => [q[0] / self.scale, flip * q[1] / self.scale],
+        }
+    }
 }
 
 /// The rail line through the slider's positions (total least squares): its angle in
@@ -323,6 +381,90 @@ pub fn significant(x: f64) -> String {
 #[cfg(test)]
 mod tests {
     use super::median;
+    use crate::data::{Calibration, ReadOptions, Recording};
+
+    /// A pendulum's track in pixels, y down, on a camera rolled by 2 deg: the slider along a
+    /// tilted line, the bob below it.
+    fn pixels() -> Recording {
+        let roll = 2f64.to_radians();
+        let n = 50;
+        let at = |x: f64, y: f64| {
+            let (s, c) = roll.sin_cos();
+            Some([600.0 + c * x - s * y, 300.0 + s * x + c * y])
+        };
+        Recording {
+            times: (0..n).map(|i| i as f64 * 0.01).collect(),
+            slider: (0..n).map(|i| at(i as f64, 0.0)).collect(),
+            bob: (0..n)
+                .map(|i| {
+                    let a = 0.02 * i as f64;
+                    at(i as f64 + 300.0 * a.sin(), 300.0 * a.cos())
+                })
+                .collect(),
+            ..Recording::default()
+        }
+    }
+
+    /// The calibration's two directions are one map and its inverse: what the reader made of a
+    /// file's points is `to_rail` of them, and `to_file` gives the file's points back (to
+    /// rounding), for pixels (y flipped, any scale) and millimetres (scale 1/1000, exact).
+    #[test]
+    fn to_file_inverts_what_the_reader_applied() {
+        for (scale, y_down) in [(0.0008097282, true), (0.001, false), (1.0, false)] {
+            let file = pixels();
+            let mut rec = file.clone();
+            let opts = ReadOptions {
+                scale: Some(scale),
+                rail_frame: true,
+                ..ReadOptions::default()
+            };
+            super::calibrate(&mut rec, None, y_down, &opts).unwrap();
+            let cal = &rec.provenance.calibration;
+            assert!(cal.rail_angle.is_some());
+            for (f, r) in file
+                .slider
+                .iter()
+                .chain(&file.bob)
+                .zip(rec.slider.iter().chain(&rec.bob))
+            {
+                let (f, r) = (f.unwrap(), r.unwrap());
+                assert_eq!(cal.to_rail(f), r, "the reader's own map");
+                let back = cal.to_file(r);
+                for k in 0..2 {
+                    assert!(
+                        (back[k] - f[k]).abs() <= 1e-12 * f[k].abs().max(1.0),
+                        "{scale}: {back:?} {f:?}"
+                    );
+                }
+            }
+        }
+    }
+
+    /// Pixels go the right way: in a y-down file the bob, below the rail, has the larger pixel
+    /// y, and a rail-frame point lower down (y smaller) goes back to a larger pixel y; a point
+    /// farther along the rail goes back farther along the file's rolled x.
+    #[test]
+    fn to_file_flips_y_back_down_and_turns_the_rail_back() {
+        let mut rec = pixels();
+        let opts = ReadOptions {
+            scale: Some(0.001),
+            rail_frame: true,
+            ..ReadOptions::default()
+        };
+        super::calibrate(&mut rec, None, true, &opts).unwrap();
+        let cal: &Calibration = &rec.provenance.calibration;
+        // The bob hangs below the rail in the rail frame.
+        assert!(rec.bob[0].unwrap()[1] < 0.0);
+        let up = cal.to_file([0.0, 0.0]);
+        let down = cal.to_file([0.0, -0.1]);
+        assert!(down[1] > up[1], "{down:?} below {up:?} in pixels");
+        let along = cal.to_file([0.1, 0.0]);
+        // 100 px along the rail rolled by 2 deg: +99.94 px in x, +3.49 px in y (y down).
+        let d = [along[0] - up[0], along[1] - up[1]];
+        let roll = 2f64.to_radians();
+        assert!((d[0] - 100.0 * roll.cos()).abs() < 1e-9, "{d:?}");
+        assert!((d[1] - 100.0 * roll.sin()).abs() < 1e-9, "{d:?}");
+    }
 
     /// The median by a full sort, as it was computed before selection.
     fn sorted_median(mut v: Vec<f64>) -> f64 {

@@ -173,6 +173,7 @@ impl Builder {
                 self.fps, self.dropped, self.min_likelihood
             )],
             plane: self.three_d.then_some(self.plane),
+            frame_rate: Some(self.fps),
             ..Parsed::default()
         })
     }

@@ -26,6 +26,8 @@
 //!   rod-length check that flags outlier frames.
 //! - `recording.rs`: the formats, the calibrated `Recording` with its provenance, and the
 //!   canonical CSV it writes; `error.rs`: the one error type, `DataError`.
+//! - `overlay_csv.rs`: a model's markers written back in a recording's own units and layout
+//!   (`fit --overlay FILE.csv`), through the calibration's inverse.
 //! - `synth.rs`: synthetic recordings with a known mu.
 //! - `inspect/`: what a file holds before the options a reader needs are known (`appell
 //!   inspect`): markers, times, units, the pair that moves like the slider and the bob, and the
@@ -41,6 +43,7 @@ pub mod inspect;
 mod kinovea_xml;
 pub mod mcap;
 mod options;
+pub mod overlay_csv;
 mod parsed;
 mod recording;
 mod ros_cdr;
@@ -255,6 +258,13 @@ fn crop(rec: &mut Recording, start: f64, end: f64, label: &Path) -> Result<(), D
     };
     let t0 = rec.times[first];
     rec.times = keep.iter().map(|&i| rec.times[i] - t0).collect();
+    // The first frame kept is the recording's first now: its clock starts there, so that an
+    // overlay is stamped (and numbered) at the frames it holds.
+    let p = &mut rec.provenance;
+    p.time_origin += t0;
+    p.time_origin_ns = p
+        .time_origin_ns
+        .map(|ns| ns.saturating_add((t0 * 1e9).round() as i64));
     rec.slider = keep.iter().map(|&i| rec.slider[i]).collect();
     rec.bob = keep.iter().map(|&i| rec.bob[i]).collect();
     rec.provenance.notes.push(format!(
@@ -318,6 +328,7 @@ fn assemble(
     for t in &mut times {
         *t -= t0;
     }
+    let off_plane = [&slider_name, &bob_name].map(|n| parsed.off_plane.get(n).copied());
     let mut rec = Recording {
         times,
         slider,
@@ -333,6 +344,9 @@ fn assemble(
             time_origin_ns: parsed
                 .time_base_ns
                 .map(|base| base.saturating_add((t0 * 1e9).round() as i64)),
+            frame_rate: parsed.frame_rate,
+            plane: parsed.plane,
+            off_plane,
             notes: parsed.notes,
             warnings: parsed.warnings,
             metadata: parsed.metadata,

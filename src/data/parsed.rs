@@ -34,4 +34,10 @@ pub(crate) struct Parsed {
     pub joined: Vec<(String, String)>,
     /// The plane a 3-D file's positions were projected onto (`None`: the file is 2-D).
     pub plane: Option<super::Plane>,
+    /// The rate (Hz) the file's frame numbers were turned into times at, when they were
+    /// (`t = frame / rate`): `--fps` for DeepLabCut and SLEAP, Motive's export rate.
+    pub frame_rate: Option<f64>,
+    /// A 3-D file's markers' mean coordinate off the plane (file units), by name, where the
+    /// reader keeps it (Motive).
+    pub off_plane: BTreeMap<String, f64>,
 }

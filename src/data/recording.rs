@@ -165,6 +165,16 @@ pub struct Provenance {
     pub time_origin: f64,
     /// The same in integer nanoseconds, exact, when the file's clock counts them (MCAP).
     pub time_origin_ns: Option<i64>,
+    /// The rate the file numbers its frames at (Hz), when it numbers them: DeepLabCut's and
+    /// SLEAP's `--fps`, Motive's `Export Frame Rate`; a frame's number is its file time
+    /// ([`Provenance::time_origin`] + t) times this rate.
+    pub frame_rate: Option<f64>,
+    /// The plane a 3-D file's positions were projected onto (`None`: the file is 2-D).
+    pub plane: Option<super::Plane>,
+    /// The slider's and the bob's mean coordinate off that plane (file units, unscaled), where
+    /// the reader keeps it (Motive): a table written back in the file's three axes puts the
+    /// model's markers at that depth.
+    pub off_plane: [Option<f64>; 2],
     /// Scale, flip and rail-frame transform.
     pub calibration: Calibration,
     /// Rod length check.

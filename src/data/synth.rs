@@ -246,6 +246,7 @@ pub fn write_synthetic(path: &Path, syn: &Synthetic, scene: &Scene) -> Result<()
         origin_ns: START_NS as u64,
         lab_markers: true,
         metadata: BTreeMap::from([("truth".to_string(), syn.truth.clone())]),
+        with_input: None,
     };
     let run = ModelRun {
         rig: &scene.rig,

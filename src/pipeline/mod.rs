@@ -243,7 +243,16 @@ pub fn fit_observations(
 /// The first frame's stamp in a recording's own clock (ns, [`crate::data::Provenance::origin_ns`]),
 /// read again: an overlay of a joint fit's release is stamped from it.
 pub fn origin_ns(paths: &[PathBuf], opts: &ReadOptions) -> anyhow::Result<u64> {
-    Ok(read_recording(paths, opts)?.provenance.origin_ns())
+    Ok(read_provenance(paths, opts)?.origin_ns())
+}
+
+/// A recording's provenance (its calibration, format, marker names and clock), read again: a
+/// joint fit's release overlay in the release's own units is written through it.
+pub fn read_provenance(
+    paths: &[PathBuf],
+    opts: &ReadOptions,
+) -> anyhow::Result<crate::data::Provenance> {
+    Ok(read_recording(paths, opts)?.provenance)
 }
 
 /// What a fit's JSON was made from: the recordings read, the rig file, and this tool's

@@ -21,12 +21,20 @@ pub fn write_fit_overlay(
     rep: &FitReport,
     origin_ns: u64,
 ) -> Result<(), OverlayError> {
-    let run = ModelRun {
-        rig: &rep.rig,
-        initial: &rep.initial,
-        camera: &rep.camera,
-        options: &rep.problem.options,
-    };
+    write_fit_overlay_with_input(w, obs, rep, origin_ns, None)
+}
+
+/// [`write_fit_overlay`], with the recording's own MCAP file (`input`, its bytes) copied
+/// beside the overlay's topics when given: its channels, schemas and messages as they are
+/// (`appell fit --overlay-with-input`).
+pub fn write_fit_overlay_with_input(
+    w: &mut dyn Write,
+    obs: &Observations,
+    rep: &FitReport,
+    origin_ns: u64,
+    input: Option<&[u8]>,
+) -> Result<(), OverlayError> {
+    let run = fit_run(rep);
     model_overlay(
         w,
         obs,
@@ -34,6 +42,7 @@ pub fn write_fit_overlay(
         &rep.events,
         super::fit::answer(rep),
         origin_ns,
+        input,
     )
 }
 
@@ -62,13 +71,28 @@ pub fn write_release_overlay(
         &mut |_| {},
     )?
     .events;
-    let run = ModelRun {
+    let run = part_run(part);
+    model_overlay(w, obs, &run, &events, answer, origin_ns, None)
+}
+
+/// The fitted model a fit's overlays sample: its rig, start, camera and integrator options.
+fn fit_run(rep: &FitReport) -> ModelRun<'_> {
+    ModelRun {
+        rig: &rep.rig,
+        initial: &rep.initial,
+        camera: &rep.camera,
+        options: &rep.problem.options,
+    }
+}
+
+/// The joint model at its optimum for one release (`part`), as its overlays sample it.
+fn part_run(part: &crate::fit::TrajectoryProblem) -> ModelRun<'_> {
+    ModelRun {
         rig: &part.rig,
         initial: &part.initial,
         camera: &part.camera,
         options: &part.options,
-    };
-    model_overlay(w, obs, &run, &events, answer, origin_ns)
+    }
 }
 
 /// A recording and a model's run over its frames, with the model's events and an answer line.
@@ -79,6 +103,7 @@ fn model_overlay(
     events: &[crate::sim::Event],
     answer: String,
     origin_ns: u64,
+    with_input: Option<&[u8]>,
 ) -> Result<(), OverlayError> {
     let mut metadata = BTreeMap::new();
     metadata.insert(
@@ -99,12 +124,14 @@ fn model_overlay(
         origin_ns,
         lab_markers: false,
         metadata,
+        with_input,
     };
     write_overlay(w, &input, Some(run))
 }
 
 /// Where `fit --joint --overlay OUT.mcap` writes a release's overlay: beside `OUT`, named
-/// `OUT`'s stem, an underscore and the release's first file's stem (`fit_release_03.mcap`).
+/// `OUT`'s stem, an underscore and the release's first file's stem (`fit_release_03.mcap`;
+/// `OUT`'s own extension, `.csv` for tables).
 pub fn release_overlay_path(
     out: &std::path::Path,
     release: &[std::path::PathBuf],
@@ -118,7 +145,57 @@ pub fn release_overlay_path(
         .and_then(|p| p.file_stem())
         .map(|s| s.to_string_lossy().into_owned())
         .unwrap_or_default();
-    out.with_file_name(format!("{stem}_{name}.mcap"))
+    let ext = out
+        .extension()
+        .map_or("mcap".to_owned(), |e| e.to_string_lossy().into_owned());
+    out.with_file_name(format!("{stem}_{name}.{ext}"))
+}
+
+/// The overlay of `appell fit --overlay FILE.csv`: the fitted model's markers at every frame
+/// (the fit's rig, start, camera and integrator options, one run as for the MCAP overlay) in
+/// the recording's own units, axes and time column, in its tool's table where it has one
+/// ([`crate::data::overlay_csv`]); `prov` is the recording's provenance (its calibration,
+/// format, marker names and clock).
+pub fn write_fit_overlay_csv(
+    w: &mut dyn Write,
+    obs: &Observations,
+    rep: &FitReport,
+    prov: &crate::data::Provenance,
+) -> Result<(), OverlayError> {
+    let run = fit_run(rep);
+    model_csv(w, &obs.times, &run, prov)
+}
+
+/// The `.csv` overlay of one release of `appell fit --joint`: the joint model at its optimum
+/// for that release (`part`), in the release's own units and time column (`prov`).
+pub fn write_release_overlay_csv(
+    w: &mut dyn Write,
+    part: &crate::fit::TrajectoryProblem,
+    prov: &crate::data::Provenance,
+) -> Result<(), OverlayError> {
+    let run = part_run(part);
+    model_csv(w, &part.observations().times, &run, prov)
+}
+
+/// A model's run over the frames written as a table in the recording's own units.
+fn model_csv(
+    w: &mut dyn Write,
+    times: &[f64],
+    run: &ModelRun,
+    prov: &crate::data::Provenance,
+) -> Result<(), OverlayError> {
+    let mut out = crate::data::overlay_csv::CsvOverlay::new(w, prov)?;
+    let mut failed: Option<std::io::Error> = None;
+    run.each_frame(times, &mut |t, m| {
+        if failed.is_none() {
+            failed = out.row(t, m.map(|m| m.markers)).err();
+        }
+    })?;
+    if let Some(e) = failed {
+        return Err(e.into());
+    }
+    out.finish()?;
+    Ok(())
 }
 
 /// The kinds of overlay file, by the output's extension.
@@ -126,11 +203,13 @@ pub fn release_overlay_path(
 pub enum OverlayFormat {
     /// MCAP for Foxglove (`.mcap`).
     Mcap,
+    /// The model's markers as a table in the recording's own units and layout (`.csv`).
+    Csv,
 }
 
 /// An overlay path whose extension names no overlay format.
 #[derive(Debug, thiserror::Error)]
-#[error("--overlay {}: expected a file ending in .mcap (Foxglove), got {}", path.display(), ext.as_deref().map_or("no extension".to_owned(), |e| format!(".{e}")))]
+#[error("--overlay {}: expected a file ending in .mcap (Foxglove) or .csv (the model's markers in the recording's own units), got {}", path.display(), ext.as_deref().map_or("no extension".to_owned(), |e| format!(".{e}")))]
 pub struct UnknownOverlay {
     /// The path given.
     pub path: std::path::PathBuf,
@@ -146,6 +225,7 @@ impl OverlayFormat {
             .map(|e| e.to_string_lossy().to_ascii_lowercase());
         match ext.as_deref() {
             Some("mcap") => Ok(OverlayFormat::Mcap),
+            Some("csv") => Ok(OverlayFormat::Csv),
             _ => Err(UnknownOverlay {
                 path: path.to_owned(),
                 ext,
@@ -173,6 +253,7 @@ pub fn write_simulation_overlay(
         origin_ns: 0,
         lab_markers: false,
         metadata: BTreeMap::new(),
+        with_input: None,
     };
     let run = ModelRun {
         rig: &scene.rig,

@@ -287,7 +287,7 @@ fn fit_overlay_from_the_command_line_decodes_and_holds_the_printed_answer() {
 /// Bad paths and an overlay over an input follow the output rules: refused before any work
 /// (exit 2, nothing written) when it names an input or another output or has no known
 /// extension; a directory that does not exist or a full disk is exit 1 with the reason, the
-/// report printed in full and no file left.
+/// report printed in full and no file left, for either kind of overlay (`.mcap`, `.csv`).
 #[test]
 fn overlay_paths_follow_the_output_rules() {
     let dir = tempfile::tempdir().unwrap();
@@ -333,10 +333,12 @@ fn overlay_paths_follow_the_output_rules() {
     // Cannot be written: exit 1, the report kept, the reason named.
     // A full disk: a link named like an overlay to /dev/full, which refuses every write.
     let full = Path::new("/dev/full").exists()
-        && std::os::unix::fs::symlink("/dev/full", d.join("full.mcap")).is_ok();
-    let mut targets = vec![p("missing/o.mcap")];
+        && std::os::unix::fs::symlink("/dev/full", d.join("full.mcap")).is_ok()
+        && std::os::unix::fs::symlink("/dev/full", d.join("full.csv")).is_ok();
+    let mut targets = vec![p("missing/o.mcap"), p("missing/o.csv")];
     if full {
         targets.push(p("full.mcap"));
+        targets.push(p("full.csv"));
     }
     for target in targets {
         let o = fit(&["--overlay", &target]);
@@ -596,4 +598,390 @@ fn a_joint_fit_writes_one_overlay_a_release() {
             .collect();
         assert_eq!(events, want, "{}", file.display());
     }
+}
+
+/// A shipped recording with the flags its tool needs: files under the repository root, the
+/// flags as `fit` and `convert` take them, and the same as read options.
+struct Shipped {
+    files: &'static [&'static str],
+    rig: &'static str,
+    flags: &'static [&'static str],
+    opts: fn() -> ReadOptions,
+    /// The format `convert` should detect in the overlay.
+    format: &'static str,
+}
+
+fn shipped() -> Vec<Shipped> {
+    const SHOW: &str = "tests/data/showcase/showcase_rig.toml";
+    vec![
+        Shipped {
+            files: &[
+                "tests/data/showcase/showcase_tracker_slider.txt",
+                "tests/data/showcase/showcase_tracker_bob.txt",
+            ],
+            rig: SHOW,
+            flags: &["--rail-frame"],
+            opts: || ReadOptions {
+                rail_frame: true,
+                ..ReadOptions::default()
+            },
+            format: "tracker",
+        },
+        Shipped {
+            files: &["tests/data/showcase/showcase_dlc.csv"],
+            rig: SHOW,
+            flags: &["--fps", "100", "--rod-length", "0.251", "--rail-frame"],
+            opts: || ReadOptions {
+                fps: Some(100.0),
+                rod_length: Some(0.251),
+                rail_frame: true,
+                ..ReadOptions::default()
+            },
+            format: "dlc",
+        },
+        Shipped {
+            files: &["tests/data/showcase/showcase_sleap.csv"],
+            rig: SHOW,
+            flags: &["--fps", "200", "--scale", "0.00104", "--rail-frame"],
+            opts: || ReadOptions {
+                fps: Some(200.0),
+                scale: Some(0.00104),
+                rail_frame: true,
+                ..ReadOptions::default()
+            },
+            format: "dlc",
+        },
+        Shipped {
+            files: &["tests/data/showcase/showcase_motive.csv"],
+            rig: SHOW,
+            flags: &[
+                "--slider",
+                "Unlabeled 1001",
+                "--bob",
+                "Unlabeled 1002",
+                "--rail-frame",
+            ],
+            opts: || ReadOptions {
+                slider: Some("Unlabeled 1001".into()),
+                bob: Some("Unlabeled 1002".into()),
+                rail_frame: true,
+                ..ReadOptions::default()
+            },
+            format: "motive",
+        },
+        Shipped {
+            files: &[RECORDING],
+            rig: RIG,
+            flags: &[],
+            opts: ReadOptions::default,
+            format: "wide",
+        },
+    ]
+}
+
+/// `appell fit FILES --rig RIG FLAGS --overlay OUT`, which must succeed.
+fn fit_with_overlay(s: &Shipped, out: &Path) {
+    let files: Vec<String> = s
+        .files
+        .iter()
+        .map(|f| root(f).display().to_string())
+        .collect();
+    let rig = root(s.rig).display().to_string();
+    let mut args: Vec<&str> = vec!["fit"];
+    args.extend(files.iter().map(String::as_str));
+    args.extend(["--rig", rig.as_str()]);
+    args.extend_from_slice(s.flags);
+    args.extend(["--overlay", out.to_str().unwrap(), "--json"]);
+    let o = appell(&args);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{:?}: {}",
+        s.files,
+        String::from_utf8_lossy(&o.stderr)
+    );
+}
+
+/// A recording's positions in the file's own units and axes: read with a scale of 1, y as the
+/// file has it, no rail frame.
+fn raw(paths: &[PathBuf], opts: &ReadOptions) -> appell::data::Recording {
+    let raw = ReadOptions {
+        scale: Some(1.0),
+        y_down: Some(false),
+        rail_frame: false,
+        rod_length: None,
+        ..opts.clone()
+    };
+    appell::data::read_recording(paths, &raw).unwrap()
+}
+
+/// The acceptance of issue 63 for `--overlay FILE.csv`, on every shipped showcase (Tracker,
+/// DeepLabCut, SLEAP, Motive) and the example MCAP: the table, read back in the file's units
+/// and mapped through the recording's calibration, equals the fitted model's markers (the MCAP
+/// overlay's, the simulator's for the fitted scene) to 1e-9 m at the same frame times; it is
+/// written in its tool's layout, which `convert` reads again with the recording's own flags;
+/// and its positions lie on the recorded markers in the file's own units (a y not flipped back
+/// or a rail not turned back would put the model's bob a rod's length away).
+#[test]
+fn csv_overlays_map_back_through_the_calibration_to_the_fitted_markers() {
+    let dir = tempfile::tempdir().unwrap();
+    for (k, s) in shipped().iter().enumerate() {
+        let csv = dir.path().join(format!("o{k}.csv"));
+        let mcap_out = dir.path().join(format!("o{k}.mcap"));
+        fit_with_overlay(s, &csv);
+        fit_with_overlay(s, &mcap_out);
+        let msgs = read_checked(&std::fs::read(&mcap_out).unwrap());
+        let model = model_markers(&msgs);
+        let model_t: Vec<f64> = msgs
+            .iter()
+            .filter(|m| m.topic == ov::TOPIC_MARKERS)
+            .map(|m| json(m)["t"].as_f64().unwrap())
+            .collect();
+
+        let opts = (s.opts)();
+        let inputs: Vec<PathBuf> = s.files.iter().map(|f| root(f)).collect();
+        let recording = appell::data::read_recording(&inputs, &opts).unwrap();
+        let cal = &recording.provenance.calibration;
+        let back = raw(std::slice::from_ref(&csv), &opts);
+        assert_eq!(back.len(), model.len(), "{:?}: one row a frame", s.files);
+        let mut worst: f64 = 0.0;
+        for i in 0..back.len() {
+            assert!(
+                (back.times[i] - model_t[i]).abs() < 1e-9,
+                "{:?}: frame {i} at {} s, the model's at {} s",
+                s.files,
+                back.times[i],
+                model_t[i]
+            );
+            let (p, q) = (back.slider[i].unwrap(), back.bob[i].unwrap());
+            let rail = [cal.to_rail(p), cal.to_rail(q)];
+            let m = model[i];
+            for (j, v) in [rail[0][0], rail[0][1], rail[1][0], rail[1][1]]
+                .iter()
+                .enumerate()
+            {
+                worst = worst.max((v - m[j]).abs());
+            }
+        }
+        assert!(worst <= 1e-9, "{:?}: {worst:e} m off", s.files);
+
+        // The file's own units and axes: the model's bob on the recorded bob.
+        let recorded = raw(&inputs, &opts);
+        let rod = recording.provenance.geometry.as_ref().unwrap().median / cal.scale;
+        let mut off: Vec<f64> = recorded
+            .bob
+            .iter()
+            .zip(&back.bob)
+            .filter_map(|(r, m)| {
+                let (r, m) = ((*r)?, (*m)?);
+                Some((r[0] - m[0]).hypot(r[1] - m[1]))
+            })
+            .collect();
+        off.sort_by(f64::total_cmp);
+        let median = off[off.len() / 2];
+        assert!(
+            median < 0.01 * rod,
+            "{:?}: the model's bob {median} file units from the recorded one (rod {rod})",
+            s.files
+        );
+
+        // Motive's third axis: the model's markers at the recorded markers' depth off the
+        // plane (the take's Z, plane xy), within a few noise deviations (0.15 mm).
+        if s.format == "motive" {
+            let z = |path: &Path, col: usize| -> f64 {
+                let text = std::fs::read_to_string(path).unwrap();
+                let v: Vec<f64> = text
+                    .lines()
+                    .skip(7)
+                    .filter_map(|l| l.split(',').nth(col)?.parse().ok())
+                    .collect();
+                v.iter().sum::<f64>() / v.len() as f64
+            };
+            for col in [4, 7] {
+                let (got, want) = (z(&csv, col), z(&inputs[0], col));
+                assert!(
+                    (got - want).abs() < 0.5,
+                    "Z column {col}: {got} against {want} mm"
+                );
+            }
+        }
+
+        // `convert` reads it again, in the tool's layout, with the recording's flags.
+        let out = dir.path().join(format!("c{k}.csv"));
+        let mut args = vec!["convert", csv.to_str().unwrap(), out.to_str().unwrap()];
+        args.extend_from_slice(s.flags);
+        let o = appell(&args);
+        let said = String::from_utf8_lossy(&o.stdout);
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{:?}: {}",
+            s.files,
+            String::from_utf8_lossy(&o.stderr)
+        );
+        assert!(
+            said.contains(&format!("({} format, detected)", s.format)),
+            "{:?}: {said}",
+            s.files
+        );
+        let converted = appell::data::read_recording(&[out], &ReadOptions::default()).unwrap();
+        assert_eq!(converted.len(), model.len(), "{:?}", s.files);
+    }
+}
+
+/// Messages and payload bytes per topic of an MCAP file.
+fn per_topic(bytes: &[u8]) -> BTreeMap<String, (usize, usize)> {
+    let mut out: BTreeMap<String, (usize, usize)> = BTreeMap::new();
+    for m in mcap::MessageStream::new(bytes).unwrap() {
+        let m = m.unwrap();
+        let e = out.entry(m.channel.topic.clone()).or_default();
+        e.0 += 1;
+        e.1 += m.data.len();
+    }
+    out
+}
+
+/// `--overlay-with-input` keeps an MCAP recording's own topics beside the overlay's: each of
+/// the input's topics holds as many messages and bytes as in the input, with the same schema,
+/// and the overlay's eight topics are all there; a table overlay or a recording not in MCAP is
+/// refused before the fit (exit 2, saying why).
+#[test]
+fn overlay_with_input_keeps_the_recordings_topics() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("with.mcap");
+    let rec = root(RECORDING).display().to_string();
+    let rig = root(RIG).display().to_string();
+    let o = appell(&[
+        "fit",
+        &rec,
+        "--rig",
+        &rig,
+        "--overlay",
+        out.to_str().unwrap(),
+        "--overlay-with-input",
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let input = std::fs::read(root(RECORDING)).unwrap();
+    let bytes = std::fs::read(&out).unwrap();
+    let want = per_topic(&input);
+    let got = per_topic(&bytes);
+    assert!(!want.is_empty());
+    for (topic, counts) in &want {
+        assert_eq!(got.get(topic), Some(counts), "{topic}");
+    }
+    assert_eq!(got.len(), want.len() + 8, "{:?}", got.keys());
+    // Each copied message decodes against its schema as the input's did (the JSON topics'
+    // keys in their schemas), and the stamps are the input's.
+    let msgs = read_checked(&bytes);
+    let first_in = mcap::MessageStream::new(&input)
+        .unwrap()
+        .map(|m| m.unwrap().log_time)
+        .collect::<Vec<_>>();
+    let copied: Vec<u64> = msgs
+        .iter()
+        .filter(|m| want.contains_key(&m.topic))
+        .map(|m| m.log_time)
+        .collect();
+    assert_eq!(copied, first_in);
+
+    // Refused before the fit: a table overlay, and a recording that is not MCAP.
+    let csv = dir.path().join("o.csv");
+    let dlc = root("tests/data/showcase/showcase_dlc.csv")
+        .display()
+        .to_string();
+    let show_rig = root("tests/data/showcase/showcase_rig.toml")
+        .display()
+        .to_string();
+    let mcap_out = dir.path().join("o.mcap");
+    for (args, what) in [
+        (
+            vec![
+                "fit",
+                &rec,
+                "--rig",
+                &rig,
+                "--overlay",
+                csv.to_str().unwrap(),
+                "--overlay-with-input",
+            ],
+            "table (.csv)",
+        ),
+        (
+            vec![
+                "fit",
+                &dlc,
+                "--rig",
+                &show_rig,
+                "--fps",
+                "100",
+                "--rod-length",
+                "0.251",
+                "--overlay",
+                mcap_out.to_str().unwrap(),
+                "--overlay-with-input",
+            ],
+            "not MCAP",
+        ),
+    ] {
+        let o = appell(&args);
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains("--overlay-with-input") && err.contains(what),
+            "{args:?}: {err}"
+        );
+        assert!(o.stdout.is_empty(), "{args:?}: refused before the fit");
+    }
+    assert!(!csv.exists() && !mcap_out.exists());
+}
+
+/// A fit of part of a recording (`--t-start`) writes its overlay in the file's own clock: the
+/// table's first frame number is the first frame kept (DeepLabCut at 100 fps from 0.5 s:
+/// frame 50), and the MCAP overlay's first stamp is the recording's stamp of that frame.
+#[test]
+fn an_overlay_of_a_time_window_keeps_the_files_clock() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("w.csv");
+    let dlc = Shipped {
+        flags: &[
+            "--fps",
+            "100",
+            "--rod-length",
+            "0.251",
+            "--rail-frame",
+            "--t-start",
+            "0.5",
+        ],
+        ..shipped().swap_remove(1)
+    };
+    fit_with_overlay(&dlc, &csv);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let first = text.lines().nth(3).unwrap();
+    assert!(first.starts_with("50,"), "{first}");
+
+    let out = dir.path().join("w.mcap");
+    let rec = root(RECORDING);
+    let example = Shipped {
+        flags: &["--t-start", "0.5"],
+        ..shipped().swap_remove(4)
+    };
+    fit_with_overlay(&example, &out);
+    let msgs = read_checked(&std::fs::read(&out).unwrap());
+    let stamps: Vec<u64> = mcap::MessageStream::new(&std::fs::read(&rec).unwrap())
+        .unwrap()
+        .map(|m| m.unwrap().log_time)
+        .collect();
+    let want = stamps[0] + 500_000_000;
+    assert!(stamps.contains(&want));
+    let first = msgs
+        .iter()
+        .find(|m| m.topic == ov::TOPIC_MARKERS)
+        .unwrap()
+        .log_time;
+    assert_eq!(first, want);
 }

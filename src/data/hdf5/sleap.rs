@@ -109,6 +109,7 @@ pub(super) fn read(f: &Hdf5File, src: &Src, opts: &ReadOptions) -> Result<Parsed
         notes: vec![format!(
             "SLEAP analysis HDF5: {n_tracks} track(s), {n_nodes} node(s), {n_frames} frames; pixels with y down, t = frame / {fps} Hz, NaN as missing"
         )],
+        frame_rate: Some(fps),
         ..Parsed::default()
     })
 }

@@ -525,6 +525,47 @@ impl<'w> OverlayWriter<'w> {
         )
     }
 
+    /// Copy every message of the MCAP file `input` (its bytes) with its channel and schema,
+    /// stamps and sequence numbers as they are, beside the overlay's topics: a recording read
+    /// from MCAP kept whole in its overlay. Read linearly, as the reader reads it; a damaged
+    /// tail (which the reader warned of) ends the copy where the reader's frames ended.
+    /// Returns the messages copied.
+    pub fn copy_messages(&mut self, input: &[u8]) -> Result<usize, McapError> {
+        let mut ids: std::collections::HashMap<u16, u16> = std::collections::HashMap::new();
+        let mut copied = 0;
+        for m in ::mcap::MessageStream::new(input)? {
+            let Ok(m) = m else { break };
+            let channel = match ids.get(&m.channel.id) {
+                Some(&id) => id,
+                None => {
+                    let schema = match &m.channel.schema {
+                        Some(s) => self.out.add_schema(&s.name, &s.encoding, &s.data)?,
+                        None => 0,
+                    };
+                    let id = self.out.add_channel(
+                        schema,
+                        &m.channel.topic,
+                        &m.channel.message_encoding,
+                        &m.channel.metadata,
+                    )?;
+                    ids.insert(m.channel.id, id);
+                    id
+                }
+            };
+            self.out.write_to_known_channel(
+                &MessageHeader {
+                    channel_id: channel,
+                    sequence: m.sequence,
+                    log_time: m.log_time,
+                    publish_time: m.publish_time,
+                },
+                &m.data,
+            )?;
+            copied += 1;
+        }
+        Ok(copied)
+    }
+
     /// Write the events left (those after the last frame) and end the file.
     pub fn finish(mut self) -> Result<(), McapError> {
         self.events_until(f64::INFINITY)?;
@@ -541,12 +582,15 @@ pub enum OverlayError {
     /// The MCAP file could not be written.
     #[error("{0}")]
     Mcap(#[from] ::mcap::McapError),
+    /// A table (`.csv`) could not be written.
+    #[error("{0}")]
+    Io(#[from] std::io::Error),
 }
 
 impl From<OverlayError> for std::io::Error {
     fn from(e: OverlayError) -> Self {
         match e {
-            OverlayError::Mcap(::mcap::McapError::Io(io)) => io,
+            OverlayError::Mcap(::mcap::McapError::Io(io)) | OverlayError::Io(io) => io,
             other => std::io::Error::other(other.to_string()),
         }
     }
@@ -568,6 +612,39 @@ impl ModelRun<'_> {
     /// The model at one sample: markers, mode and forces.
     pub fn frame(&self, s: &crate::sim::Sample<f64>) -> ModelFrame {
         ModelFrame::of(self.rig, self.camera, s)
+    }
+
+    /// One run over `times` (ascending, s from the first frame), each frame's model handed to
+    /// `each` as it is sampled (`None` for the frames after a run that stopped early, a
+    /// paradox): nothing is kept, so a long recording costs no memory but its times.
+    pub fn each_frame(
+        &self,
+        times: &[f64],
+        each: &mut dyn FnMut(f64, Option<ModelFrame>),
+    ) -> Result<(), crate::sim::SimError> {
+        let Some(&t_end) = times.last() else {
+            return Ok(());
+        };
+        let mut reached = 0;
+        simulate_each(
+            self.rig,
+            self.initial,
+            t_end,
+            self.options,
+            &Request {
+                sample_times: times.to_vec(),
+                friction_work: false,
+                positions_only: false,
+            },
+            &mut |s| {
+                reached += 1;
+                each(s.t, Some(self.frame(&s)));
+            },
+        )?;
+        for &t in &times[reached..] {
+            each(t, None);
+        }
+        Ok(())
     }
 }
 
@@ -592,6 +669,9 @@ pub struct OverlayInput<'a> {
     pub lab_markers: bool,
     /// MCAP metadata records (name -> key -> value).
     pub metadata: BTreeMap<String, BTreeMap<String, String>>,
+    /// The recording's own MCAP file (its bytes), whose channels, schemas and messages are
+    /// copied beside the overlay's (`fit --overlay-with-input`).
+    pub with_input: Option<&'a [u8]>,
 }
 
 /// Write an overlay of `input` and the model `run` (sampled at every frame time) on `w`.
@@ -651,6 +731,9 @@ pub fn write_overlay(
             model: None,
         })?;
     }
+    if let Some(bytes) = input.with_input {
+        out.copy_messages(bytes)?;
+    }
     out.finish()?;
     Ok(())
 }
@@ -681,8 +764,9 @@ struct OutFrame<'a> {
     markers: Vec<OutMarker<'a>>,
 }
 
-/// JSON Schema of the frame messages [`write_json`] writes (schema `lab.MarkerFrame2D`).
-pub const FRAME_SCHEMA: &str = r#"{"title":"lab.MarkerFrame2D","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"frame_id":{"type":"string"},"markers":{"type":"array","items":{"type":"object","properties":{"id":{"type":"string"},"x":{"type":"number"},"y":{"type":"number"}}}}}}"#;
+/// JSON Schema of the frame messages [`write_json`] writes (schema `lab.MarkerFrame2D`); a
+/// marker not seen has null x and y, which the schema allows (a validator refused it).
+pub const FRAME_SCHEMA: &str = r#"{"title":"lab.MarkerFrame2D","type":"object","properties":{"timestamp":{"type":"object","properties":{"sec":{"type":"integer"},"nsec":{"type":"integer"}}},"frame_id":{"type":"string"},"markers":{"type":"array","items":{"type":"object","properties":{"id":{"type":"string"},"x":{"type":["number","null"]},"y":{"type":["number","null"]}}}}}}"#;
 
 /// One `lab.MarkerFrame2D` JSON frame at `ns` (a missing marker with null x and y) into `buf`.
 fn frame_json(

@@ -3,7 +3,7 @@
 //! renamed when they reappeared are joined under their first name.
 
 use super::rows::Rows;
-use super::xyz::{complete, group_xyz, read_xyz_rows, unit_scale};
+use super::xyz::{complete, group_xyz, read_xyz_rows_off_plane, unit_scale};
 use crate::data::{DataError, Parsed, Plane, ReadOptions, Series};
 use std::collections::HashMap;
 use std::io::Read;
@@ -29,12 +29,12 @@ pub(super) fn read_motive(
         .and_then(|r| r.parse::<f64>().ok())
         .filter(|r| r.is_finite() && *r > 0.0);
     let mut base = None;
-    let mut series = read_xyz_rows(
+    let (mut series, off_plane) = read_xyz_rows_off_plane(
         &mut rows,
         path,
         &markers,
         plane,
-        |r| match rate_hz {
+        &mut |r| match rate_hz {
             Some(hz) => {
                 let f = r.req(0, "Frame", false)?;
                 let b = *base.get_or_insert(f);
@@ -48,6 +48,13 @@ pub(super) fn read_motive(
         },
         false,
     )?;
+    // Each marker's mean depth off the plane, by name before the joins (a joined marker keeps
+    // its first name, and that name's depth).
+    let off_plane = series
+        .iter()
+        .zip(off_plane)
+        .filter_map(|(s, d)| Some((s.name.clone(), d?)))
+        .collect();
     let (join_notes, joined, join_warning) = join_renamed_unlabeled(&mut series);
     let time_note = match rate_hz {
         Some(hz) => format!("t = (Frame - first frame) / Export Frame Rate {hz} Hz from the header (the Time column is rounded)"),
@@ -76,6 +83,8 @@ pub(super) fn read_motive(
         joined,
         warnings: join_warning.into_iter().collect(),
         plane: Some(plane),
+        frame_rate: rate_hz,
+        off_plane,
         ..Parsed::default()
     })
 }

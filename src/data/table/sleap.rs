@@ -97,6 +97,7 @@ pub(super) fn read_sleap_csv(
         notes: vec![format!(
             "SLEAP analysis CSV: pixels with y down, t = frame_idx / {fps} Hz"
         )],
+        frame_rate: Some(fps),
         ..Parsed::default()
     })
 }

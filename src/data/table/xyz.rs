@@ -50,6 +50,26 @@ pub(super) fn read_xyz_rows<R: Read>(
     mut time: impl FnMut(&Rows<R>) -> Result<f64, DataError>,
     stop_at_blank: bool,
 ) -> Result<Vec<Series>, DataError> {
+    read_xyz_rows_off_plane(rows, path, markers, plane, &mut time, stop_at_blank).map(|(s, _)| s)
+}
+
+/// [`read_xyz_rows`], with each marker's mean coordinate off the plane (the axis the
+/// projection drops; `None` for a marker never seen), file units, in the markers' order: an
+/// overlay written back in the file's three axes puts the model there.
+pub(super) fn read_xyz_rows_off_plane<R: Read>(
+    rows: &mut Rows<R>,
+    path: &Path,
+    markers: &[(String, [usize; 3])],
+    plane: Plane,
+    time: &mut dyn FnMut(&Rows<R>) -> Result<f64, DataError>,
+    stop_at_blank: bool,
+) -> Result<(Vec<Series>, Vec<Option<f64>>), DataError> {
+    let off = match plane {
+        Plane::Xy => 2,
+        Plane::Xz => 1,
+        Plane::Yz => 0,
+    };
+    let mut sums = vec![(0.0, 0usize); markers.len()];
     let mut series: Vec<Series> = markers
         .iter()
         .map(|(n, _)| Series {
@@ -72,9 +92,12 @@ pub(super) fn read_xyz_rows<R: Read>(
         clock.check(path, || rows.at(), t)?;
         times.push(t);
         for (k, (name, idx)) in markers.iter().enumerate() {
-            series[k]
-                .points
-                .push(rows.point(*idx, name, false)?.map(|p| plane.project(p)));
+            let p = rows.point(*idx, name, false)?;
+            if let Some(p) = p {
+                sums[k].0 += p[off];
+                sums[k].1 += 1;
+            }
+            series[k].points.push(p.map(|p| plane.project(p)));
         }
     }
     if times.is_empty() {
@@ -86,7 +109,11 @@ pub(super) fn read_xyz_rows<R: Read>(
     for s in &mut series {
         s.times = times.clone();
     }
-    Ok(series)
+    let means = sums
+        .into_iter()
+        .map(|(sum, n)| (n > 0).then(|| sum / n as f64))
+        .collect();
+    Ok((series, means))
 }
 
 /// The markers of `groups` with all three columns; `rows_err(expected)` makes the header error
