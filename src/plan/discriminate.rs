@@ -223,21 +223,27 @@ impl Laws {
     /// this checks a proposal's claim where a rival can move far from Coulomb's law (a
     /// static coefficient that shifts a slip to mimic a Stribeck hump). `None` for a pair
     /// whose fit fails.
+    ///
+    /// Each pair keeps the smaller of the two lambdas: a fit stopped short of the rival's best
+    /// (its iteration limit, a local minimum) overstates lambda as the linearisation can, and
+    /// a pair counts as told apart only when neither finds the rival fitting.
     pub fn verified(&self, ev: &Evaluator, y0: &State<f64>) -> Vec<Option<Separation>> {
         use rayon::prelude::*;
         let ln_n = self.rows.max(2.0).ln();
         let frames = Frames::new(ev, self.max_frames);
         let releases: Vec<State<f64>> = self.before_release.iter().copied().chain([*y0]).collect();
+        let linear = self.separations(ev, y0);
         self.pairs
             .par_iter()
-            .map(|&(a, b)| {
+            .zip(linear)
+            .map(|(&(a, b), linear)| {
                 let (truth, rival) = (&self.candidates[a], &self.candidates[b]);
                 let start = rival_start(&truth.1, &rival.1, rival.0);
                 let parts = releases
                     .iter()
                     .map(|y| rival_problem(ev, &frames, &truth.1, &start, rival.0, y))
                     .collect::<Option<Vec<_>>>()?;
-                let lambda = fit_rival(parts)?;
+                let lambda = fit_rival(parts)?.min(linear.map_or(f64::INFINITY, |s| s.lambda));
                 Some(separation(truth.0, rival.0, lambda, ln_n))
             })
             .collect()
