@@ -688,7 +688,7 @@ impl RigOrigin<'_> {
     /// where it fitted the quantity, so a mass ratio of -1 shows as -1, not as the NaN it
     /// makes of the masses).
     fn name(&self, q: Quantity, rig: &Rig<f64>, value: f64) -> (String, f64) {
-        let rigid = rig.pendulum.is_some();
+        let rigid = rig.pendulum.is_some_and(|p| !p.is_point());
         match *self {
             RigOrigin::File { friction } => {
                 let name = match q {

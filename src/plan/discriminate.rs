@@ -16,10 +16,11 @@
 use super::law::{reference_rig, Law, STRONG};
 use super::search::{Evaluator, Frames};
 use super::spec::normal_cdf;
-use crate::fit::{Param, TrajectoryProblem};
+use crate::fit::{Observations, Param, TrajectoryProblem};
 use crate::model::{Rig, State};
 use nalgebra::{DMatrix, DVector};
 use serde::Serialize;
+use std::sync::Arc;
 
 /// How far a recording would separate one law, taken as true, from a rival.
 #[derive(Debug, Clone, PartialEq, Serialize)]
@@ -233,16 +234,31 @@ impl Laws {
         let frames = Frames::new(ev, self.max_frames);
         let releases: Vec<State<f64>> = self.before_release.iter().copied().chain([*y0]).collect();
         let linear = self.separations(ev, y0);
+        // Each truth's recordings once, for all its rivals.
+        let recorded: Vec<Option<Vec<Arc<Observations>>>> = (0..self.candidates.len())
+            .into_par_iter()
+            .map(|a| {
+                if !self.pairs.iter().any(|&(t, _)| t == a) {
+                    return None;
+                }
+                releases
+                    .iter()
+                    .map(|y| truth_recording(ev, &frames, &self.candidates[a].1, y))
+                    .collect()
+            })
+            .collect();
         self.pairs
             .par_iter()
             .zip(linear)
             .map(|(&(a, b), linear)| {
                 let (truth, rival) = (&self.candidates[a], &self.candidates[b]);
                 let start = rival_start(&truth.1, &rival.1, rival.0);
-                let parts = releases
+                let parts = recorded[a]
+                    .as_ref()?
                     .iter()
-                    .map(|y| rival_problem(ev, &frames, &truth.1, &start, rival.0, y))
-                    .collect::<Option<Vec<_>>>()?;
+                    .zip(&releases)
+                    .map(|(obs, y)| rival_problem(ev, &frames, obs, &start, rival.0, y))
+                    .collect();
                 let lambda = fit_rival(parts)?.min(linear.map_or(f64::INFINITY, |s| s.lambda));
                 Some(separation(truth.0, rival.0, lambda, ln_n))
             })
@@ -386,43 +402,50 @@ impl Own {
     }
 }
 
-/// The rival's problem on the truth's noise-free recording of release `y0`: its
-/// coefficient, its law's parameters and the release free, started at `start` (from the
-/// true release).
-fn rival_problem(
+/// The truth's noise-free recording of release `y0` at `frames`' frames.
+fn truth_recording(
     ev: &Evaluator,
     frames: &Frames,
     truth: &Rig<f64>,
-    start: &Rig<f64>,
-    rival: Law,
     y0: &State<f64>,
-) -> Option<TrajectoryProblem> {
+) -> Option<Arc<Observations>> {
     let y = predict(ev, frames, truth, y0)?;
     let n = frames.obs.times.len();
     if y.len() != 4 * n {
         return None;
     }
     // The placeholder sees every marker in every frame: rows are slider x, y, bob x, y.
-    let obs = crate::fit::Observations {
+    Some(Arc::new(Observations {
         times: frames.obs.times.clone(),
         slider: (0..n).map(|i| Some([y[4 * i], y[4 * i + 1]])).collect(),
         bob: (0..n).map(|i| Some([y[4 * i + 2], y[4 * i + 3]])).collect(),
-    };
+    }))
+}
+
+/// The rival's problem on the truth's recording `obs` of release `y0`: its coefficient, its
+/// law's parameters and the release free, started at `start` (from the true release).
+fn rival_problem(
+    ev: &Evaluator,
+    frames: &Frames,
+    obs: &Arc<Observations>,
+    start: &Rig<f64>,
+    rival: Law,
+    y0: &State<f64>,
+) -> TrajectoryProblem {
     let free: Vec<Param> = std::iter::once(Param::MuKinetic)
         .chain(rival.params().iter().copied())
         .chain([Param::X, Param::Theta, Param::XDot, Param::ThetaDot])
         .collect();
-    let mut problem =
-        TrajectoryProblem::new(std::sync::Arc::new(obs), *start, *y0, free, ev.options);
+    let mut problem = TrajectoryProblem::new(obs.clone(), *start, *y0, free, ev.options);
     problem.tie_static = !rival.params().contains(&Param::MuStatic);
     problem.sigma = [frames.noise, frames.noise];
-    Some(problem)
+    problem
 }
 
 /// The chi-square the rival's best fit leaves over `parts` (one recording, or several fitted
 /// together with the rival's parameters shared), by the fit's Levenberg-Marquardt.
 fn fit_rival(parts: Vec<TrajectoryProblem>) -> Option<f64> {
-    use crate::fit::lm::{LeastSquares, LevenbergMarquardt};
+    use crate::fit::lm::LevenbergMarquardt;
     use crate::fit::solve::run_lm;
     const ITERS: u64 = 50;
     let cost = if parts.len() == 1 {
@@ -437,9 +460,8 @@ fn fit_rival(parts: Vec<TrajectoryProblem>) -> Option<f64> {
         for part in &joint.parts {
             p0.extend_from_slice(&part.values().as_slice()[s..]);
         }
+        // A start the solver cannot evaluate is its error (its first normal equations).
         let p0 = DVector::from_vec(p0);
-        // A start the solver cannot evaluate is no fit.
-        joint.cost(&p0)?.ok()?;
         run_lm(&joint, p0, ITERS, LevenbergMarquardt::default())
             .ok()?
             .1

@@ -12,7 +12,7 @@
 use super::spec::PlanRigSpec;
 use crate::fit::priors::RigMeasurement;
 use crate::numbers::value_pm;
-use crate::scene::{RigSpec, SceneError};
+use crate::scene::SceneError;
 use serde_json::Value;
 use std::path::Path;
 
@@ -78,35 +78,7 @@ fn unit_of(what: &str) -> &'static str {
 /// The plan's `[rig]` as the fit would take it: every value with the deviation of a ruler and
 /// a kitchen scale (a plan file states none).
 fn plan_measurement(rig: &PlanRigSpec) -> RigMeasurement {
-    RigMeasurement::from_spec(&RigSpec {
-        slider_mass: rig.slider_mass,
-        bob_mass: rig.bob_mass,
-        rod_length: rig.rod_length,
-        rod_mass: rig.rod_mass,
-        bob_radius: rig.bob_radius,
-        pendulum_mass: rig.pendulum_mass,
-        pendulum_com: rig.pendulum_com,
-        pendulum_inertia: rig.pendulum_inertia,
-        gravity: rig.gravity,
-        mu_kinetic: None,
-        mu_static: None,
-        rail_tilt_deg: None,
-        pivot_damping: None,
-        friction_law: None,
-        mu_kinetic_positive: None,
-        mu_kinetic_negative: None,
-        mu_static_positive: None,
-        mu_static_negative: None,
-        load_exponent: None,
-        stribeck_velocity: None,
-        viscous_friction: None,
-        rod_length_sd: None,
-        slider_mass_sd: None,
-        bob_mass_sd: None,
-        rod_mass_sd: None,
-        bob_radius_sd: None,
-        gravity_sd: None,
-    })
+    RigMeasurement::from_spec(&rig.rig_spec())
 }
 
 /// The pendulum as a rig file describes it, in words.

@@ -749,12 +749,11 @@ impl FrictionSpec {
 const FRICTION_KEYS: [&str; 4] = ["mu_", "friction_law", "stribeck_velocity", "load_exponent"];
 
 impl PlanRigSpec {
-    /// The rig with the friction's central values, checked as a rig file's by the same
-    /// function ([`RigSpec::checked`]: the same ranges and messages, the friction keys named
-    /// as the plan's), and its time scale.
-    fn rig(&self, path: &Path, f: &FrictionSpec) -> Result<Rig<f64>, SceneError> {
+    /// The plan's rig as a rig file's `[rig]`: its masses, rod, pendulum and gravity, no
+    /// friction, tilt, damping or deviations.
+    pub fn rig_spec(&self) -> RigSpec {
         let r = self;
-        let spec = RigSpec {
+        RigSpec {
             slider_mass: r.slider_mass,
             bob_mass: r.bob_mass,
             rod_length: r.rod_length,
@@ -764,17 +763,17 @@ impl PlanRigSpec {
             pendulum_com: r.pendulum_com,
             pendulum_inertia: r.pendulum_inertia,
             gravity: r.gravity,
-            mu_kinetic: f.mu_kinetic,
-            mu_static: f.mu_static,
+            mu_kinetic: None,
+            mu_static: None,
             rail_tilt_deg: None,
             pivot_damping: None,
-            friction_law: f.friction_law,
-            mu_kinetic_positive: f.mu_kinetic_positive,
-            mu_kinetic_negative: f.mu_kinetic_negative,
-            mu_static_positive: f.mu_static_positive,
-            mu_static_negative: f.mu_static_negative,
-            load_exponent: f.load_exponent,
-            stribeck_velocity: f.stribeck_velocity,
+            friction_law: None,
+            mu_kinetic_positive: None,
+            mu_kinetic_negative: None,
+            mu_static_positive: None,
+            mu_static_negative: None,
+            load_exponent: None,
+            stribeck_velocity: None,
             viscous_friction: None,
             rod_length_sd: None,
             slider_mass_sd: None,
@@ -782,6 +781,24 @@ impl PlanRigSpec {
             rod_mass_sd: None,
             bob_radius_sd: None,
             gravity_sd: None,
+        }
+    }
+
+    /// The rig with the friction's central values, checked as a rig file's by the same
+    /// function ([`RigSpec::checked`]: the same ranges and messages, the friction keys named
+    /// as the plan's), and its time scale.
+    fn rig(&self, path: &Path, f: &FrictionSpec) -> Result<Rig<f64>, SceneError> {
+        let spec = RigSpec {
+            mu_kinetic: f.mu_kinetic,
+            mu_static: f.mu_static,
+            friction_law: f.friction_law,
+            mu_kinetic_positive: f.mu_kinetic_positive,
+            mu_kinetic_negative: f.mu_kinetic_negative,
+            mu_static_positive: f.mu_static_positive,
+            mu_static_negative: f.mu_static_negative,
+            load_exponent: f.load_exponent,
+            stribeck_velocity: f.stribeck_velocity,
+            ..self.rig_spec()
         };
         let rig = spec.checked(path).map_err(|e| match e {
             SceneError::Invalid { path, message } => SceneError::Invalid {

@@ -466,14 +466,14 @@ fn plan_after_a_fit_of_another_rig_is_refused() {
 fn the_worked_law_example_weighs_every_law_the_first_release_left_open() {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let laws = root.join("data/laws");
-    let fit = Command::new(env!("CARGO_BIN_EXE_appell"))
-        .arg("fit")
-        .arg(laws.join("first_release.csv"))
-        .arg("--rig")
-        .arg(laws.join("rig.toml"))
-        .arg("--json")
-        .output()
-        .unwrap();
+    let (rec, rig_file) = (laws.join("first_release.csv"), laws.join("rig.toml"));
+    let fit = appell(&[
+        "fit",
+        rec.to_str().unwrap(),
+        "--rig",
+        rig_file.to_str().unwrap(),
+        "--json",
+    ]);
     assert!(
         fit.status.success(),
         "{}",
@@ -554,14 +554,13 @@ fn the_worked_law_example_weighs_every_law_the_first_release_left_open() {
 
 /// `appell plan PLAN --after FIT --json`, parsed.
 fn plan_json_after(plan: &Path, fit: &Path) -> serde_json::Value {
-    let out = Command::new(env!("CARGO_BIN_EXE_appell"))
-        .arg("plan")
-        .arg(plan)
-        .arg("--after")
-        .arg(fit)
-        .arg("--json")
-        .output()
-        .unwrap();
+    let out = appell(&[
+        "plan",
+        plan.to_str().unwrap(),
+        "--after",
+        fit.to_str().unwrap(),
+        "--json",
+    ]);
     assert!(
         out.status.success(),
         "{}",
