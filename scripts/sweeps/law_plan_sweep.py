@@ -24,7 +24,9 @@ camera and errors are those of configs/plan_law_<rig>.toml):
      the truth (mu_kinetic; mu_static for static and Stribeck; stribeck_velocity for
      Stribeck; mu_kinetic_split for direction; load_exponent for load), with no `failed` fit.
   6. the proposal's `predicted_stderr` under the true law against the joint fit's achieved
-     standard error, per parameter (ratio predicted / achieved; within 20 % counted).
+     standard error, per parameter (ratio predicted / achieved; within 20 % counted), and
+     whether the achieved one lies in the proposal's `predicted_stderr_range` (the law over
+     its departures; 20 % slack either side), with the joint fit's interval kind.
 Plain Coulomb rails (3 rigs x the seeds): steps 1-3 only; does the plan weigh no law and
 say it plans for mu's precision (`laws.weighed` empty, `laws.notes`)?
 CPU: `appell plan configs/plan_example.toml` (3 runs) and every plan with and without laws.
@@ -212,7 +214,9 @@ def judge_fit(rec, law):
                 flagged=flagged, failed=failed, zs=zs, error=rec.get("error", ""),
                 cpu_s=rec["cpu_s"], answer=(js.get("answer") or "")[:200],
                 notes=fl.get("notes") or [],
-                se={n: (param(js, n) or (None, None))[1] for n in lrg.gated(law)})
+                se={n: (param(js, n) or (None, None))[1] for n in lrg.gated(law)},
+                interval={n: ((js.get("shared") or {}).get(n) or {}).get("interval")
+                          for n in lrg.gated(law)})
 
 
 def strip_laws(src, dst):
@@ -287,7 +291,8 @@ def run_case(c):
     top = props[0]
     keep = ("rank", "initial", "theta_deg", "robustness", "meets_min_robustness",
             "pairs_resolved", "pairs", "worst_expected_delta_bic", "discrimination",
-            "predicted_stderr", "predicted_mu_stderr", "shrinks_mu_stderr_by")
+            "predicted_stderr", "predicted_stderr_range", "predicted_mu_stderr",
+            "shrinks_mu_stderr_by")
     out["top"] = {k: top.get(k) for k in keep if k in top}
     out["at_limit"] = pj.get("at_limit")
     out["top_at_limit"] = sorted({a.get("quantity", "?") + ":" + a.get("limit", "?")
@@ -326,6 +331,14 @@ def run_case(c):
     out["se_ratio"] = {n: (pse[n] / ach[n] if pse.get(n) and ach.get(n) else None)
                        for n in lrg.gated(law)}
     out["predicted_stderr_true_law"] = pse
+    # the achieved error against the plan's range over the departures (within 20 % of it)
+    rng = ((out["top"].get("predicted_stderr_range") or {}).get(law)) or {}
+    out["se_in_range"] = {}
+    for n in lrg.gated(law):
+        lo_hi = rng.get(n)
+        if lo_hi and ach.get(n) and None not in lo_hi:
+            lo, hi = lo_hi
+            out["se_in_range"][n] = (lo / (1 + WITHIN)) <= ach[n] <= hi * (1 + WITHIN)
     if not out["releases"]["planned"].get("sim_error"):
         alone = cached_json(os.path.join(d, "alone_planned.json"),
                             [appell, "fit", os.path.join(d, "planned.csv"), "--rig", rig_file,
@@ -428,6 +441,26 @@ def ratio_rows(rows, key, L):
              f"{len(allr)} |")
 
 
+def range_rows(rows, L):
+    """The achieved error within the plan's range over departures (20 % slack), and how the
+    joint fit made its interval (a block-widened one holds the model's misfit too)."""
+    tot = [0, 0]
+    for case in LAWS:
+        for rig in RIGS:
+            rs = [r for r in rows if r.get("case") == case and r["rig"] == rig
+                  and (((r.get("releases") or {}).get("planned") or {}).get("fit") or {})
+                  .get("chosen") == r["law"]]
+            for name in lrg.gated(case):
+                v = [(r.get("se_in_range") or {}).get(name) for r in rs]
+                v = [x for x in v if x is not None]
+                kinds = [((r["releases"]["planned"]["fit"].get("interval") or {}).get(name)
+                          or "?") for r in rs]
+                tot[0] += sum(v)
+                tot[1] += len(v)
+                L.append(f"| {case} | {rig} | {name} | {sum(v)} of {len(v)} | {tally(kinds)} |")
+    L.append(f"| **4 laws** | | | **{tot[0]} of {tot[1]}** | |")
+
+
 def tables(rows, cpu_example, seeds, base=None):
     L = []
     L.append(f"Seeds {seeds}. Identified: the joint fit (first + the release) chose exactly the "
@@ -513,6 +546,15 @@ def tables(rows, cpu_example, seeds, base=None):
     L.append("| true law | rig | parameter | median | min | max | within 20 % |")
     L.append("|---|---|---|---|---|---|---|")
     ratio_rows(rows, "se_ratio", L)
+    L.append("")
+    L.append("The achieved error (the joint fit of first + planned, where it chose the true "
+             "law) within the plan's `predicted_stderr_range` (the law at 0.5 to 4 times its "
+             "reference departure), with 20 % slack either side; and the joint fit's interval "
+             "kinds:")
+    L.append("")
+    L.append("| true law | rig | parameter | in range | joint fit's interval |")
+    L.append("|---|---|---|---|---|")
+    range_rows(rows, L)
     L.append("")
     L.append("The same against the planned release fitted alone with the true law forced "
              "(`--friction LAW`, static: `--with mu_static`):")

@@ -938,4 +938,47 @@ mod tests {
         assert_eq!(t.n_residuals, 2000.0);
         assert!(LawTable::from_json(&serde_json::json!({})).is_none());
     }
+
+    #[test]
+    fn a_law_errors_range_brackets_its_departures_between() {
+        // The swing slides both ways and restarts: every law shows. The range a proposal
+        // prints holds its errors at the reference departure and says something (a wider
+        // step or split changes them); Coulomb's law has no departure, so no range.
+        use crate::plan::law::departure_rig;
+        let spec = example();
+        let mut ev = Evaluator::new(&spec);
+        ev.laws = Laws::new(
+            &spec.rig,
+            &[Law::Coulomb, Law::Static, Law::Direction],
+            1000.0,
+        );
+        let release = [SWING[1], SWING[3], SWING[2]];
+        let errors = ev.law_stderr(&release);
+        // The departures between the sampled ones (a factor 2 apart): the range
+        // holds each within a fifth. Not exactly: an error can dip between two samples where
+        // a slip appears or goes (static friction's coefficient here, unevenly in the
+        // departure).
+        for law in [Law::Static, Law::Direction] {
+            for k in [0.6, 0.7, 0.85, 1.2, 1.4, 1.7, 2.4, 2.8, 3.4] {
+                let between = ev
+                    .stderrs(&departure_rig(&spec.rig, law, k), &SWING, law.params())
+                    .unwrap();
+                for (q, se) in between {
+                    let e = errors
+                        .iter()
+                        .find(|e| e.law == law && e.param == q)
+                        .unwrap_or_else(|| panic!("{law} {q:?} missing"));
+                    let [lo, hi] = e.range.expect("a law at a reference departure has a range");
+                    assert!(lo <= e.stderr && e.stderr <= hi, "{law} {q:?}: {e:?}");
+                    assert!(
+                        lo / 1.2 <= se && se <= 1.2 * hi,
+                        "{law} {q:?} at {k}: {se} outside {lo}..{hi}"
+                    );
+                    assert!(hi > 1.01 * lo, "{law} {q:?}: {lo}..{hi} says nothing");
+                }
+            }
+        }
+        let coulomb: Vec<_> = errors.iter().filter(|e| e.law == Law::Coulomb).collect();
+        assert!(!coulomb.is_empty() && coulomb.iter().all(|e| e.range.is_none()));
+    }
 }

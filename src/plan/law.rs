@@ -110,9 +110,42 @@ pub const REFERENCE_SPLIT_FRACTION: f64 = 0.025;
 /// Load exponent of the reference departure.
 pub const REFERENCE_LOAD_EXPONENT: f64 = 0.9;
 
+/// A predicted standard error of one law's parameter from a proposal's recording: at the
+/// law's reference departure (or its given values), and, for a law at a reference
+/// departure, the smallest and largest over [`DEPARTURE_SCALES`] and the reference.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LawError {
+    /// The law.
+    pub law: Law,
+    /// The parameter.
+    pub param: Param,
+    /// Its predicted standard error at the reference departure (infinite: not shown).
+    pub stderr: f64,
+    /// Smallest and largest predicted standard error over the departures; `None` when the
+    /// law's values are given (a plan file's or a fit's), not a reference.
+    pub range: Option<[f64; 2]>,
+}
+
+/// The multiples of the reference departure a proposal's predicted errors are also given at
+/// ([`departure_rig`]; with the reference, a factor 2 apart): a law's errors depend on how far
+/// it departs from Coulomb's (a larger static step restarts the slider later, a wider split
+/// lengthens one way's slides), which a plan cannot know before the release. Half the
+/// reference to four times it spans the departures dry rails report: static friction 5-40 %
+/// above kinetic, Stribeck speeds 5-40 mm/s, coefficients 2.5-20 % apart by direction, load
+/// exponents 0.95-0.6. Sampled, not swept: static friction's errors jump where a slip appears
+/// or goes (between the samples, within a fifth of the range on the example's swing, tested).
+pub const DEPARTURE_SCALES: [f64; 3] = [0.5, 2.0, 4.0];
+
 /// The rig under `law` at its reference departure from `base` (whose law's own values are
 /// kept when it is that law: a plan file's or a fit's).
 pub fn reference_rig(base: &Rig<f64>, law: Law) -> Rig<f64> {
+    departure_rig(base, law, 1.0)
+}
+
+/// The rig under `law` at `scale` times its reference departure from Coulomb's law (the
+/// static step, the Stribeck hump and its speed, the split, one minus the exponent), from
+/// `base`; `base`'s own values when it is that law.
+pub fn departure_rig(base: &Rig<f64>, law: Law, scale: f64) -> Rig<f64> {
     let mut rig = *base;
     let own = Law::of_rig(base) == law;
     let mu = base.mu_kinetic;
@@ -122,18 +155,19 @@ pub fn reference_rig(base: &Rig<f64>, law: Law) -> Rig<f64> {
         rig.kinetic_split = 0.0;
         rig.static_split = 0.0;
         rig.load_exponent = 1.0;
+        let step = (1.0 + (REFERENCE_STATIC_RATIO - 1.0) * scale) * mu;
         match law {
             Law::Coulomb => {}
-            Law::Static => rig.mu_static = REFERENCE_STATIC_RATIO * mu,
+            Law::Static => rig.mu_static = step,
             Law::Stribeck => {
-                rig.mu_static = REFERENCE_STATIC_RATIO * mu;
-                rig.stribeck_velocity = REFERENCE_STRIBECK_VELOCITY;
+                rig.mu_static = step;
+                rig.stribeck_velocity = REFERENCE_STRIBECK_VELOCITY * scale;
             }
             Law::Direction => {
-                rig.kinetic_split = REFERENCE_SPLIT_FRACTION * mu;
+                rig.kinetic_split = REFERENCE_SPLIT_FRACTION * scale * mu;
                 rig.static_split = rig.kinetic_split;
             }
-            Law::Load => rig.load_exponent = REFERENCE_LOAD_EXPONENT,
+            Law::Load => rig.load_exponent = 1.0 - (1.0 - REFERENCE_LOAD_EXPONENT) * scale,
         }
     }
     rig

@@ -17,8 +17,6 @@ pub mod spec;
 pub use criteria::{Criteria, Evaluation, Hit};
 pub use spec::{PlanSpec, Target, Uncertain};
 
-use crate::fit::Param;
-
 use crate::model::regions::{max_mass_ratio_for_paradox, mu_critical};
 use crate::model::{Rig, Shorthands, State};
 use crate::sim::{Event, Request, Sample};
@@ -55,9 +53,9 @@ pub struct Proposal {
     /// the plan weighs no laws).
     pub separation: f64,
     /// Predicted standard errors of each weighed law's parameters (mu_kinetic and the
-    /// law's own) from a recording of this release, the law at its reference departure:
-    /// (law, parameter, stderr).
-    pub law_stderr: Vec<(law::Law, Param, f64)>,
+    /// law's own) from a recording of this release, the law at its reference departure,
+    /// with their range over the departures a law may have.
+    pub law_stderr: Vec<law::LawError>,
     /// Samples of the nominal run at the frame rate (for figures).
     pub samples: Vec<Sample<f64>>,
 }

@@ -11,6 +11,7 @@ use crate::sim::{simulate, Options, Request, Solution};
 use argmin::core::{CostFunction, Error, Executor};
 use argmin::solver::neldermead::NelderMead;
 use indicatif::ProgressBar;
+use nalgebra::DMatrix;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use rand_distr::StandardNormal;
@@ -306,6 +307,25 @@ impl<'a> Evaluator<'a> {
         y0: &State<f64>,
         extra: &[Param],
     ) -> Option<Vec<(Param, f64)>> {
+        self.stderrs_with(frames, rig, y0, None, extra)
+    }
+
+    /// [`Evaluator::stderrs_on`], with the recording already made (`before`, its release,
+    /// recorded with the plan's camera) fitted jointly under `rig` when given: each release's
+    /// information about the rig's parameters, its own initial state marginalised, summed.
+    /// The earlier fit then adds only what it knew of the rig's measured build, not its mu:
+    /// that fit's mu is the coefficient of the law it chose (Coulomb's, read from slides one
+    /// way, say), which under another law is a combination of that law's parameters (mu
+    /// plus the split toward the way it slid); the earlier recording's own information under
+    /// `rig` says which.
+    fn stderrs_with(
+        &self,
+        frames: &Frames,
+        rig: &Rig<f64>,
+        y0: &State<f64>,
+        before: Option<&State<f64>>,
+        extra: &[Param],
+    ) -> Option<Vec<(Param, f64)>> {
         let state = [Param::X, Param::Theta, Param::XDot, Param::ThetaDot];
         let mut free: Vec<Param> = match &self.spec.prior {
             Some(prior) => prior.names.clone(),
@@ -320,34 +340,53 @@ impl<'a> Evaluator<'a> {
         );
         let rig_params = free.len();
         free.extend(state);
-        let mut problem =
-            TrajectoryProblem::new(frames.obs.clone(), *rig, *y0, free.clone(), self.options);
-        problem.tie_static = !free.contains(&Param::MuStatic);
-        let noise = frames.noise;
-        problem.sigma = [noise, noise];
-        let normal = problem.normal_equations(&problem.values()).ok()?;
-        let k = free.len();
-        let a = normal.jtj.view((0, 0), (rig_params, rig_params));
-        let b = normal
-            .jtj
-            .view((0, rig_params), (rig_params, k - rig_params));
-        let c = normal
-            .jtj
-            .view((rig_params, rig_params), (k - rig_params, k - rig_params))
-            .into_owned();
         let infinite = || {
             free[..rig_params]
                 .iter()
                 .map(|&q| (q, f64::INFINITY))
                 .collect()
         };
-        let Some(c_inv) = c.cholesky().map(|ch| ch.inverse()) else {
+        // One release's information about the rig's parameters, its state marginalised
+        // (a Schur complement); `Some(None)` when its state is not identifiable.
+        let release_info = |y: &State<f64>| -> Option<Option<DMatrix<f64>>> {
+            let mut problem =
+                TrajectoryProblem::new(frames.obs.clone(), *rig, *y, free.clone(), self.options);
+            problem.tie_static = !free.contains(&Param::MuStatic);
+            let noise = frames.noise;
+            problem.sigma = [noise, noise];
+            let normal = problem.normal_equations(&problem.values()).ok()?;
+            let k = free.len();
+            let a = normal.jtj.view((0, 0), (rig_params, rig_params));
+            let b = normal
+                .jtj
+                .view((0, rig_params), (rig_params, k - rig_params));
+            let c = normal
+                .jtj
+                .view((rig_params, rig_params), (k - rig_params, k - rig_params))
+                .into_owned();
+            Some(c.cholesky().map(|ch| a - b * ch.inverse() * b.transpose()))
+        };
+        let Some(mut info) = release_info(y0)? else {
             return Some(infinite());
         };
-        let mut info = a - b * c_inv * b.transpose();
+        if let Some(y) = before {
+            match release_info(y)? {
+                Some(i) => info += i,
+                None => return Some(infinite()),
+            }
+        }
         if let Some(prior) = &self.spec.prior {
+            let mut prior_info = prior.information.clone();
+            if before.is_some() {
+                // The earlier recording counts through its own information; the fit adds the
+                // rig's build (mu's row and column out).
+                if let Some(i) = prior.names.iter().position(|&q| q == Param::MuKinetic) {
+                    prior_info.row_mut(i).fill(0.0);
+                    prior_info.column_mut(i).fill(0.0);
+                }
+            }
             let mut block = info.view_mut((0, 0), (known, known));
-            block += &prior.information;
+            block += &prior_info;
         }
         let Some(ch) = info.cholesky() else {
             return Some(infinite());
@@ -373,10 +412,11 @@ impl<'a> Evaluator<'a> {
     }
 
     /// Predicted standard errors of each weighed law's parameters (mu_kinetic and its own,
-    /// at its reference departure) from a recording of this release; without laws to weigh,
-    /// those of the plan's own law when it has parameters beyond mu.
-    pub fn law_stderr(&self, p: &ReleaseValues) -> Vec<(super::law::Law, Param, f64)> {
-        use super::law::{reference_rig, Law};
+    /// at its reference departure, with their range over [`super::law::DEPARTURE_SCALES`])
+    /// from a recording of this release; without laws to weigh, those of the plan's own law
+    /// when it has parameters beyond mu.
+    pub fn law_stderr(&self, p: &ReleaseValues) -> Vec<super::law::LawError> {
+        use super::law::{departure_rig, reference_rig, Law, LawError, DEPARTURE_SCALES};
         let laws: Vec<(Law, Rig<f64>)> = match &self.laws {
             Some(l) => l.candidates.clone(),
             None => {
@@ -388,14 +428,47 @@ impl<'a> Evaluator<'a> {
             }
         };
         let y0 = self.initial(p);
+        let frames = self.all_frames();
+        let chosen = Law::of_rig(&self.spec.rig);
+        // The recording already made, when its release is known, under each law but the
+        // one its fit chose (whose mu the fit's knowledge already is).
+        let before = self.laws.as_ref().and_then(|l| l.before_release);
         let mut out = Vec::new();
         for (law, rig) in laws {
-            let Some(ses) = self.stderrs(&rig, &y0, law.params()) else {
+            let before = before.as_ref().filter(|_| law != chosen);
+            let se = |r: &Rig<f64>| self.stderrs_with(&frames, r, &y0, before, law.params());
+            let Some(ses) = se(&rig) else {
                 continue;
+            };
+            // A law at a reference departure (not the plan's or the fit's own values, and
+            // with a departure at all): its errors at the other departures too.
+            let referenced = law != Law::Coulomb && chosen != law;
+            let others: Vec<Vec<(Param, f64)>> = match referenced {
+                true => DEPARTURE_SCALES
+                    .iter()
+                    // A departure the release cannot be run at shows nothing.
+                    .map(|&k| se(&departure_rig(&self.spec.rig, law, k)).unwrap_or_default())
+                    .collect(),
+                false => Vec::new(),
             };
             for (q, se) in ses {
                 if q == Param::MuKinetic || law.params().contains(&q) {
-                    out.push((law, q, se));
+                    let range = referenced.then(|| {
+                        others
+                            .iter()
+                            .map(|v| {
+                                v.iter()
+                                    .find(|(p, _)| *p == q)
+                                    .map_or(f64::INFINITY, |(_, s)| *s)
+                            })
+                            .fold([se, se], |[lo, hi], s| [lo.min(s), hi.max(s)])
+                    });
+                    out.push(LawError {
+                        law,
+                        param: q,
+                        stderr: se,
+                        range,
+                    });
                 }
             }
         }

@@ -134,11 +134,19 @@ fn law_json(v: &mut Value, p: &Proposal) {
     }
     if !p.law_stderr.is_empty() {
         let mut m = serde_json::Map::new();
-        for (law, q, se) in &p.law_stderr {
-            let e = m.entry(law.name()).or_insert_with(|| json!({}));
-            e[q.name()] = finite(*se);
+        let mut ranges = serde_json::Map::new();
+        for e in &p.law_stderr {
+            let se = m.entry(e.law.name()).or_insert_with(|| json!({}));
+            se[e.param.name()] = finite(e.stderr);
+            if let Some([lo, hi]) = e.range {
+                let r = ranges.entry(e.law.name()).or_insert_with(|| json!({}));
+                r[e.param.name()] = json!([finite(lo), finite(hi)]);
+            }
         }
         v["predicted_stderr"] = Value::Object(m);
+        if !ranges.is_empty() {
+            v["predicted_stderr_range"] = Value::Object(ranges);
+        }
     }
 }
 
@@ -174,19 +182,37 @@ fn law_lines(s: &mut String, p: &Proposal) {
         );
     }
     let mut by_law: Vec<(crate::plan::law::Law, Vec<String>)> = Vec::new();
-    for (law, q, se) in &p.law_stderr {
-        let text = if se.is_finite() {
-            format!("{} {:.2e}", q.name(), se)
+    let mut ranged = false;
+    for e in &p.law_stderr {
+        let q = e.param.name();
+        let mut text = if e.stderr.is_finite() {
+            format!("{q} {:.2e}", e.stderr)
         } else {
-            format!("{} not shown by this release", q.name())
+            format!("{q} not shown by this release")
         };
-        match by_law.iter_mut().find(|(l, _)| l == law) {
+        if let Some([lo, hi]) = e.range {
+            ranged = true;
+            text += &match (lo.is_finite(), hi.is_finite()) {
+                (true, true) => format!(" ({lo:.2e} to {hi:.2e})"),
+                (true, false) => format!(" ({lo:.2e} to not shown)"),
+                _ => " (not shown at any departure)".to_owned(),
+            };
+        }
+        match by_law.iter_mut().find(|(l, _)| *l == e.law) {
             Some((_, v)) => v.push(text),
-            None => by_law.push((*law, vec![text])),
+            None => by_law.push((e.law, vec![text])),
         }
     }
     for (law, v) in by_law {
         let _ = writeln!(s, "   predicted stderr under {law}: {}", v.join(", "));
+    }
+    if ranged {
+        let scales = crate::plan::law::DEPARTURE_SCALES;
+        let (a, b) = (scales[0], scales[scales.len() - 1]);
+        let _ = writeln!(
+            s,
+            "   (at each law's reference departure; in brackets, from {a} to {b} times it: a law's errors depend on how far it departs, which the release will show)"
+        );
     }
 }
 
