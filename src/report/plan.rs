@@ -353,8 +353,9 @@ pub fn plan_table(report: &PlanReport) -> String {
             p.draws,
             p.predicted_mu_stderr,
             report.prior_mu_stderr.map_or(String::new(), |prior| format!(
-                " with the earlier fit's {prior:.3e} (it shrinks mu's stderr by a factor {:.2})",
-                prior / p.predicted_mu_stderr
+                // Three digits: each error is itself uncertain by more than a per cent.
+                " with the earlier fit's {prior:.3e} (it shrinks mu's stderr by a factor {})",
+                crate::numbers::significant(prior / p.predicted_mu_stderr, 3)
             ))
         );
         law_lines(&mut s, p);
