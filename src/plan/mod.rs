@@ -228,34 +228,48 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
         spec.search.verify_draws,
         spec.search.seed.wrapping_add(0x5eed),
     );
-    let check_all = |cs: &[Candidate]| {
-        cs.par_iter()
-            .map(|c| checked(&ev, &check, c))
-            .collect::<Result<Vec<_>, PlanError>>()
+    // First the fresh robustness and mu's error alone (what decides a release's place);
+    // the rivals' full fits and the laws' errors only for the releases reported.
+    let fresh_all = |cs: &[Candidate]| -> Vec<Fresh> {
+        cs.par_iter().map(|c| fresh(&ev, &check, c)).collect()
     };
-    let mut all = check_all(&chosen)?;
+    let mut all = fresh_all(&chosen);
     // A release failing the fresh check leaves a place free: once more, the best candidates
     // away from every release checked so far (a failed one's neighbours would likely fail too).
-    let ranked = all.iter().filter(|p| p.ranked()).count();
+    let ranked = all.iter().filter(|f| f.ranked(min_rob)).count();
     if ranked < all.len() {
-        let checked: Vec<ReleaseValues> = all
-            .iter()
-            .map(|p| search::release_values(&p.initial))
-            .collect();
+        let checked: Vec<ReleaseValues> = all.iter().map(|f| f.candidate.release).collect();
         let rest: Vec<Candidate> = pool
             .iter()
             .filter(|c| far_from(&ranges, &checked, &c.release))
             .copied()
             .collect();
         let second = distinct(&rest, &ranges, top - ranked);
-        all.extend(check_all(&second)?);
+        all.extend(fresh_all(&second));
     }
-    bar.finish_and_clear();
     // Only releases meeting the plan's own rule are ranked. The others fill the list up to
     // `top`, apart and unranked (the most robust first, away from the ranked ones and from each
     // other); with `top` ranked ones they are dropped.
-    let (mut proposals, mut failed): (Vec<Proposal>, Vec<Proposal>) =
-        all.into_iter().partition(Proposal::ranked);
+    let (kept, mut failed): (Vec<Fresh>, Vec<Fresh>) =
+        all.into_iter().partition(|f| f.ranked(min_rob));
+    failed.sort_by(|a, b| b.passed.cmp(&a.passed));
+    let mut taken: Vec<ReleaseValues> = kept.iter().map(|f| f.candidate.release).collect();
+    let mut kept_failed = Vec::new();
+    for f in failed {
+        if kept.len() + kept_failed.len() < top && far_from(&ranges, &taken, &f.candidate.release)
+        {
+            taken.push(f.candidate.release);
+            kept_failed.push(f);
+        }
+    }
+    let full = |fs: &[Fresh]| {
+        fs.par_iter()
+            .map(|f| checked(&ev, &check, f))
+            .collect::<Result<Vec<_>, PlanError>>()
+    };
+    let mut proposals = full(&kept)?;
+    let unranked = full(&kept_failed)?;
+    bar.finish_and_clear();
     if ev.laws.is_some() {
         // The search's own order: the separation, then mu's precision.
         let key = |p: &Proposal| {
@@ -270,19 +284,6 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
         proposals.sort_by(|a, b| key(a).total_cmp(&key(b)));
     } else {
         proposals.sort_by(|a, b| a.predicted_mu_stderr.total_cmp(&b.predicted_mu_stderr));
-    }
-    failed.sort_by(|a, b| b.robustness.total_cmp(&a.robustness));
-    let mut taken: Vec<ReleaseValues> = proposals
-        .iter()
-        .map(|p| search::release_values(&p.initial))
-        .collect();
-    let mut unranked = Vec::new();
-    for p in failed {
-        let r = search::release_values(&p.initial);
-        if proposals.len() + unranked.len() < top && far_from(&ranges, &taken, &r) {
-            taken.push(r);
-            unranked.push(p);
-        }
     }
     let feasible = !proposals.is_empty();
     let at_limit = proposals
@@ -348,11 +349,51 @@ fn prior_mu_stderr(spec: &PlanSpec) -> Option<f64> {
         .map(|(_, se)| se)
 }
 
-/// The fresh check of a candidate: its robustness over `check` and its nominal run sampled
-/// at the frames, for the report.
-fn checked(ev: &Evaluator, check: &Draws, c: &Candidate) -> Result<Proposal, PlanError> {
+/// A candidate's fresh check: its robustness over the check's draws and mu's predicted
+/// error, all that decides whether and where it is reported.
+struct Fresh {
+    candidate: Candidate,
+    /// Draws of the check showing every target.
+    passed: usize,
+    /// mu's predicted standard error (every frame's under laws; the search's own otherwise).
+    mu_stderr: f64,
+    draws: usize,
+}
+
+impl Fresh {
+    /// The one-sided 95% lower bound of the robustness.
+    fn robustness(&self) -> f64 {
+        search::robustness_lower_bound(self.passed, self.draws)
+    }
+
+    /// Whether the release is ranked ([`Proposal::ranked`]).
+    fn ranked(&self, min_robustness: f64) -> bool {
+        self.robustness() >= min_robustness && self.mu_stderr.is_finite()
+    }
+}
+
+/// The fresh check of a candidate's robustness over `check`.
+fn fresh(ev: &Evaluator, check: &Draws, c: &Candidate) -> Fresh {
+    Fresh {
+        candidate: *c,
+        passed: ev.passes(&c.release, check),
+        // The search's own value when it ranked by it; under laws it took a sample of the
+        // frames, and the report gives every frame's.
+        mu_stderr: if ev.laws.is_some() {
+            ev.mu_stderr(&c.release)
+        } else {
+            c.stderr
+        },
+        draws: check.len(),
+    }
+}
+
+/// A checked release as reported: its nominal run sampled at the frames, the rivals' full
+/// fits and the laws' errors.
+fn checked(ev: &Evaluator, check: &Draws, f: &Fresh) -> Result<Proposal, PlanError> {
     let spec = ev.spec;
-    let passed = ev.passes(&c.release, check);
+    let c = &f.candidate;
+    let passed = f.passed;
     let y0 = ev.initial(&c.release);
     let request = Request {
         sample_times: spec.camera.frame_times(),
@@ -387,13 +428,7 @@ fn checked(ev: &Evaluator, check: &Draws, c: &Candidate) -> Result<Proposal, Pla
         meets_min_robustness: robustness >= spec.goal.min_robustness,
         robustness_observed: passed as f64 / check.len() as f64,
         draws: check.len(),
-        // The search's own value when it ranked by it; under laws it took a sample of the
-        // frames, and the report gives every frame's.
-        predicted_mu_stderr: if ev.laws.is_some() {
-            ev.mu_stderr(&c.release)
-        } else {
-            c.stderr
-        },
+        predicted_mu_stderr: f.mu_stderr,
         separations,
         separation,
         law_stderr: ev.law_stderr(&c.release),
