@@ -230,9 +230,8 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
     );
     // First the fresh robustness and mu's error alone (what decides a release's place);
     // the rivals' full fits and the laws' errors only for the releases reported.
-    let fresh_all = |cs: &[Candidate]| -> Vec<Fresh> {
-        cs.par_iter().map(|c| fresh(&ev, &check, c)).collect()
-    };
+    let fresh_all =
+        |cs: &[Candidate]| -> Vec<Fresh> { cs.par_iter().map(|c| fresh(&ev, &check, c)).collect() };
     let mut all = fresh_all(&chosen);
     // A release failing the fresh check leaves a place free: once more, the best candidates
     // away from every release checked so far (a failed one's neighbours would likely fail too).
@@ -256,8 +255,7 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
     let mut taken: Vec<ReleaseValues> = kept.iter().map(|f| f.candidate.release).collect();
     let mut kept_failed = Vec::new();
     for f in failed {
-        if kept.len() + kept_failed.len() < top && far_from(&ranges, &taken, &f.candidate.release)
-        {
+        if kept.len() + kept_failed.len() < top && far_from(&ranges, &taken, &f.candidate.release) {
             taken.push(f.candidate.release);
             kept_failed.push(f);
         }
