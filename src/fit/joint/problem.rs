@@ -294,6 +294,15 @@ impl Candidate for JointProblem {
         out.parts = out.parts.iter().map(|p| p.static_near_tie()).collect();
         out
     }
+    fn stribeck_slow_start(&self) -> Option<Self> {
+        let mut out = self.clone();
+        out.parts = self
+            .parts
+            .iter()
+            .map(|p| p.stribeck_slow_start())
+            .collect::<Option<_>>()?;
+        Some(out)
+    }
     fn score_drops(&self, p: &DVector<f64>, candidates: &[Nuisance]) -> Vec<(Nuisance, f64)> {
         let mut at = self.clone();
         at.set_values(p);

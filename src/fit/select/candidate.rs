@@ -44,6 +44,10 @@ pub trait Candidate: LeastSquares + Clone + Send + Sync + 'static {
     /// The model with mu_static just above mu_kinetic, where the static coefficient (and
     /// Stribeck's law) does what Coulomb's law with one coefficient does.
     fn static_near_tie(&self) -> Self;
+    /// The model with Stribeck's speed at its second start
+    /// ([`super::nuisance::STRIBECK_SLOW_START`]) when the law was just added (its speed free
+    /// and still at [`super::nuisance::STRIBECK_START`]); `None` otherwise.
+    fn stribeck_slow_start(&self) -> Option<Self>;
     /// The model with Coulomb's law with one coefficient in place of its friction law
     /// ([`Nuisance::is_friction`] left out), every other value kept.
     fn coulomb(&self) -> Self;

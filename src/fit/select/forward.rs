@@ -162,7 +162,16 @@ fn add_forced<M: Candidate>(s: &mut Search<M>, opts: &SelectOptions<M::Start>, c
             continue;
         }
         let m = s.current.0.with_nuisance(nu, opts.mu_static_start);
-        let solved = fit_candidate(&m, opts.fresh_start.as_ref(), opts, Some(s.current.2));
+        let fit = |m: &M| fit_candidate(m, opts.fresh_start.as_ref(), opts, Some(s.current.2));
+        let solved = fit(&m);
+        // Stribeck's law also from its speed's second start, the lower cost kept.
+        let (m, solved) = match m.stribeck_slow_start() {
+            Some(slow) => {
+                let other = fit(&slow);
+                lower((m, solved), (slow, other))
+            }
+            None => (m, solved),
+        };
         let solved = match (solved, opts.fresh_start.as_ref()) {
             (Ok(got), Some(start)) => Ok(held_rig_start(&m, start, got, opts.max_iters)),
             (other, _) => other,
@@ -211,7 +220,7 @@ fn round<M: Candidate>(
         return false;
     }
     let (first, rest) = jobs(s, &to_fit, &drops, misfit, opts);
-    let fits = fit_jobs(first, rest, s, fresh, opts, crit);
+    let fits = best_of_each(fit_jobs(first, rest, s, fresh, opts, crit));
     let Some((set, mut m, q, c2, at)) = record(s, fits, crit) else {
         return false;
     };
@@ -318,11 +327,13 @@ fn jobs<M: Candidate>(
         };
         // Nested: the current model is the candidate at its neutral values, so its fit
         // can be no worse than the current one's.
-        jobs.push((
-            nu.join(chosen),
-            cur_problem.with_nuisance(nu, opts.mu_static_start),
-            Some(*cur_chi2),
-        ));
+        let m = cur_problem.with_nuisance(nu, opts.mu_static_start);
+        // Stribeck's law also from its speed's second start, a job of its own so that each
+        // start is cut and finished alike ([`best_of_each`] keeps the lower).
+        if let Some(slow) = m.stribeck_slow_start() {
+            jobs.push((nu.join(chosen), slow, Some(*cur_chi2)));
+        }
+        jobs.push((nu.join(chosen), m, Some(*cur_chi2)));
         if drop_static && nu.supersedes() != Some(Nuisance::StaticFriction) {
             let tied = cur_problem.static_tied();
             let without: Vec<Nuisance> = chosen
@@ -565,6 +576,19 @@ fn swap_twins<M: Candidate>(s: &mut Search<M>, opts: &SelectOptions<M::Start>, c
     }
 }
 
+/// `jobs` and, for each that adds Stribeck's law, the same from its speed's second start
+/// ([`super::nuisance::STRIBECK_SLOW_START`]); [`best_of_each`] keeps the lower of the two.
+fn with_slow_starts<M: Candidate>(mut jobs: Vec<LawJob<M>>) -> Vec<LawJob<M>> {
+    let slow: Vec<LawJob<M>> = jobs
+        .iter()
+        .filter_map(|(set, m, parent, reach)| {
+            Some((set.clone(), m.stribeck_slow_start()?, *parent, *reach))
+        })
+        .collect();
+    jobs.extend(slow);
+    jobs
+}
+
 /// Starts of mu_static over mu_kinetic for the static law besides the onsets' value: its
 /// cost has a valley per stick the slip ends, and a single start stalled in the wrong one
 /// (reduced chi-square 3.2 where the truth gives 1.0).
@@ -677,7 +701,7 @@ fn weigh_laws<M: Candidate>(s: &mut Search<M>, opts: &SelectOptions<M::Start>, c
     ] {
         push(&mut jobs, &[law], opts.mu_static_start);
     }
-    let mut best = fit_law_jobs(jobs, opts);
+    let mut best = fit_law_jobs(with_slow_starts(jobs), opts);
     let static_fit = best
         .iter()
         .find(|(set, ..)| set.len() == core.len() + 1 && set.contains(&Nuisance::StaticFriction))
@@ -716,7 +740,7 @@ fn weigh_laws<M: Candidate>(s: &mut Search<M>, opts: &SelectOptions<M::Start>, c
             more.push((set, m, parent, reach));
         }
     }
-    best.extend(fit_law_jobs(more, opts));
+    best.extend(fit_law_jobs(with_slow_starts(more), opts));
     let best = best_of_each(best);
     let mut winner: Option<Best<M>> = None;
     for (set, m, solved, capped) in best {
@@ -804,27 +828,35 @@ fn same_set(name: &str, set: &[Nuisance]) -> bool {
 fn best_of_each<M: Candidate>(fits: Vec<Fitted<M>>) -> Vec<Fitted<M>> {
     let mut out: Vec<Fitted<M>> = Vec::new();
     for (set, m, solved, capped) in fits {
-        match out.iter_mut().find(|o| same_nuisances(&o.0, &set)) {
+        match out.iter().position(|o| same_nuisances(&o.0, &set)) {
             None => out.push((set, m, solved, capped)),
-            Some(o) => {
-                let spent = |x: &Outcome| x.as_ref().map_or_else(|e| e.2, |g| g.2);
-                let total = spent(&o.2) + spent(&solved);
-                let better = match (&o.2, &solved) {
-                    (Ok(a), Ok(b)) => b.1 < a.1,
-                    (Err(_), Ok(_)) => true,
-                    _ => false,
-                };
-                if better {
-                    *o = (set, m, solved, capped);
-                }
-                match &mut o.2 {
-                    Ok(g) => g.2 = total,
-                    Err(e) => e.2 = total,
-                }
+            Some(i) => {
+                let (s0, m0, solved0, capped0) = out.remove(i);
+                let ((set, m, capped), solved) =
+                    lower(((s0, m0, capped0), solved0), ((set, m, capped), solved));
+                out.insert(i, (set, m, solved, capped));
             }
         }
     }
     out
+}
+
+/// The lower-cost of two fits of one candidate (`a` on a tie or when both failed), with the
+/// iterations of both.
+fn lower<T>(a: (T, Outcome), b: (T, Outcome)) -> (T, Outcome) {
+    let spent = |x: &Outcome| x.as_ref().map_or_else(|e| e.2, |g| g.2);
+    let total = spent(&a.1) + spent(&b.1);
+    let b_lower = match (&a.1, &b.1) {
+        (Ok(x), Ok(y)) => y.1 < x.1,
+        (Err(_), Ok(_)) => true,
+        _ => false,
+    };
+    let (t, mut o) = if b_lower { b } else { a };
+    match &mut o {
+        Ok(g) => g.2 = total,
+        Err(e) => e.2 = total,
+    }
+    (t, o)
 }
 
 /// The table completed: each row's BIC against the chosen model's, the chosen row marked and

@@ -8,6 +8,15 @@ use crate::model::FrictionLaw;
 /// ([`Nuisance::carries_friction_alone`]) is pinned at its bound 0: no coefficient was measured.
 pub const MU_PINNED: f64 = 1e-3;
 
+/// Where Stribeck's speed starts when the law is added (m/s).
+pub const STRIBECK_START: f64 = 0.05;
+
+/// Stribeck's speed's second start (m/s), for a law just added: from 0.05 m/s alone, fits of
+/// a release with slow slides both ways (the heavy slider, v_s 0.02 m/s) fell to a hump at
+/// 1-1.6 mm/s, 100-125 above the true law's chi-square, mu_static 30-43 and the speed 60-100
+/// standard errors off; from 0.005, 0.01 or 0.02 m/s each found the true law's optimum.
+pub const STRIBECK_SLOW_START: f64 = 0.01;
+
 /// A departure from the ideal rig or camera that a candidate model adds (docs/physics.md, "Real
 /// rigs" and "What a camera adds").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -197,7 +206,7 @@ impl Nuisance {
         match self {
             Nuisance::Stribeck => {
                 m.rig.friction_law = FrictionLaw::Stribeck;
-                m.rig.stribeck_velocity = 0.05;
+                m.rig.stribeck_velocity = STRIBECK_START;
             }
             // At the neutral values, where the law is Coulomb's bit for bit.
             Nuisance::Direction => {

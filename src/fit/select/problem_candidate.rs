@@ -1,7 +1,7 @@
 //! A single recording's problem ([`TrajectoryProblem`]) as a candidate of the selection.
 
 use super::candidate::Candidate;
-use super::nuisance::{coulomb_of, Nuisance};
+use super::nuisance::{coulomb_of, Nuisance, STRIBECK_SLOW_START, STRIBECK_START};
 use super::score::score_drops;
 use crate::fit::problem::{Param, TrajectoryProblem};
 use crate::model::State;
@@ -56,6 +56,15 @@ impl Candidate for TrajectoryProblem {
         let mut tied = self.clone();
         tied.rig.mu_static = tied.rig.mu_kinetic * (1.0 + 1e-9);
         tied
+    }
+    fn stribeck_slow_start(&self) -> Option<Self> {
+        let fresh = self.free.contains(&Param::StribeckVelocity)
+            && self.rig.stribeck_velocity == STRIBECK_START;
+        fresh.then(|| {
+            let mut m = self.clone();
+            m.rig.stribeck_velocity = STRIBECK_SLOW_START;
+            m
+        })
     }
     fn coulomb(&self) -> Self {
         coulomb_of(self)
