@@ -166,17 +166,6 @@ impl<'a> Evaluator<'a> {
     /// A candidate judged on `draws`: its robustness, mu's predicted standard error and,
     /// when the plan weighs laws and the release can be ranked, its separation.
     pub fn candidate(&self, p: &ReleaseValues, draws: &Draws) -> Candidate {
-        self.candidate_with(p, draws, None)
-    }
-
-    /// [`Evaluator::candidate`], with the separation taken as `separation` when given instead
-    /// of computed (a refinement among releases that all tell every pair apart).
-    fn candidate_with(
-        &self,
-        p: &ReleaseValues,
-        draws: &Draws,
-        separation: Option<f64>,
-    ) -> Candidate {
         let robustness = self.passes(p, draws) as f64 / draws.len() as f64;
         // Under laws mu's error only breaks ties: the sampled frames will do (a proposal's
         // printed error is every frame's, [`super::checked`]).
@@ -185,10 +174,10 @@ impl<'a> Evaluator<'a> {
             None => self.mu_stderr(p),
         };
         // Releases far from robust are priced out by the penalty anyway: no rival fits.
-        let separation = match separation {
-            Some(s) => s,
-            None if robustness >= 0.5 * self.spec.goal.min_robustness => self.separation(p),
-            None => f64::NAN,
+        let separation = if robustness >= 0.5 * self.spec.goal.min_robustness {
+            self.separation(p)
+        } else {
+            f64::NAN
         };
         Candidate {
             release: *p,
@@ -617,9 +606,6 @@ struct Refine<'e, 'a> {
     ranges: [[f64; 2]; 3],
     dims: Vec<usize>,
     base: ReleaseValues,
-    /// The start's separation, held fixed while the simplex moves, when the start already
-    /// tells every pair apart ([`refine`]).
-    separation: Option<f64>,
 }
 
 impl Refine<'_, '_> {
@@ -649,7 +635,7 @@ impl Refine<'_, '_> {
         let (p, _) = self.release(u);
         self.ev
             .nominal_ok(&p)
-            .then(|| self.ev.candidate_with(&p, self.draws, self.separation))
+            .then(|| self.ev.candidate(&p, self.draws))
     }
 }
 
@@ -670,31 +656,20 @@ impl CostFunction for Refine<'_, '_> {
 
 /// Refine a grid candidate by Nelder-Mead within the box; returns the better of the start
 /// and the end.
-///
-/// When the start already tells every pair of laws apart (each expected margin at least
-/// [`super::discriminate::MARGIN_CAP`], where the ranking is mu's precision), the simplex
-/// moves on robustness and mu's error alone, the rivals' terms not computed at each step:
-/// the end is then judged in full, and kept only if it beats the start.
 pub fn refine(ev: &Evaluator, draws: &Draws, start: &Candidate, iters: u64) -> Candidate {
     let ranges = release_box(ev.spec);
     let dims: Vec<usize> = (0..3).filter(|&k| ranges[k][1] > ranges[k][0]).collect();
     if dims.is_empty() {
         return *start;
     }
-    let saturated = ev.laws.as_ref().is_some_and(|laws| {
-        super::discriminate::Laws::worst(&laws.separations(ev, &ev.initial(&start.release)))
-            >= super::discriminate::MARGIN_CAP
-    });
-    let problem = |separation| Refine {
+    let problem = Refine {
         ev,
         draws,
         ranges,
         dims: dims.clone(),
         base: start.release,
-        separation,
     };
-    let moving = problem(saturated.then_some(start.separation));
-    let u0 = moving.unit(&start.release);
+    let u0 = problem.unit(&start.release);
     // A simplex of about one grid cell around the start.
     let step = 1.0 / (ev.spec.search.grid_points.max(2) - 1) as f64;
     let mut simplex = vec![u0.clone()];
@@ -706,13 +681,20 @@ pub fn refine(ev: &Evaluator, draws: &Draws, start: &Candidate, iters: u64) -> C
     let solver = NelderMead::new(simplex)
         .with_sd_tolerance(1e-3)
         .expect("a positive tolerance");
-    let best = Executor::new(moving, solver)
+    let best = Executor::new(problem, solver)
         .configure(|s| s.max_iters(iters))
         .run()
         .ok()
         .and_then(|r| r.state.best_param.clone());
+    let problem = Refine {
+        ev,
+        draws,
+        ranges,
+        dims,
+        base: start.release,
+    };
     let min_rob = ev.spec.goal.min_robustness;
-    best.and_then(|u| problem(None).candidate(&u))
+    best.and_then(|u| problem.candidate(&u))
         .filter(|c| c.usable() && c.objective(min_rob) < start.objective(min_rob))
         .unwrap_or(*start)
 }
