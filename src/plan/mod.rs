@@ -251,7 +251,7 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
     // other); with `top` ranked ones they are dropped.
     let (kept, mut failed): (Vec<Fresh>, Vec<Fresh>) =
         all.into_iter().partition(|f| f.ranked(min_rob));
-    failed.sort_by(|a, b| b.passed.cmp(&a.passed));
+    failed.sort_by_key(|f| std::cmp::Reverse(f.passed));
     let mut taken: Vec<ReleaseValues> = kept.iter().map(|f| f.candidate.release).collect();
     let mut kept_failed = Vec::new();
     for f in failed {
