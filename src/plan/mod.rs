@@ -262,7 +262,7 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
     }
     let full = |fs: &[Fresh]| {
         fs.par_iter()
-            .map(|f| checked(&ev, &check, f))
+            .map(|f| checked(&ev, f))
             .collect::<Result<Vec<_>, PlanError>>()
     };
     let mut proposals = full(&kept)?;
@@ -388,7 +388,7 @@ fn fresh(ev: &Evaluator, check: &Draws, c: &Candidate) -> Fresh {
 
 /// A checked release as reported: its nominal run sampled at the frames, the rivals' full
 /// fits and the laws' errors.
-fn checked(ev: &Evaluator, check: &Draws, f: &Fresh) -> Result<Proposal, PlanError> {
+fn checked(ev: &Evaluator, f: &Fresh) -> Result<Proposal, PlanError> {
     let spec = ev.spec;
     let c = &f.candidate;
     let passed = f.passed;
@@ -404,7 +404,7 @@ fn checked(ev: &Evaluator, check: &Draws, f: &Fresh) -> Result<Proposal, PlanErr
             initial: y0,
             message: "the nominal run failed".into(),
         })?;
-    let robustness = search::robustness_lower_bound(passed, check.len());
+    let robustness = f.robustness();
     // The claim is the rivals' full fits, not the search's linearisation (which a rival that
     // moves far from Coulomb's law can beat).
     let verified: Vec<Option<discriminate::Separation>> = ev
@@ -424,8 +424,8 @@ fn checked(ev: &Evaluator, check: &Draws, f: &Fresh) -> Result<Proposal, PlanErr
         nominal,
         robustness,
         meets_min_robustness: robustness >= spec.goal.min_robustness,
-        robustness_observed: passed as f64 / check.len() as f64,
-        draws: check.len(),
+        robustness_observed: passed as f64 / f.draws as f64,
+        draws: f.draws,
         predicted_mu_stderr: f.mu_stderr,
         separations,
         separation,
