@@ -981,4 +981,61 @@ mod tests {
         let coulomb: Vec<_> = errors.iter().filter(|e| e.law == Law::Coulomb).collect();
         assert!(!coulomb.is_empty() && coulomb.iter().all(|e| e.range.is_none()));
     }
+
+    #[test]
+    fn the_search_tolerance_ranks_as_the_reporting_one_does() {
+        // The search runs at rtol 1e-6, what a plan reports at 1e-8. Over a grid of the
+        // example's box, with every law weighed after a release that showed none: the same
+        // robustness, mu's error to a thousandth, the laws' separation to a hundredth of a
+        // pair nearly everywhere, and the search's best release as good as the best found at
+        // the reporting tolerance.
+        use crate::plan::search::{grid, release_box, Candidate, Draws};
+        let spec = after_coulomb([0.0, std::f64::consts::FRAC_PI_2, 0.0, 0.0]);
+        let mut report = Evaluator::new(&spec);
+        report.laws = resolve(&report, 2000.0).0;
+        assert!(report.laws.is_some());
+        let search = report.searching();
+        assert!(search.options.rtol > 10.0 * report.options.rtol);
+        let draws = Draws::new(8, 3);
+        let min_rob = spec.goal.min_robustness;
+        let pairs: Vec<_> = grid(&release_box(&spec), 9)
+            .into_iter()
+            .filter(|p| report.nominal_ok(p))
+            .map(|p| (report.candidate(&p, &draws), search.candidate(&p, &draws)))
+            .collect();
+        assert!(pairs.len() >= 20, "{} releases", pairs.len());
+        let mut close = 0;
+        for (a, b) in &pairs {
+            assert_eq!(a.robustness, b.robustness, "{:?}", a.release);
+            assert_eq!(a.stderr.is_finite(), b.stderr.is_finite(), "{:?}", a.release);
+            assert!(
+                !a.stderr.is_finite() || (a.stderr.ln() - b.stderr.ln()).abs() < 1e-3,
+                "{:?}: {} against {}",
+                a.release,
+                a.stderr,
+                b.stderr
+            );
+            if (a.separation - b.separation).abs() < 0.01 {
+                close += 1;
+            }
+        }
+        eprintln!("{close} of {} within a hundredth", pairs.len());
+        assert!(10 * close >= 9 * pairs.len(), "{close} of {}", pairs.len());
+        let best = |pick: fn(&(Candidate, Candidate)) -> &Candidate| {
+            pairs
+                .iter()
+                .min_by(|x, y| {
+                    pick(x)
+                        .objective(min_rob)
+                        .total_cmp(&pick(y).objective(min_rob))
+                })
+                .map(|x| x.0.objective(min_rob))
+                .unwrap()
+        };
+        let (at_report, at_search) = (best(|x| &x.0), best(|x| &x.1));
+        assert!(
+            at_search - at_report < 0.01,
+            "the search's best scores {at_search} at the reporting tolerance, the best {at_report}"
+        );
+    }
 }

@@ -182,13 +182,14 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
         .map_or_else(Vec::new, |l| l.candidates.iter().map(|c| c.0).collect());
     ev.laws = laws;
     let ev = ev;
+    let search_ev = ev.searching();
     let ranges = search::release_box(spec);
     let points = search::grid(&ranges, spec.search.grid_points);
     bar.set_length(points.len() as u64);
     let draws = Draws::new(spec.search.draws, spec.search.seed);
     let min_rob = spec.goal.min_robustness;
     let mut notes = paradox_notes(spec);
-    let mut grid_found = search::screen(&ev, &points, &draws, bar);
+    let mut grid_found = search::screen(&search_ev, &points, &draws, bar);
     let evaluated = points.len();
     grid_found.retain(|c| c.usable() || c.robustness > 0.0);
     if grid_found.is_empty() {
@@ -212,11 +213,17 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
         });
     }
     grid_found.sort_by(|a, b| a.objective(min_rob).total_cmp(&b.objective(min_rob)));
-    // Refine a few distinct grid winners; keep the rest of the grid as fallbacks.
+    // Refine a few distinct grid winners; keep the rest of the grid as fallbacks. A winner
+    // that already tells every pair of laws apart by the margin cap is kept as it is: moving
+    // it could only buy mu's precision, and a move judged at the laws' reference departures
+    // alone has found releases whose other departures show nothing.
     let seeds = distinct(&grid_found, &ranges, spec.search.top.min(4));
     let refined: Vec<Candidate> = seeds
         .par_iter()
-        .map(|c| search::refine(&ev, &draws, c, 30))
+        .map(|c| match c.saturated {
+            true => *c,
+            false => search::refine(&search_ev, &draws, c, 30),
+        })
         .collect();
     let mut pool = refined;
     pool.extend(grid_found.iter().copied());
@@ -276,6 +283,7 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
                 robustness: 1.0,
                 stderr: p.predicted_mu_stderr,
                 separation: p.separation,
+                saturated: false,
             }
             .objective(0.0)
         };
@@ -353,7 +361,7 @@ struct Fresh {
     candidate: Candidate,
     /// Draws of the check showing every target.
     passed: usize,
-    /// mu's predicted standard error (every frame's under laws; the search's own otherwise).
+    /// mu's predicted standard error from every frame.
     mu_stderr: f64,
     draws: usize,
 }
@@ -375,13 +383,9 @@ fn fresh(ev: &Evaluator, check: &Draws, c: &Candidate) -> Fresh {
     Fresh {
         candidate: *c,
         passed: ev.passes(&c.release, check),
-        // The search's own value when it ranked by it; under laws it took a sample of the
-        // frames, and the report gives every frame's.
-        mu_stderr: if ev.laws.is_some() {
-            ev.mu_stderr(&c.release)
-        } else {
-            c.stderr
-        },
+        // At the reporting tolerance and from every frame: the search's own value came from
+        // its looser runs (and, under laws, a sample of the frames).
+        mu_stderr: ev.mu_stderr(&c.release),
         draws: check.len(),
     }
 }
