@@ -1007,7 +1007,12 @@ mod tests {
         let mut close = 0;
         for (a, b) in &pairs {
             assert_eq!(a.robustness, b.robustness, "{:?}", a.release);
-            assert_eq!(a.stderr.is_finite(), b.stderr.is_finite(), "{:?}", a.release);
+            assert_eq!(
+                a.stderr.is_finite(),
+                b.stderr.is_finite(),
+                "{:?}",
+                a.release
+            );
             assert!(
                 !a.stderr.is_finite() || (a.stderr.ln() - b.stderr.ln()).abs() < 1e-3,
                 "{:?}: {} against {}",
