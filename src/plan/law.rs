@@ -126,6 +126,14 @@ pub struct LawError {
     pub range: Option<[f64; 2]>,
 }
 
+impl LawError {
+    /// Whether the recording would not pin the parameter down at the reference departure or
+    /// at one of the others ([`DEPARTURE_SCALES`]): infinite there, "not shown".
+    pub fn hidden_somewhere(&self) -> bool {
+        !self.stderr.is_finite() || self.range.is_some_and(|[_, hi]| !hi.is_finite())
+    }
+}
+
 /// The multiples of the reference departure a proposal's predicted errors are also given at
 /// ([`departure_rig`]; with the reference, a factor 2 apart): a law's errors depend on how far
 /// it departs from Coulomb's (a larger static step restarts the slider later, a wider split

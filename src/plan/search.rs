@@ -152,11 +152,11 @@ impl<'a> Evaluator<'a> {
         }
     }
 
-    /// The evaluator the search ranks releases with: the same, simulated at rtol 1e-6 and
-    /// atol 1e-8 ([`SEARCH_RTOL`]). A ranking needs less than a report: the grid's
-    /// robustness, mu's error and the laws' separation agree with the reporting tolerance's
-    /// to within the run-to-run scatter of mirror-image releases, at two thirds of the
-    /// cost. What a plan reports (the fresh check, the proposals) keeps `self`'s.
+    /// The evaluator a law plan's search ranks releases with: the same, simulated at rtol
+    /// 1e-6 and atol 1e-8 ([`SEARCH_RTOL`]). A ranking by the laws' separation needs less
+    /// than a report: the grid's robustness, mu's error and the separation agree with the
+    /// reporting tolerance's to within the scatter of mirror-image releases, at two thirds
+    /// of the cost. What a plan reports (the fresh check, the proposals) keeps `self`'s.
     pub fn searching(&self) -> Evaluator<'a> {
         let mut ev = self.clone();
         ev.options.rtol = SEARCH_RTOL;
@@ -507,7 +507,7 @@ pub struct Candidate {
 
 /// One pair of laws told apart, in the units of [`Candidate::objective`]: a hundred
 /// e-folds of mu's standard error.
-const PAIR: f64 = 100.0;
+pub const PAIR: f64 = 100.0;
 
 impl Candidate {
     /// What the search minimises: log stderr, or, when the plan weighs laws, log stderr
