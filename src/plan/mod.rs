@@ -182,10 +182,8 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
         .map_or_else(Vec::new, |l| l.candidates.iter().map(|c| c.0).collect());
     ev.laws = laws;
     let ev = ev;
-    // Only a law plan searches at the looser tolerance: its ranking moves in steps of a
-    // pair's chance. A plan for mu's precision polishes a continuous error, and at 1e-6 the
-    // campaign plan's best came out 6 % less precise (mu's error shrunk 2.76 against 2.94
-    // times, docs/python.md's example).
+    // Only a law plan searches at the looser tolerance (its ranking moves in steps of a
+    // pair's chance); a plan for mu's precision keeps its proposals as they were.
     let search_ev = match ev.laws {
         Some(_) => ev.searching(),
         None => ev.clone(),
