@@ -400,9 +400,13 @@ fn fresh(ev: &Evaluator, check: &Draws, c: &Candidate) -> Fresh {
     Fresh {
         candidate: *c,
         passed: ev.passes(&c.release, check),
-        // At the reporting tolerance and from every frame: the search's own value came from
-        // its looser runs (and, under laws, a sample of the frames).
-        mu_stderr: ev.mu_stderr(&c.release),
+        // A plan for mu's precision searched with the reporting tolerance and every frame: its
+        // own value. A law plan's search ran looser and on a sample of the frames.
+        mu_stderr: if ev.laws.is_some() {
+            ev.mu_stderr(&c.release)
+        } else {
+            c.stderr
+        },
         draws: check.len(),
     }
 }

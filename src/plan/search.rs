@@ -704,7 +704,7 @@ pub fn refine(ev: &Evaluator, draws: &Draws, start: &Candidate, iters: u64) -> C
     }
     // Under laws: about four Nelder-Mead iterations' worth of steps (the simplex's size).
     let patience = ev.laws.is_some().then_some(4 * (dims.len() + 1));
-    let problem = Refine {
+    let problem = |patience| Refine {
         ev,
         draws,
         ranges,
@@ -713,7 +713,8 @@ pub fn refine(ev: &Evaluator, draws: &Draws, start: &Candidate, iters: u64) -> C
         patience,
         stall: Mutex::new((f64::INFINITY, 0)),
     };
-    let u0 = problem.unit(&start.release);
+    let moving = problem(patience);
+    let u0 = moving.unit(&start.release);
     // A simplex of about one grid cell around the start.
     let step = 1.0 / (ev.spec.search.grid_points.max(2) - 1) as f64;
     let mut simplex = vec![u0.clone()];
@@ -725,22 +726,13 @@ pub fn refine(ev: &Evaluator, draws: &Draws, start: &Candidate, iters: u64) -> C
     let solver = NelderMead::new(simplex)
         .with_sd_tolerance(1e-3)
         .expect("a positive tolerance");
-    let best = Executor::new(problem, solver)
+    let best = Executor::new(moving, solver)
         .configure(|s| s.max_iters(iters))
         .run()
         .ok()
         .and_then(|r| r.state.best_param.clone());
-    let problem = Refine {
-        ev,
-        draws,
-        ranges,
-        dims,
-        base: start.release,
-        patience: None,
-        stall: Mutex::new((f64::INFINITY, 0)),
-    };
     let min_rob = ev.spec.goal.min_robustness;
-    best.and_then(|u| problem.candidate(&u))
+    best.and_then(|u| problem(None).candidate(&u))
         .filter(|c| c.usable() && c.objective(min_rob) < start.objective(min_rob))
         .unwrap_or(*start)
 }
