@@ -229,16 +229,31 @@ impl Laws {
     /// (its iteration limit, a local minimum) overstates lambda as the linearisation can, and
     /// a pair counts as told apart only when neither finds the rival fitting.
     pub fn verified(&self, ev: &Evaluator, y0: &State<f64>) -> Vec<Option<Separation>> {
+        let all: Vec<usize> = (0..self.pairs.len()).collect();
+        let linear = self.separations(ev, y0);
+        self.verified_pairs(ev, y0, &all, &linear)
+    }
+
+    /// [`Laws::verified`] for the pairs `which` alone (indices into [`Laws::pairs`]), in
+    /// that order, each pair's lambda kept at most `linear`'s (its linearised separations,
+    /// all pairs; empty for none): a second look at the pairs a linearisation may have
+    /// overstated costs their fits only.
+    pub fn verified_pairs(
+        &self,
+        ev: &Evaluator,
+        y0: &State<f64>,
+        which: &[usize],
+        linear: &[Option<Separation>],
+    ) -> Vec<Option<Separation>> {
         use rayon::prelude::*;
         let ln_n = self.rows.max(2.0).ln();
         let frames = Frames::new(ev, self.max_frames);
         let releases: Vec<State<f64>> = self.before_release.iter().copied().chain([*y0]).collect();
-        let linear = self.separations(ev, y0);
         // Each truth's recordings once, for all its rivals.
         let recorded: Vec<Option<Vec<Arc<Observations>>>> = (0..self.candidates.len())
             .into_par_iter()
             .map(|a| {
-                if !self.pairs.iter().any(|&(t, _)| t == a) {
+                if !which.iter().any(|&i| self.pairs[i].0 == a) {
                     return None;
                 }
                 releases
@@ -247,10 +262,10 @@ impl Laws {
                     .collect()
             })
             .collect();
-        self.pairs
+        which
             .par_iter()
-            .zip(linear)
-            .map(|(&(a, b), linear)| {
+            .map(|&i| (self.pairs[i], linear.get(i).cloned().flatten()))
+            .map(|((a, b), linear)| {
                 let (truth, rival) = (&self.candidates[a], &self.candidates[b]);
                 let start = rival_start(&truth.1, &rival.1, rival.0);
                 let parts = recorded[a]
@@ -728,6 +743,35 @@ mod tests {
         l.max_frames = usize::MAX;
         assert_eq!(l.pairs.len(), 1);
         l.separations(ev, y0)[0].as_ref().unwrap().lambda
+    }
+
+    /// The plan's second look fits one of each mirror-image pair of releases when neither
+    /// law has a direction and the rail is level: the rivals' full fits must leave the same
+    /// chi-square for both (here Stribeck's hump against a static step on the light rig, a
+    /// release that slides both ways and sticks).
+    #[test]
+    fn full_fits_separate_a_release_and_its_mirror_alike() {
+        let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("configs/plan_law_suspect.toml");
+        let spec = PlanSpec::from_path(&path).unwrap();
+        let ev = Evaluator::new(&spec).searching();
+        let laws = Laws::new(&spec.rig, &[Law::Static, Law::Stribeck], 4000.0).unwrap();
+        let pair = laws
+            .pairs
+            .iter()
+            .position(|&(a, b)| {
+                laws.candidates[a].0 == Law::Stribeck && laws.candidates[b].0 == Law::Static
+            })
+            .unwrap();
+        let y0 = [0.0, 67.5f64.to_radians(), -0.3, 0.0];
+        let fit = |y: &State<f64>| {
+            laws.verified_pairs(&ev, y, &[pair], &[])[0]
+                .as_ref()
+                .unwrap()
+                .lambda
+        };
+        let (a, b) = (fit(&y0), fit(&mirror(y0)));
+        assert!(a > 1.0, "{a}");
+        assert!((a - b).abs() < 0.02 * a, "{a} against {b}");
     }
 
     #[test]

@@ -5,7 +5,8 @@
 use crate::helpers::*;
 use appell::fit::{fit, FitSettings};
 use appell::model::{Rig, State};
-use appell::plan::{plan, PlanSpec};
+use appell::plan::law::Law;
+use appell::plan::{plan, PlanSpec, Proposal};
 use appell::sim::{simulate, EventKind, Options, Request};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -550,6 +551,33 @@ fn the_worked_law_example_weighs_every_law_the_first_release_left_open() {
         .filter(|m| m.starts_with("slide"))
         .collect();
     assert!(ways.len() == 2, "slides {ways:?}");
+}
+
+/// The search ranks releases by linearised rivals, which call Stribeck's hump told apart from
+/// a static step at nearly every release of the light rig's box; the rivals' full fits of
+/// its best ones do not (a static coefficient that slips later mimics the hump). The plan's
+/// second look fits that pair in full at more releases and lists the one that tells it apart,
+/// and the full fits of the listed release, at the plan's own tolerance, agree.
+#[test]
+fn the_second_look_finds_a_release_whose_full_fits_tell_the_hump_from_a_step() {
+    let spec = PlanSpec::from_path(&config("plan_law_suspect.toml")).unwrap();
+    let report = plan(&spec).unwrap();
+    let look = report
+        .notes
+        .iter()
+        .find(|n| n.contains("the rivals' full fits did not"))
+        .expect("the best grid releases leave the hump against a step to the full fits");
+    assert!(look.contains("stribeck (true) from static"), "{look}");
+    let hard = |p: &Proposal| {
+        p.separations
+            .iter()
+            .find(|s| s.truth == Law::Stribeck && s.rival == Law::Static)
+            .map_or(0.0, |s| s.probability)
+    };
+    let told: Vec<f64> = report.proposals.iter().map(hard).collect();
+    assert!(told.iter().any(|&c| c >= 0.9), "{told:?}: {look}");
+    // It ranks first: it tells more pairs apart and shows every law the plan weighs.
+    assert!(told[0] >= 0.9, "{told:?}");
 }
 
 /// `appell plan PLAN --after FIT --json`, parsed.
