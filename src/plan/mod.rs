@@ -562,13 +562,19 @@ impl SecondLook<'_> {
                     .all(|&k| self.laws.candidates[k].0 != law::Law::Direction)
             });
         let mirror = |r: &ReleaseValues| [PI - r[0], -r[1], -r[2]];
+        // The grid's mirror images agree to rounding only (pi - theta).
+        let same = |a: &ReleaseValues, b: &ReleaseValues| {
+            a.iter()
+                .zip(b)
+                .all(|(u, v)| (u - v).abs() <= 1e-9 * (1.0 + u.abs()))
+        };
         let mut queue: Vec<Candidate> = Vec::new();
         for c in self.pool {
             let new = !self
                 .seen
                 .iter()
                 .chain(queue.iter().map(|q| &q.release))
-                .any(|s| s == &c.release || (symmetric && *s == mirror(&c.release)));
+                .any(|s| same(s, &c.release) || (symmetric && same(s, &mirror(&c.release))));
             // Only a release whose linearised count beats the best's full one could gain.
             if new
                 && c.usable()
