@@ -5,9 +5,8 @@
 //! refused: its mu and its covariance describe another rig, and the plan's promise ("shrinks
 //! mu's error by a factor 42.76") would be about neither.
 //!
-//! The fit's deviations are the ones it used (its rig file's stated `_sd` or the defaults of a
-//! ruler and a kitchen scale; a fitted value's standard error); the plan file states none, so
-//! its values carry the same defaults ([`RigMeasurement::from_spec`]).
+//! Each side's deviations are its file's `_sd` keys or the defaults of a ruler and a kitchen
+//! scale ([`RigMeasurement::from_spec`]); a fitted value's, its standard error.
 
 use super::spec::PlanRigSpec;
 use crate::fit::priors::RigMeasurement;
@@ -75,8 +74,8 @@ fn unit_of(what: &str) -> &'static str {
     }
 }
 
-/// The plan's `[rig]` as the fit would take it: every value with the deviation of a ruler and
-/// a kitchen scale (a plan file states none).
+/// The plan's `[rig]` as the fit would take it: every value with its stated deviation (`_sd`)
+/// or that of a ruler and a kitchen scale.
 fn plan_measurement(rig: &PlanRigSpec) -> RigMeasurement {
     RigMeasurement::from_spec(&rig.rig_spec())
 }
@@ -348,6 +347,12 @@ mod tests {
             pendulum_com: None,
             pendulum_inertia: None,
             gravity: None,
+            rod_length_sd: None,
+            slider_mass_sd: None,
+            bob_mass_sd: None,
+            rod_mass_sd: None,
+            bob_radius_sd: None,
+            gravity_sd: None,
         }
     }
 
@@ -381,6 +386,31 @@ mod tests {
         // 10 mm is another rod (7 sd).
         let (m, _) = compare(&fit(0.1, 0.1, 0.31), &plan(0.1, 0.1, 0.3));
         assert_eq!(m[0].what, "rod_length");
+    }
+
+    #[test]
+    fn the_plans_stated_deviations_are_counted() {
+        // 0.13 kg against 0.10 kg: 6.1 combined sd with a kitchen scale's 3 % on both sides.
+        let (m, _) = compare(&fit(0.13, 0.1, 0.3), &plan(0.1, 0.1, 0.3));
+        assert_eq!(m.len(), 1, "{m:?}");
+        assert!(
+            m[0].sd_apart > 5.0 && m[0].plan.contains("default"),
+            "{m:?}"
+        );
+        // The plan's slider weighed on a rough scale (10 g): 2.8 sd, the same rig.
+        let rough = PlanRigSpec {
+            slider_mass_sd: Some(0.01),
+            ..plan(0.1, 0.1, 0.3)
+        };
+        assert!(compare(&fit(0.13, 0.1, 0.3), &rough).0.is_empty());
+        // A precise rod (0.1 mm) on the plan's side cannot hide a ruler's 7 sd on the fit's.
+        let precise = PlanRigSpec {
+            rod_length_sd: Some(1e-4),
+            ..plan(0.1, 0.1, 0.3)
+        };
+        let (m, _) = compare(&fit(0.1, 0.1, 0.31), &precise);
+        assert_eq!(m.len(), 1, "{m:?}");
+        assert!(m[0].plan.contains("stated"), "{m:?}");
     }
 
     #[test]

@@ -32,6 +32,20 @@ pub struct PlanRigSpec {
     pub pendulum_inertia: Option<f64>,
     /// Gravity (m/s^2); default [`crate::scene::EARTH_GRAVITY`].
     pub gravity: Option<f64>,
+    /// Standard deviation of the rod length (m) as measured; default a ruler's (1 mm). These
+    /// `_sd` keys are a rig file's: `plan --after` counts how far the fit's rig is from this
+    /// one in them.
+    pub rod_length_sd: Option<f64>,
+    /// Standard deviation of the slider mass (kg); default a kitchen scale's.
+    pub slider_mass_sd: Option<f64>,
+    /// Standard deviation of the bob mass (kg); default a kitchen scale's.
+    pub bob_mass_sd: Option<f64>,
+    /// Standard deviation of the rod mass (kg).
+    pub rod_mass_sd: Option<f64>,
+    /// Standard deviation of the bob radius (m).
+    pub bob_radius_sd: Option<f64>,
+    /// Standard deviation of gravity (m/s^2).
+    pub gravity_sd: Option<f64>,
 }
 
 /// The `[friction]` section: the law the lab expects (the rig file's keys: Coulomb's by
@@ -749,8 +763,8 @@ impl FrictionSpec {
 const FRICTION_KEYS: [&str; 4] = ["mu_", "friction_law", "stribeck_velocity", "load_exponent"];
 
 impl PlanRigSpec {
-    /// The plan's rig as a rig file's `[rig]`: its masses, rod, pendulum and gravity, no
-    /// friction, tilt, damping or deviations.
+    /// The plan's rig as a rig file's `[rig]`: its masses, rod, pendulum, gravity and their
+    /// deviations, no friction, tilt or damping.
     pub fn rig_spec(&self) -> RigSpec {
         let r = self;
         RigSpec {
@@ -775,12 +789,12 @@ impl PlanRigSpec {
             load_exponent: None,
             stribeck_velocity: None,
             viscous_friction: None,
-            rod_length_sd: None,
-            slider_mass_sd: None,
-            bob_mass_sd: None,
-            rod_mass_sd: None,
-            bob_radius_sd: None,
-            gravity_sd: None,
+            rod_length_sd: r.rod_length_sd,
+            slider_mass_sd: r.slider_mass_sd,
+            bob_mass_sd: r.bob_mass_sd,
+            rod_mass_sd: r.rod_mass_sd,
+            bob_radius_sd: r.bob_radius_sd,
+            gravity_sd: r.gravity_sd,
         }
     }
 
@@ -1172,6 +1186,21 @@ targets = ["stick_to_slide", { stick_slip_cycles = 2 }]
             .unwrap_err()
             .to_string();
         assert!(e.contains("friction.mu_kinetic_range"), "{e}");
+        // A rig file's deviations, checked as a rig file's are.
+        let bad = GOOD.replace("rod_length = 0.3", "rod_length = 0.3\nrod_length_sd = 0.2");
+        let e = PlanSpec::from_toml(&bad, Path::new("p.toml"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("p.toml") && e.contains("rig.rod_length_sd"),
+            "{e}"
+        );
+        let good = GOOD.replace(
+            "rod_length = 0.3",
+            "rod_length = 0.3\nrod_length_sd = 0.002",
+        );
+        let p = PlanSpec::from_toml(&good, Path::new("p.toml")).unwrap();
+        assert_eq!(p.rig_file.rig_spec().rod_length_sd, Some(0.002));
     }
 
     #[test]
