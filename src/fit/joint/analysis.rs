@@ -64,8 +64,15 @@ pub(super) fn analyse(
 ) -> Result<Analysis, JointError> {
     let sub: Vec<&Single> = sel.iter().map(|&i| &kept[i]).collect();
     let start = singles::start(&sub, ctx.rig_guess, ctx.settings, ctx.joint);
-    let model = model::fit_model(start, &sub, ctx.settings, select)?;
-    let shared = shared::shared_fit(&model.problem, &model.p, &sub)?;
+    let mut model = model::fit_model(start, &sub, ctx.settings, select)?;
+    let shared = match shared::shared_fit(&model.problem, &model.p, &sub) {
+        // A shared parameter the releases together leave undetermined is held, once.
+        Err(JointError::Undetermined(params)) => {
+            model = model::hold_undetermined(model, &params)?;
+            shared::shared_fit(&model.problem, &model.p, &sub)?
+        }
+        r => r?,
+    };
     let mut rows = release_rows(&model.problem, &sub, ctx.settings);
     let pairs = own_pairs(&rows);
     let consistency_p = consistency(&pairs);

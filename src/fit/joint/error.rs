@@ -22,4 +22,8 @@ pub enum JointError {
     /// The joint fit failed.
     #[error("the joint fit failed: {0}")]
     Joint(String),
+    /// The releases together do not determine these shared parameters (nothing the markers
+    /// show depends on them at their fitted values) and no nuisance the data chose frees them.
+    #[error("the joint fit failed: the joint information matrix is singular ({}: not determined by the releases together)", .0.iter().map(|q| q.name()).collect::<Vec<_>>().join(", "))]
+    Undetermined(Vec<crate::fit::problem::Param>),
 }

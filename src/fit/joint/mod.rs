@@ -78,6 +78,17 @@ pub fn fit_joint(
         consistency_p,
         sel,
     } = found;
+    for &(q, value) in &model.held {
+        warnings.push(format!(
+            "{} is not determined by these releases together (nothing the markers show depends on it at its fitted value): held at {}{}, not fitted; a release that shows it would pin it",
+            q.name(),
+            crate::data::inspect::sig(value, 4),
+            match q.unit() {
+                "" => String::new(),
+                u => format!(" {u}"),
+            }
+        ));
+    }
     let mut mu = shared.estimates[shared.mu_index].1;
     model_uncertainty(
         &mut mu,

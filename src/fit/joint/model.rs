@@ -6,6 +6,7 @@
 use super::error::JointError;
 use super::problem::JointProblem;
 use super::singles::{Single, Start};
+use crate::fit::problem::{Param, TrajectoryProblem};
 use crate::fit::select::{self, Candidate, ModelRow, Nuisance, SelectOptions};
 use crate::fit::solve::{solve_loose, STAGE_FTOL};
 use crate::fit::FitSettings;
@@ -25,6 +26,13 @@ pub(super) struct JointModel {
     pub(super) iterations: u64,
     /// Whether the nuisances were chosen by the data (else the consensus was kept).
     pub(super) selected: bool,
+    /// Shared parameters held at their values after the choice because the releases together
+    /// did not determine them ([`hold_undetermined`]), with the values.
+    pub(super) held: Vec<(Param, f64)>,
+    /// The releases' parts without any nuisance (to fit the model without one).
+    plain: Vec<TrajectoryProblem>,
+    /// The start's mu_kinetic (where a nuisance's mu_static starts).
+    mu0: f64,
 }
 
 /// The joint model: the start fitted (loosely: it only starts the selection), the nuisances
@@ -59,6 +67,9 @@ pub(super) fn fit_model(
         models: Vec::new(),
         iterations,
         selected: select,
+        held: Vec::new(),
+        plain,
+        mu0,
     };
     if select && (settings.nuisances || !settings.with.is_empty()) {
         let from = Origin {
@@ -69,7 +80,7 @@ pub(super) fn fit_model(
             consensus: consensus.clone(),
         };
         model = choose_nuisances(model, from, settings);
-        model = drop_unsupported(model, &plain, &consensus, mu0, settings);
+        model = drop_unsupported(model, &consensus, settings);
     } else {
         model.nuisances = consensus;
     }
@@ -93,9 +104,7 @@ struct Origin {
 /// nuisance the releases together do not need.
 fn drop_unsupported(
     mut model: JointModel,
-    plain: &[crate::fit::problem::TrajectoryProblem],
     consensus: &[Nuisance],
-    mu0: f64,
     settings: &FitSettings,
 ) -> JointModel {
     let n = model.problem.n_rows() as f64;
@@ -119,40 +128,83 @@ fn drop_unsupported(
             .copied()
             .filter(|c| *c != nu)
             .collect();
-        let parts = plain
-            .iter()
-            .zip(&model.problem.parts)
-            .map(|(p, cur)| {
-                let mut m = p.clone();
-                for &c in &keep {
-                    m = m.with_nuisance(c, mu0 * 1.1);
-                }
-                m.initial = cur.initial;
-                for q in m.free.clone() {
-                    super::singles::set_param(&mut m, q, cur.get(q));
-                }
-                m
-            })
-            .collect();
-        let without = JointProblem::new(parts, model.problem.same_camera);
-        let Ok((p, _, it)) = solve_loose(
-            &without,
-            without.values(),
-            settings.max_iters,
-            Some(STAGE_FTOL),
-        ) else {
+        let Some((without, p, it)) = without(&model, &keep, settings) else {
             continue;
         };
         model.iterations += it;
         if bic(&without, &p).is_some_and(|b| b < with + 2.0) {
-            let mut without = without;
-            without.set_values(&p);
             model.problem = without;
             model.p = p;
             model.nuisances = keep;
         }
     }
     model
+}
+
+/// `model` with only the nuisances `keep`, every value it shares with `model` kept, fitted
+/// (loosely, as the selection fits): its problem (values set), optimum and iterations.
+fn without(
+    model: &JointModel,
+    keep: &[Nuisance],
+    settings: &FitSettings,
+) -> Option<(JointProblem, DVector<f64>, u64)> {
+    let parts = model
+        .plain
+        .iter()
+        .zip(&model.problem.parts)
+        .map(|(p, cur)| {
+            let mut m = p.clone();
+            for &c in keep {
+                m = m.with_nuisance(c, model.mu0 * 1.1);
+            }
+            m.initial = cur.initial;
+            for q in m.free.clone() {
+                super::singles::set_param(&mut m, q, cur.get(q));
+            }
+            m
+        })
+        .collect();
+    let mut without = JointProblem::new(parts, model.problem.same_camera);
+    let (p, _, it) = solve_loose(
+        &without,
+        without.values(),
+        settings.max_iters,
+        Some(STAGE_FTOL),
+    )
+    .ok()?;
+    without.set_values(&p);
+    Some((without, p, it))
+}
+
+/// The chosen model with the shared parameters `undetermined` (those the releases together do
+/// not determine: nothing the markers show depends on them at their fitted values) held at
+/// their values, as a single fit holds them; an error when mu_kinetic is among them. A static
+/// coefficient the consensus model put in whose step no release's restart reaches is such:
+/// its fit is no worse for any larger value, but no better without it (a slider held stuck
+/// is no Coulomb slider that slips), so the term stays and its value is a bound.
+pub(super) fn hold_undetermined(
+    mut model: JointModel,
+    undetermined: &[Param],
+) -> Result<JointModel, JointError> {
+    if undetermined.is_empty() || undetermined.contains(&Param::MuKinetic) {
+        return Err(JointError::Undetermined(undetermined.to_vec()));
+    }
+    let parts: Vec<TrajectoryProblem> = model
+        .problem
+        .parts
+        .iter()
+        .map(|part| {
+            let mut m = part.clone();
+            m.free.retain(|q| !undetermined.contains(q));
+            m
+        })
+        .collect();
+    for &q in undetermined {
+        model.held.push((q, model.problem.parts[0].get(q)));
+    }
+    model.problem = JointProblem::new(parts, model.problem.same_camera);
+    model.p = model.problem.values();
+    Ok(model)
 }
 
 /// The nuisances chosen by the data from `model` at its optimum: the single fit's forward
@@ -190,6 +242,9 @@ fn choose_nuisances(model: JointModel, from: Origin, settings: &FitSettings) -> 
         models: sel.rows,
         iterations: model.iterations + sel.iterations,
         selected: true,
+        held: model.held,
+        plain: model.plain,
+        mu0: model.mu0,
     }
 }
 

@@ -54,9 +54,19 @@ pub(super) fn shared_fit(
         n_blocks,
     );
     if c.singular {
-        return Err(JointError::Joint(
-            "the joint information matrix is singular".into(),
-        ));
+        // The joint vector is the shared parameters first: those are the rig's, which a
+        // nuisance may have freed, which the analysis then holds ([`super::model::hold_undetermined`]).
+        let s = jp.shared.len();
+        let shared: Vec<Param> = c
+            .undetermined
+            .iter()
+            .filter(|&&i| i < s)
+            .map(|&i| jp.shared[i])
+            .collect();
+        return Err(match shared.is_empty() {
+            true => JointError::Joint("the joint information matrix is singular".into()),
+            false => JointError::Undetermined(shared),
+        });
     }
     let (cov, cov_block) = (&c.cov, &c.block);
     let s = jp.shared.len();
