@@ -710,7 +710,7 @@ def main(argv=None):
                          "after the same fits and plan_example.toml, for the CPU comparison")
     ap.add_argument("--truth", choices=["default", "reference"], default="default",
                     help="reference: the true laws at the planner's reference departures from "
-                         "mu_k = 0.22 (mu_s 1.1 mu_k, v_s 0.05 m/s, split 2.5 %% of mu, "
+                         "mu_k = 0.22 (mu_s 1.1 mu_k, v_s 0.01 m/s, split 2.5 %% of mu, "
                          "exponent 0.9), in their own work directory")
     ap.add_argument("--plan", default=PLAN_PATTERN,
                     help="plan files, {rig} for the rig's name (default "
@@ -722,9 +722,9 @@ def main(argv=None):
     if args.plan != PLAN_PATTERN:
         work += "_plan" + hashlib.sha256(args.plan.encode()).hexdigest()[:8]
     if args.truth == "reference":
-        # src/plan/discriminate.rs, REFERENCE_*: the departures the planner assumes
+        # src/plan/law.rs, REFERENCE_*: the departures the planner assumes
         mu = lrg.MU_K
-        lrg.set_truth(mu_s=round(1.1 * mu, 12), v_s=0.05, mu_pos=round(1.025 * mu, 12),
+        lrg.set_truth(mu_s=round(1.1 * mu, 12), v_s=0.01, mu_pos=round(1.025 * mu, 12),
                       mu_neg=round(0.975 * mu, 12), load_exp=0.9)
         work += "_reftruth"
     os.makedirs(work, exist_ok=True)
