@@ -108,11 +108,14 @@ fn drop_unsupported(
     settings: &FitSettings,
 ) -> JointModel {
     let n = model.problem.n_rows() as f64;
-    let bic = |m: &JointProblem, p: &DVector<f64>| -> Option<f64> {
+    let chi2 = |m: &JointProblem, p: &DVector<f64>| -> Option<f64> {
         let cost = crate::fit::lm::LeastSquares::normal_equations(m, p)
             .ok()?
             .cost;
-        Some(2.0 * cost + m.n_free() as f64 * n.ln())
+        Some(2.0 * cost)
+    };
+    let bic = |m: &JointProblem, p: &DVector<f64>| -> Option<f64> {
+        Some(chi2(m, p)? + m.n_free() as f64 * n.ln())
     };
     let forced = settings.forced();
     for &nu in consensus {
@@ -132,13 +135,56 @@ fn drop_unsupported(
             continue;
         };
         model.iterations += it;
-        if bic(&without, &p).is_some_and(|b| b < with + 2.0) {
+        let (Some(b), Some(c)) = (bic(&without, &p), chi2(&without, &p)) else {
+            continue;
+        };
+        if b < with + 2.0 {
+            rechosen(&mut model.models, &keep, &without, c, b, n);
             model.problem = without;
             model.p = p;
             model.nuisances = keep;
         }
     }
     model
+}
+
+/// The models table after a drop made `m` (holding `keep`, at chi-square `chi2` and BIC `bic`
+/// over `n` rows) the chosen model: its row in (one of the same name replaced), the others'
+/// criteria against it and the weights again. The table mu's model uncertainty and the law
+/// table are read from would otherwise name a model the fit no longer reports as chosen.
+fn rechosen(
+    rows: &mut Vec<ModelRow>,
+    keep: &[Nuisance],
+    m: &JointProblem,
+    chi2: f64,
+    bic: f64,
+    n: f64,
+) {
+    let name = match keep.is_empty() {
+        true => "base".to_owned(),
+        false => keep.iter().map(|k| k.name()).collect::<Vec<_>>().join("+"),
+    };
+    rows.retain(|r| r.name != name);
+    for r in rows.iter_mut() {
+        r.chosen = false;
+        r.delta_bic = r.bic - bic;
+    }
+    rows.push(ModelRow {
+        name,
+        free: m.free_names(),
+        chi2,
+        bic,
+        delta_bic: 0.0,
+        chosen: true,
+        mu_kinetic: m.mu_kinetic(),
+        failed: None,
+        weight: 0.0,
+        path: true,
+        implausible: m.implausible(),
+        stopped_early: false,
+    });
+    let dof = (n - m.n_free() as f64).max(1.0);
+    select::model_weights(rows, (chi2 / dof).max(1.0));
 }
 
 /// `model` with only the nuisances `keep`, every value it shares with `model` kept, fitted

@@ -24,4 +24,4 @@ pub use forward::forward;
 pub use nuisance::{Nuisance, MU_PINNED};
 pub use score::score_drops_by;
 pub use selection::{misfits, ModelRow, SelectOptions};
-pub use weights::{adequate_spread, model_spread};
+pub use weights::{adequate_spread, model_spread, model_weights};
