@@ -688,6 +688,27 @@ fn an_undetermined_shared_parameter_is_held_not_the_joint_fit_failed() {
         // The static law's held coefficient is said; Coulomb's law holds none.
         assert_eq!(held, law == "static", "{second}: {}", js["warnings"]);
     }
+    // The static pair's joint model started from the releases' consensus (static friction)
+    // and compared no model without a law: its law table says so, not that the model
+    // described the recordings without Coulomb's law.
+    let text = Command::new(env!("CARGO_BIN_EXE_appell"))
+        .args(["fit", "--joint", "--rig"])
+        .arg(dir.join("rigs/equal.toml"))
+        .arg("--release")
+        .arg(dir.join("static_equal_push_s1.csv"))
+        .arg("--release")
+        .arg(dir.join("static_equal_random_s1.csv"))
+        .output()
+        .unwrap();
+    let out = String::from_utf8_lossy(&text.stdout);
+    let coulomb = out
+        .lines()
+        .find(|l| l.trim_start().starts_with("coulomb "))
+        .unwrap_or_else(|| panic!("no coulomb row: {out}"));
+    assert!(
+        coulomb.contains("every model compared had another law"),
+        "{coulomb}"
+    );
 }
 
 /// A consensus nuisance the joint data do not support is taken out after the selection, and

@@ -302,6 +302,13 @@ pub fn friction_law_text(s: &mut String, f: &crate::fit::law::FrictionLawResult)
             ("screened", _, Some([drop, need])) => format!(
                 "not fitted: the score test predicts a chi-square drop of {drop:.1}, below the {need:.1} it would cost"
             ),
+            // Coulomb's law is the plain model's: a single fit always compares it, so only
+            // a forced law or a joint selection started from a consensus with another law
+            // leaves it out.
+            _ if l.law == "coulomb" && f.forced => "not tried: the law is forced".to_owned(),
+            _ if l.law == "coulomb" => {
+                "not fitted: every model compared had another law (the joint model starts from its releases' consensus)".to_owned()
+            }
             _ => "not tried: the model described the recording without it".to_owned(),
         };
         let _ = writeln!(s, "    {:<10} {detail}", l.law);
