@@ -256,6 +256,20 @@ pub(super) struct Estimates {
     pub rig_fraction: f64,
 }
 
+/// The warning for a parameter `q` held at `value` because `by` (the recording, or the
+/// releases together) does not determine it; a single fit and a joint fit say it alike.
+pub(crate) fn held_warning(q: Param, value: f64, by: &str) -> String {
+    let unit = match q.unit() {
+        "" => String::new(),
+        u => format!(" {u}"),
+    };
+    format!(
+        "{} is not determined by {by}: held at {}{unit}, not fitted; a release that shows it would pin it",
+        q.name(),
+        crate::data::inspect::sig(value, 4),
+    )
+}
+
 /// Standard errors (Jacobian, block covariance) and Wald intervals; mu_kinetic's profile
 /// interval comes after ([`mu_profile`]).
 ///
@@ -277,11 +291,10 @@ pub(super) fn estimates(
         .collect();
     if !held.is_empty() {
         for &q in &held {
-            f.warnings.push(format!(
-                "{} is not determined by this recording (nothing the markers show depends on it): held at {} {}, not fitted; a release that shows it would pin it",
-                q.name(),
-                crate::data::inspect::sig(f.problem.get(q), 4),
-                q.unit()
+            f.warnings.push(held_warning(
+                q,
+                f.problem.get(q),
+                "this recording (nothing the markers show depends on it)",
             ));
         }
         f.problem.free.retain(|q| !held.contains(q));

@@ -385,6 +385,9 @@ struct Fresh {
     /// mu's predicted standard error from every frame.
     mu_stderr: f64,
     draws: usize,
+    /// The laws' predicted errors when already computed (the second look asks whether a
+    /// release hides a law before it is checked in full).
+    law_stderr: Option<Vec<law::LawError>>,
 }
 
 impl Fresh {
@@ -412,6 +415,7 @@ fn fresh(ev: &Evaluator, check: &Draws, c: &Candidate) -> Fresh {
             c.stderr
         },
         draws: check.len(),
+        law_stderr: None,
     }
 }
 
@@ -458,7 +462,10 @@ fn checked(ev: &Evaluator, f: &Fresh) -> Result<Proposal, PlanError> {
         predicted_mu_stderr: f.mu_stderr,
         separations,
         separation,
-        law_stderr: ev.law_stderr(&c.release),
+        law_stderr: f
+            .law_stderr
+            .clone()
+            .unwrap_or_else(|| ev.law_stderr(&c.release)),
         samples: sol.samples,
     })
 }
@@ -552,17 +559,15 @@ impl SecondLook<'_> {
         if look.done() {
             return;
         }
-        let f = fresh(self.ev, self.check, &j.0);
+        let mut f = fresh(self.ev, self.check, &j.0);
         let ranked = f.ranked(self.min_robustness);
         look.tried.push((j.0.release, ranked));
         if !ranked {
             return;
         }
-        let hides = self
-            .ev
-            .law_stderr(&j.0.release)
-            .iter()
-            .any(|e| e.hidden_somewhere());
+        let errors = self.ev.law_stderr(&j.0.release);
+        let hides = errors.iter().any(|e| e.hidden_somewhere());
+        f.law_stderr = Some(errors);
         match (hides, look.hiding.is_some()) {
             (false, _) => look.found = Some((f, j.1)),
             (true, false) => look.hiding = Some((f, j.1)),
@@ -671,12 +676,12 @@ impl SecondLook<'_> {
                 self.try_release(j, &mut look);
             }
         }
-        let hiding = look.found.is_none() && look.hiding.is_some();
         let Looked {
             tried,
             found,
             hiding: fallback,
         } = look;
+        let hiding = found.is_none() && fallback.is_some();
         let found = found.or(fallback);
         let names: Vec<String> = short
             .iter()

@@ -621,6 +621,23 @@ fn releases_kept_off_the_rig_file_fail_the_joint_fit() {
     assert!(v["mu_kinetic"].is_null(), "{}", v["mu_kinetic"]);
 }
 
+/// `appell fit --joint [--json] --rig tests/data/law_release/rigs/RIG.toml` of two of that
+/// directory's recordings (names without `.csv`).
+fn law_release_pair(rig: &str, first: &str, second: &str, json: bool) -> std::process::Output {
+    let dir = repo("tests/data/law_release");
+    Command::new(env!("CARGO_BIN_EXE_appell"))
+        .args(["fit", "--joint"])
+        .args(json.then_some("--json"))
+        .arg("--rig")
+        .arg(dir.join(format!("rigs/{rig}.toml")))
+        .arg("--release")
+        .arg(dir.join(format!("{first}.csv")))
+        .arg("--release")
+        .arg(dir.join(format!("{second}.csv")))
+        .output()
+        .unwrap()
+}
+
 /// A shared parameter the releases together leave undetermined is held at its value, as a
 /// single fit holds one, not the joint fit failed. Two pairs of the independent generator's
 /// recordings (tests/data/law_release), each a push that slides once and never restarts and a
@@ -650,15 +667,7 @@ fn an_undetermined_shared_parameter_is_held_not_the_joint_fit_failed() {
             "static",
         ),
     ] {
-        let run = Command::new(env!("CARGO_BIN_EXE_appell"))
-            .args(["fit", "--joint", "--json", "--rig"])
-            .arg(dir.join(format!("rigs/{rig}.toml")))
-            .arg("--release")
-            .arg(dir.join(format!("{first}.csv")))
-            .arg("--release")
-            .arg(dir.join(format!("{second}.csv")))
-            .output()
-            .unwrap();
+        let run = law_release_pair(rig, first, second, true);
         let stderr = String::from_utf8_lossy(&run.stderr);
         assert_eq!(run.status.code(), Some(0), "{second}: {stderr}");
         let js: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();
@@ -691,15 +700,12 @@ fn an_undetermined_shared_parameter_is_held_not_the_joint_fit_failed() {
     // The static pair's joint model started from the releases' consensus (static friction)
     // and compared no model without a law: its law table says so, not that the model
     // described the recordings without Coulomb's law.
-    let text = Command::new(env!("CARGO_BIN_EXE_appell"))
-        .args(["fit", "--joint", "--rig"])
-        .arg(dir.join("rigs/equal.toml"))
-        .arg("--release")
-        .arg(dir.join("static_equal_push_s1.csv"))
-        .arg("--release")
-        .arg(dir.join("static_equal_random_s1.csv"))
-        .output()
-        .unwrap();
+    let text = law_release_pair(
+        "equal",
+        "static_equal_push_s1",
+        "static_equal_random_s1",
+        false,
+    );
     let out = String::from_utf8_lossy(&text.stdout);
     let coulomb = out
         .lines()
@@ -722,15 +728,7 @@ fn an_undetermined_shared_parameter_is_held_not_the_joint_fit_failed() {
 #[test]
 fn a_nuisance_taken_out_after_the_selection_leaves_the_table_consistent() {
     let dir = repo("tests/data/law_release");
-    let run = Command::new(env!("CARGO_BIN_EXE_appell"))
-        .args(["fit", "--joint", "--json", "--rig"])
-        .arg(dir.join("rigs/light.toml"))
-        .arg("--release")
-        .arg(dir.join("load_light_push_s4.csv"))
-        .arg("--release")
-        .arg(dir.join("load_light_random_s4.csv"))
-        .output()
-        .unwrap();
+    let run = law_release_pair("light", "load_light_push_s4", "load_light_random_s4", true);
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert_eq!(run.status.code(), Some(0), "{stderr}");
     let js: serde_json::Value = serde_json::from_slice(&run.stdout).unwrap();

@@ -79,14 +79,10 @@ pub fn fit_joint(
         sel,
     } = found;
     for &(q, value) in &model.held {
-        warnings.push(format!(
-            "{} is not determined by these releases together (nothing the markers show depends on it at its fitted value): held at {}{}, not fitted; a release that shows it would pin it",
-            q.name(),
-            crate::data::inspect::sig(value, 4),
-            match q.unit() {
-                "" => String::new(),
-                u => format!(" {u}"),
-            }
+        warnings.push(crate::fit::stages::held_warning(
+            q,
+            value,
+            "these releases together (nothing the markers show depends on it at its fitted value)",
         ));
     }
     let mut mu = shared.estimates[shared.mu_index].1;

@@ -114,15 +114,13 @@ fn drop_unsupported(
             .cost;
         Some(2.0 * cost)
     };
-    let bic = |m: &JointProblem, p: &DVector<f64>| -> Option<f64> {
-        Some(chi2(m, p)? + m.n_free() as f64 * n.ln())
-    };
+    let bic = |m: &JointProblem, chi2: f64| chi2 + m.n_free() as f64 * n.ln();
     let forced = settings.forced();
     for &nu in consensus {
         if !model.nuisances.contains(&nu) || forced.contains(&nu) {
             continue;
         }
-        let Some(with) = bic(&model.problem, &model.p) else {
+        let Some(with) = chi2(&model.problem, &model.p).map(|c| bic(&model.problem, c)) else {
             continue;
         };
         let keep: Vec<Nuisance> = model
@@ -135,9 +133,10 @@ fn drop_unsupported(
             continue;
         };
         model.iterations += it;
-        let (Some(b), Some(c)) = (bic(&without, &p), chi2(&without, &p)) else {
+        let Some(c) = chi2(&without, &p) else {
             continue;
         };
+        let b = bic(&without, c);
         if b < with + 2.0 {
             rechosen(&mut model.models, &keep, &without, c, b, n);
             model.problem = without;
@@ -160,10 +159,7 @@ fn rechosen(
     bic: f64,
     n: f64,
 ) {
-    let name = match keep.is_empty() {
-        true => "base".to_owned(),
-        false => keep.iter().map(|k| k.name()).collect::<Vec<_>>().join("+"),
-    };
+    let name = select::name_of(keep);
     rows.retain(|r| r.name != name);
     for r in rows.iter_mut() {
         r.chosen = false;

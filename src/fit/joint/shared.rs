@@ -54,8 +54,8 @@ pub(super) fn shared_fit(
         n_blocks,
     );
     if c.singular {
-        // The joint vector is the shared parameters first: those are the rig's, which a
-        // nuisance may have freed, which the analysis then holds ([`super::model::hold_undetermined`]).
+        // The joint vector starts with the shared parameters; undetermined ones among them
+        // the analysis holds ([`super::model::hold_undetermined`]).
         let s = jp.shared.len();
         let shared: Vec<Param> = c
             .undetermined

@@ -93,7 +93,7 @@ impl Criterion {
 }
 
 /// A model's name in the table: its nuisances joined by `+`, `base` for none.
-fn name_of(ns: &[Nuisance]) -> String {
+pub fn name_of(ns: &[Nuisance]) -> String {
     if ns.is_empty() {
         "base".to_owned()
     } else {

@@ -20,7 +20,7 @@ mod selection;
 mod weights;
 
 pub use candidate::Candidate;
-pub use forward::forward;
+pub use forward::{forward, name_of};
 pub use nuisance::{Nuisance, MU_PINNED};
 pub use score::score_drops_by;
 pub use selection::{misfits, ModelRow, SelectOptions};
