@@ -694,6 +694,14 @@ def parse_seeds(s):
     return [int(x) for x in s.split(",")]
 
 
+def set_reference_truth():
+    """The generator's truth at the planner's reference departures (src/plan/law.rs,
+    REFERENCE_*): what `--truth reference` simulates."""
+    mu = lrg.MU_K
+    lrg.set_truth(mu_s=round(1.1 * mu, 12), v_s=0.01, mu_pos=round(1.025 * mu, 12),
+                  mu_neg=round(0.975 * mu, 12), load_exp=0.9)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--appell", required=True)
@@ -722,10 +730,7 @@ def main(argv=None):
     if args.plan != PLAN_PATTERN:
         work += "_plan" + hashlib.sha256(args.plan.encode()).hexdigest()[:8]
     if args.truth == "reference":
-        # src/plan/law.rs, REFERENCE_*: the departures the planner assumes
-        mu = lrg.MU_K
-        lrg.set_truth(mu_s=round(1.1 * mu, 12), v_s=0.01, mu_pos=round(1.025 * mu, 12),
-                      mu_neg=round(0.975 * mu, 12), load_exp=0.9)
+        set_reference_truth()
         work += "_reftruth"
     os.makedirs(work, exist_ok=True)
     seeds = parse_seeds(args.seeds)

@@ -10,6 +10,7 @@ pub mod criteria;
 pub mod discriminate;
 pub mod law;
 pub mod prior;
+pub mod reach;
 pub mod rig_match;
 pub mod search;
 pub mod spec;
@@ -330,6 +331,13 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
     notes.extend(at_limit.iter().map(|a| at_limit_note(a, aim)));
     if let Some(best) = proposals.first() {
         notes.extend(discriminate::unresolved_notes(&best.separations));
+        // Say once why a stick-slip law stays hidden when the box cannot restart the slider.
+        let stick_slip_hidden = best.separations.iter().any(|s| {
+            s.probability < 0.5 && matches!(s.truth, law::Law::Static | law::Law::Stribeck)
+        });
+        if stick_slip_hidden {
+            notes.extend(reach::no_restart_note(spec));
+        }
     }
     let nearest = (!feasible).then(|| {
         let best = &unranked[0];

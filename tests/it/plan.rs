@@ -596,3 +596,82 @@ fn plan_json_after(plan: &Path, fit: &Path) -> serde_json::Value {
     );
     serde_json::from_slice(&out.stdout).unwrap()
 }
+
+/// `configs/plan_law_<name>.toml` asked to tell static friction from Coulomb's law, mu known
+/// to 2 %, written to a temporary plan file.
+fn static_against_coulomb(name: &str, dir: &Path) -> PathBuf {
+    let text = std::fs::read_to_string(config(&format!("plan_law_{name}.toml")))
+        .unwrap()
+        .replace(
+            "mu_kinetic_sd = 0.04",
+            "mu_kinetic_sd = 0.004\ndiscriminate = [\"coulomb\", \"static\"]",
+        );
+    assert!(text.contains("discriminate"));
+    let path = dir.join(format!("{name}.toml"));
+    std::fs::write(&path, text).unwrap();
+    path
+}
+
+/// The heavy rig's small box cannot restart a stuck slider, and the plan says so with the
+/// pull its most energetic release reaches; the claim is checked against the simulator on
+/// the box's corners (execution errors outward) under static friction 0.26 over kinetic 0.22:
+/// none slips from stick, and none is stuck under a pull above the stated bound. At the
+/// stated angle from rest (plus 2 deg) a slider under Coulomb's mu_kinetic does slide, 2 deg
+/// less it does not. The wide box (releases up to 75 deg from hanging) makes no such claim.
+/// scripts/sweeps/restart_bound_check.py checks the same with the independent generator.
+#[test]
+fn a_box_that_cannot_restart_the_slider_says_so_and_the_simulator_agrees() {
+    let dir = tempfile::tempdir().unwrap();
+    let spec = PlanSpec::from_path(&static_against_coulomb("heavy", dir.path())).unwrap();
+    let report = plan(&spec).unwrap();
+    let note = report
+        .notes
+        .iter()
+        .find(|n| n.starts_with("no release in the box can make a stuck slider slip"))
+        .unwrap_or_else(|| panic!("no restart note: {:#?}", report.notes));
+    let number = |before: &str| -> f64 {
+        let rest = &note[note.find(before).unwrap() + before.len()..];
+        rest.split(' ').next().unwrap().parse().unwrap()
+    };
+    let (bound, angle) = (number("pull at most "), number("rest at least "));
+    assert!(bound < 0.22 && angle > 30.0, "{note}");
+    let r = &spec.release;
+    // Static friction: Coulomb's law with its own coefficient at rest.
+    let mut rig = spec.rig;
+    rig.mu_kinetic = 0.22;
+    rig.mu_static = 0.26;
+    for (i, j, k) in (0..8).map(|c| (c & 1, (c >> 1) & 1, (c >> 2) & 1)) {
+        let sign = |b: usize| if b == 0 { -1.0 } else { 1.0 };
+        let y0 = [
+            r.x,
+            r.theta[i] + sign(i) * r.error[0],
+            r.x_dot[k] + sign(k) * r.error[2],
+            r.theta_dot[j] + sign(j) * r.error[1],
+        ];
+        let run = simulate(&rig, &y0, 2.0, &Options::default(), &Request::default()).unwrap();
+        let slips = run
+            .events
+            .iter()
+            .filter(|e| e.kind == EventKind::Slip)
+            .count();
+        assert_eq!(slips, 0, "corner {y0:?}: {:?}", run.events);
+    }
+    let slides_from_rest = |deg: f64| {
+        let rig = spec.rig; // Coulomb's law at the plan's mu_kinetic
+        let y0 = [0.0, (90.0 - deg).to_radians(), 0.0, 0.0];
+        let run = simulate(&rig, &y0, 2.0, &Options::default(), &Request::default()).unwrap();
+        !run.events.is_empty()
+    };
+    assert!(!slides_from_rest(angle - 2.0), "{note}");
+    assert!(slides_from_rest(angle + 2.0), "{note}");
+    let wide = PlanSpec::from_path(&static_against_coulomb("heavy_wide", dir.path())).unwrap();
+    let report = plan(&wide).unwrap();
+    assert!(
+        !report
+            .notes
+            .iter()
+            .any(|n| n.starts_with("no release in the box")),
+        "{:#?}",
+        report.notes
+    );
+}
