@@ -712,7 +712,7 @@ pub fn unresolved_notes(best: &[Separation]) -> Vec<String> {
 mod tests {
     use super::*;
     use crate::model::FrictionLaw;
-    use crate::plan::law::{LawTable, REFERENCE_SPLIT_FRACTION};
+    use crate::plan::law::{LawError, LawTable, REFERENCE_SPLIT_FRACTION};
     use crate::plan::spec::PlanSpec;
     use std::path::Path;
 
@@ -1024,6 +1024,54 @@ mod tests {
         }
         let coulomb: Vec<_> = errors.iter().filter(|e| e.law == Law::Coulomb).collect();
         assert!(!coulomb.is_empty() && coulomb.iter().all(|e| e.range.is_none()));
+    }
+
+    /// The range over mu brackets each law's errors at mu one sd either side, computed the
+    /// other way round: the errors of the same plan with its mu moved there (the reference
+    /// departures move with it, in proportion), to rounding; a plan with mu given exactly
+    /// gives no range. (On this swing, which slides long either way, mu's own error moves by
+    /// 1 %; on the light rig's planned pushes it moves by half, the sweep's figure.)
+    #[test]
+    fn the_range_over_mu_holds_the_errors_of_plans_at_mu_either_side() {
+        use crate::plan::spec::Uncertain;
+        let laws = [Law::Coulomb, Law::Static, Law::Direction];
+        let at = |mean: f64, sd: f64| {
+            let mut spec = example();
+            spec.rig.mu_kinetic = mean;
+            spec.rig.mu_static = mean;
+            spec.mu_kinetic = Uncertain::Normal { mean, sd };
+            let mut ev = Evaluator::new(&spec);
+            ev.laws = Laws::new(&spec.rig, &laws, 1000.0);
+            let release = [SWING[1], SWING[3], SWING[2]];
+            let mut errors = ev.law_stderr(&release);
+            ev.add_mu_ranges(&release, &mut errors);
+            errors
+        };
+        let (mu, sd) = (example().rig.mu_kinetic, 0.02);
+        let errors = at(mu, sd);
+        let (lower, upper) = (at(mu - sd, 0.0), at(mu + sd, 0.0));
+        assert!(lower.iter().all(|e| e.mu_range.is_none()));
+        for e in &errors {
+            let [lo, hi] = e.mu_range.expect("mu has an sd");
+            let other = |v: &[LawError]| {
+                v.iter()
+                    .find(|o| o.law == e.law && o.param == e.param)
+                    .unwrap()
+                    .stderr
+            };
+            for se in [e.stderr, other(&lower), other(&upper)] {
+                assert!(
+                    lo <= se * (1.0 + 1e-9) && se <= hi * (1.0 + 1e-9),
+                    "{e:?}: {se}"
+                );
+            }
+            let ends = [other(&lower), other(&upper)];
+            assert!(
+                ends.iter().any(|x| (x - lo).abs() <= 1e-9 * lo)
+                    || (e.stderr - lo).abs() <= 1e-9 * lo,
+                "{e:?}: low end {lo} not one of {ends:?}"
+            );
+        }
     }
 
     #[test]

@@ -124,6 +124,12 @@ pub struct LawError {
     /// Smallest and largest predicted standard error over the departures; `None` when the
     /// law's values are given (a plan file's or a fit's), not a reference.
     pub range: Option<[f64; 2]>,
+    /// Smallest and largest predicted standard error with every friction coefficient of the
+    /// law scaled by mu_kinetic one standard deviation lower and higher than the plan's (at
+    /// the same departure): a first release leaves mu known to some per cent, and how long
+    /// the planned release slides, so what it shows, moves with it. `None` when mu is given
+    /// exactly, and on every proposal but a plan's best.
+    pub mu_range: Option<[f64; 2]>,
 }
 
 impl LawError {
@@ -143,6 +149,18 @@ impl LawError {
 /// exponents 0.95-0.6. Sampled, not swept: static friction's errors jump where a slip appears
 /// or goes (between the samples, within a fifth of the range on the example's swing, tested).
 pub const DEPARTURE_SCALES: [f64; 3] = [0.5, 2.0, 4.0];
+
+/// `rig` with every friction coefficient (mu_kinetic, mu_static and the direction law's
+/// splits) multiplied by `factor`: the same law, departing from Coulomb's in the same
+/// proportion, at another mu.
+pub fn scaled_friction(rig: &Rig<f64>, factor: f64) -> Rig<f64> {
+    let mut r = *rig;
+    r.mu_kinetic *= factor;
+    r.mu_static *= factor;
+    r.kinetic_split *= factor;
+    r.static_split *= factor;
+    r
+}
 
 /// The rig under `law` at its reference departure from `base` (whose law's own values are
 /// kept when it is that law: a plan file's or a fit's).

@@ -313,6 +313,12 @@ pub fn plan_with_progress(spec: &PlanSpec, bar: &ProgressBar) -> Result<PlanRepo
     } else {
         proposals.sort_by(|a, b| a.predicted_mu_stderr.total_cmp(&b.predicted_mu_stderr));
     }
+    // The errors' ranges over mu, for the best proposal only (the release a lab makes next):
+    // two predictions per law, a tenth of a law plan's CPU for all three.
+    if let Some(best) = proposals.first_mut() {
+        let release = search::release_values(&best.initial);
+        ev.add_mu_ranges(&release, &mut best.law_stderr);
+    }
     let feasible = !proposals.is_empty();
     let at_limit = proposals
         .first()

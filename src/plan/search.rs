@@ -422,13 +422,12 @@ impl<'a> Evaluator<'a> {
         )
     }
 
-    /// Predicted standard errors of each weighed law's parameters (mu_kinetic and its own,
-    /// at its reference departure, with their range over [`super::law::DEPARTURE_SCALES`])
-    /// from a recording of this release; without laws to weigh, those of the plan's own law
-    /// when it has parameters beyond mu.
-    pub fn law_stderr(&self, p: &ReleaseValues) -> Vec<super::law::LawError> {
-        use super::law::{departure_rig, reference_rig, Law, LawError, DEPARTURE_SCALES};
-        let laws: Vec<(Law, Rig<f64>)> = match &self.laws {
+    /// The laws whose errors a plan predicts, each on its rig: the weighed laws at their
+    /// reference departures (or given values); without laws to weigh, the plan's own law when
+    /// it has parameters beyond mu.
+    fn law_rigs(&self) -> Vec<(super::law::Law, Rig<f64>)> {
+        use super::law::{reference_rig, Law};
+        match &self.laws {
             Some(l) => l.candidates.clone(),
             None => {
                 let own = Law::of_rig(&self.spec.rig);
@@ -437,17 +436,39 @@ impl<'a> Evaluator<'a> {
                 }
                 vec![(own, reference_rig(&self.spec.rig, own))]
             }
-        };
+        }
+    }
+
+    /// One law's predicted standard errors on `rig` from a recording of `y0` (with the
+    /// recording already made, when its release is known, under each law but the one its fit
+    /// chose: that one's mu is the fit's knowledge already).
+    fn law_se(
+        &self,
+        frames: &Frames,
+        y0: &State<f64>,
+        law: super::law::Law,
+        rig: &Rig<f64>,
+    ) -> Option<Vec<(Param, f64)>> {
+        let chosen = super::law::Law::of_rig(&self.spec.rig);
+        let before = self.laws.as_ref().and_then(|l| l.before_release);
+        let before = before.as_ref().filter(|_| law != chosen);
+        self.stderrs_with(frames, rig, y0, before, law.params())
+    }
+
+    /// Predicted standard errors of each weighed law's parameters (mu_kinetic and its own,
+    /// at its reference departure, with their range over [`super::law::DEPARTURE_SCALES`])
+    /// from a recording of this release; without laws to weigh, those of the plan's own law
+    /// when it has parameters beyond mu. The ranges over mu
+    /// ([`super::law::LawError::mu_range`]) are left out: [`Evaluator::add_mu_ranges`] adds
+    /// them to the best proposal a plan reports.
+    pub fn law_stderr(&self, p: &ReleaseValues) -> Vec<super::law::LawError> {
+        use super::law::{departure_rig, Law, LawError, DEPARTURE_SCALES};
         let y0 = self.initial(p);
         let frames = self.all_frames();
         let chosen = Law::of_rig(&self.spec.rig);
-        // The recording already made, when its release is known, under each law but the
-        // one its fit chose (whose mu the fit's knowledge already is).
-        let before = self.laws.as_ref().and_then(|l| l.before_release);
         let mut out = Vec::new();
-        for (law, rig) in laws {
-            let before = before.as_ref().filter(|_| law != chosen);
-            let se = |r: &Rig<f64>| self.stderrs_with(&frames, r, &y0, before, law.params());
+        for (law, rig) in self.law_rigs() {
+            let se = |r: &Rig<f64>| self.law_se(&frames, &y0, law, r);
             let Some(ses) = se(&rig) else {
                 continue;
             };
@@ -464,27 +485,56 @@ impl<'a> Evaluator<'a> {
             };
             for (q, se) in ses {
                 if q == Param::MuKinetic || law.params().contains(&q) {
-                    let range = referenced.then(|| {
-                        others
-                            .iter()
-                            .map(|v| {
-                                v.iter()
-                                    .find(|(p, _)| *p == q)
-                                    .map_or(f64::INFINITY, |(_, s)| *s)
-                            })
-                            .fold([se, se], |[lo, hi], s| [lo.min(s), hi.max(s)])
-                    });
                     out.push(LawError {
                         law,
                         param: q,
                         stderr: se,
-                        range,
+                        range: referenced.then(|| span_of(q, se, &others)),
+                        mu_range: None,
                     });
                 }
             }
         }
         out
     }
+
+    /// Fill in each error's range over mu ([`super::law::LawError::mu_range`]): the law's
+    /// coefficients scaled by mu_kinetic one standard deviation either side of the plan's.
+    /// Two more predictions per law, paid only by the best proposal a plan reports; nothing
+    /// when mu is given exactly.
+    pub fn add_mu_ranges(&self, p: &ReleaseValues, errors: &mut [super::law::LawError]) {
+        let (mu, sd) = self.spec.mu_kinetic.mean_sd();
+        if errors.is_empty() || sd <= 0.0 || mu <= 0.0 {
+            return;
+        }
+        let factors = [((mu - sd) / mu).max(0.0), (mu + sd) / mu];
+        let y0 = self.initial(p);
+        let frames = self.all_frames();
+        for (law, rig) in self.law_rigs() {
+            let at_mu: Vec<Vec<(Param, f64)>> = factors
+                .iter()
+                .map(|&k| {
+                    self.law_se(&frames, &y0, law, &super::law::scaled_friction(&rig, k))
+                        .unwrap_or_default()
+                })
+                .collect();
+            for e in errors.iter_mut().filter(|e| e.law == law) {
+                e.mu_range = Some(span_of(e.param, e.stderr, &at_mu));
+            }
+        }
+    }
+}
+
+/// The smallest and largest of `se` and parameter `q`'s errors in `of` (infinite where one
+/// does not show it).
+fn span_of(q: Param, se: f64, of: &[Vec<(Param, f64)>]) -> [f64; 2] {
+    of.iter()
+        .map(|v| {
+            v.iter()
+                .find(|(p, _)| *p == q)
+                .map_or(f64::INFINITY, |(_, s)| *s)
+        })
+        .fold([se, se], |[lo, hi], s| [lo.min(s), hi.max(s)])
 }
 
 /// A release judged by the search.

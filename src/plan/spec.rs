@@ -337,6 +337,14 @@ impl Uncertain {
         }
     }
 
+    /// The mean and standard deviation (a uniform range's: its width over sqrt(12)).
+    pub fn mean_sd(&self) -> (f64, f64) {
+        match *self {
+            Uncertain::Normal { mean, sd } => (mean, sd),
+            Uncertain::Uniform { lo, hi } => (0.5 * (lo + hi), (hi - lo) / 12f64.sqrt()),
+        }
+    }
+
     /// A plausible span: mean +- 2 sd, or the range.
     pub fn span(&self) -> [f64; 2] {
         match *self {

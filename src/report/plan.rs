@@ -135,17 +135,23 @@ fn law_json(v: &mut Value, p: &Proposal) {
     if !p.law_stderr.is_empty() {
         let mut m = serde_json::Map::new();
         let mut ranges = serde_json::Map::new();
+        let mut mu_ranges = serde_json::Map::new();
         for e in &p.law_stderr {
             let se = m.entry(e.law.name()).or_insert_with(|| json!({}));
             se[e.param.name()] = finite(e.stderr);
-            if let Some([lo, hi]) = e.range {
-                let r = ranges.entry(e.law.name()).or_insert_with(|| json!({}));
-                r[e.param.name()] = json!([finite(lo), finite(hi)]);
+            for (range, into) in [(e.range, &mut ranges), (e.mu_range, &mut mu_ranges)] {
+                if let Some([lo, hi]) = range {
+                    let r = into.entry(e.law.name()).or_insert_with(|| json!({}));
+                    r[e.param.name()] = json!([finite(lo), finite(hi)]);
+                }
             }
         }
         v["predicted_stderr"] = Value::Object(m);
         if !ranges.is_empty() {
             v["predicted_stderr_range"] = Value::Object(ranges);
+        }
+        if !mu_ranges.is_empty() {
+            v["predicted_stderr_mu_range"] = Value::Object(mu_ranges);
         }
     }
 }
@@ -182,7 +188,7 @@ fn law_lines(s: &mut String, p: &Proposal) {
         );
     }
     let mut by_law: Vec<(crate::plan::law::Law, Vec<String>)> = Vec::new();
-    let mut ranged = false;
+    let (mut ranged, mut mu_ranged) = (false, false);
     for e in &p.law_stderr {
         let q = e.param.name();
         let mut text = if e.stderr.is_finite() {
@@ -198,6 +204,17 @@ fn law_lines(s: &mut String, p: &Proposal) {
                 _ => " (not shown at any departure)".to_owned(),
             };
         }
+        if let Some([lo, hi]) = e.mu_range {
+            mu_ranged = true;
+            let shown = |x: f64| {
+                if x.is_finite() {
+                    format!("{x:.2e}")
+                } else {
+                    "not shown".to_owned()
+                }
+            };
+            text += &format!(" [mu +-1 sd: {} to {}]", shown(lo), shown(hi));
+        }
         match by_law.iter_mut().find(|(l, _)| *l == e.law) {
             Some((_, v)) => v.push(text),
             None => by_law.push((e.law, vec![text])),
@@ -212,6 +229,12 @@ fn law_lines(s: &mut String, p: &Proposal) {
         let _ = writeln!(
             s,
             "   (at each law's reference departure; in brackets, from {a} to {b} times it: a law's errors depend on how far it departs, which the release will show)"
+        );
+    }
+    if mu_ranged {
+        let _ = writeln!(
+            s,
+            "   (in square brackets, with mu_kinetic one sd lower and higher: how long the release slides, so what it shows, moves with mu)"
         );
     }
 }
