@@ -96,9 +96,15 @@ pub fn no_restart_note(spec: &PlanSpec) -> Option<String> {
             )
         },
     );
+    // A bound, so rounded up, to three digits: it stays visibly below mu_kinetic.
+    let shown = if pull > 0.0 {
+        let scale = 10f64.powi(2 - pull.log10().floor() as i32);
+        significant((pull * scale).ceil() / scale, 3)
+    } else {
+        "0".to_owned()
+    };
     Some(format!(
-        "no release in the box can make a stuck slider slip: the most energetic one (execution errors included) lets the pendulum pull at most {} of the normal force, below mu_kinetic ({}) and so below any static friction; static friction and a Stribeck hump act only when a stuck slider starts to slip, so no release here shows them{need}",
-        significant(pull, 2),
+        "no release in the box can make a stuck slider slip: the most energetic one (execution errors included) lets the pendulum pull at most {shown} of the normal force, below mu_kinetic ({}) and so below any static friction; static friction and a Stribeck hump act only when a stuck slider starts to slip, so no release here shows them{need}",
         spec.mu_kinetic
     ))
 }

@@ -635,6 +635,13 @@ fn a_box_that_cannot_restart_the_slider_says_so_and_the_simulator_agrees() {
     };
     let (bound, angle) = (number("pull at most "), number("rest at least "));
     assert!(bound < 0.22 && angle > 30.0, "{note}");
+    // The printed bound is the computed one rounded up to three digits.
+    let level = appell::plan::reach::box_level(&spec.rig, &spec.release);
+    let pull = appell::model::regions::largest_stuck_pull(&spec.rig, level).unwrap();
+    assert!(
+        pull <= bound && bound - pull < 1e-3,
+        "{pull} printed as {bound}"
+    );
     let r = &spec.release;
     // Static friction: Coulomb's law with its own coefficient at rest.
     let mut rig = spec.rig;
