@@ -203,8 +203,7 @@ pub fn mu_static_from_onsets(tracks: &Tracks, rig: &Rig<f64>, half_window: usize
             if let Some(j) = onset {
                 let (a0, a1) = (j.saturating_sub(h), (j + h).min(ts.len() - 1));
                 if let Some(a) = quadratic_at(&ts[a0..=a1], &th[a0..=a1], ts[j]) {
-                    let sh = Shorthands::new(rig, a[0], a[1]);
-                    ratios.push(sh.c.abs() / sh.b.abs());
+                    ratios.push(Shorthands::new(rig, a[0], a[1]).pull());
                 }
             }
         }

@@ -55,8 +55,7 @@ pub(super) fn motion(problem: &TrajectoryProblem) -> Result<Motion, FitError> {
                 }
             }
             sticks |= s.mode == Mode::Stick;
-            let sh = Shorthands::at(&problem.rig, &s.state);
-            needed_ratio = needed_ratio.max(sh.c.abs() / sh.b.abs());
+            needed_ratio = needed_ratio.max(Shorthands::at(&problem.rig, &s.state).pull());
         },
     )
     .map_err(|e| FitError::NoStart(e.to_string()))?;

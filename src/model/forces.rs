@@ -95,6 +95,13 @@ impl<T: Scalar> Shorthands<T> {
         mu_static * self.b.abs() - self.c.abs()
     }
 
+    /// The pull |c| / |b|: the friction coefficient a stuck slider needs to stay put
+    /// (infinite where the normal force vanishes).
+    #[inline]
+    pub fn pull(&self) -> T {
+        self.c.abs() / self.b.abs()
+    }
+
     /// Paradox margin D - mu |a|: positive outside the paradox band, where the sliding
     /// equation has exactly one solution.
     #[inline]

@@ -715,8 +715,7 @@ fn level_ratio(rig: &Rig<f64>, level: f64, th: f64) -> f64 {
     if w2 < 0.0 {
         return 0.0;
     }
-    let sh = Shorthands::new(rig, th, w2.sqrt());
-    sh.c.abs() / sh.b.abs()
+    Shorthands::new(rig, th, w2.sqrt()).pull()
 }
 
 /// The largest friction ratio along one energy level: a scan of 2048 angles and a
@@ -731,10 +730,7 @@ fn level_peak_ratio(rig: &Rig<f64>, level: f64, enough: f64) -> f64 {
     let turning = if sin_turn.abs() <= 1.0 {
         let th = sin_turn.asin();
         [th, PI - th]
-            .map(|th| {
-                let sh = Shorthands::new(rig, th, 0.0);
-                sh.c.abs() / sh.b.abs()
-            })
+            .map(|th| Shorthands::new(rig, th, 0.0).pull())
             .into_iter()
             .fold(0.0, f64::max)
     } else {
@@ -813,16 +809,17 @@ pub fn largest_stuck_pull(rig: &Rig<f64>, level: f64) -> Option<f64> {
     let mut peak = top;
     for k in 0..n {
         let th = k as f64 * std::f64::consts::TAU / n as f64;
-        if level + 2.0 * g_l * th.sine() < 0.0 {
+        let w2 = level + 2.0 * g_l * th.sine();
+        if w2 < 0.0 {
             continue; // no level up to `level` reaches this angle
         }
         let rest = Shorthands::new(rig, th, 0.0);
-        let fast = Shorthands::new(rig, th, (level + 2.0 * g_l * th.sine()).sqrt());
+        let fast = Shorthands::new(rig, th, w2.sqrt());
         if rest.b.signum() != fast.b.signum() || rest.b == 0.0 {
             return Some(f64::INFINITY);
         }
         // The turning points: a level below `level` whose bob is at rest here.
-        peak = peak.max(rest.c.abs() / rest.b.abs());
+        peak = peak.max(rest.pull());
     }
     Some(peak)
 }

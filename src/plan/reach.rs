@@ -9,8 +9,8 @@ use crate::model::regions::largest_stuck_pull;
 use crate::model::{energy, Rig};
 use crate::numbers::significant;
 
-/// The highest energy level ([`crate::model::regions::stuck_level`] units, w^2 - 2 (g/l) sin(theta)) of any release
-/// in the box, execution errors included. The energy is convex in the two velocities, so their
+/// The highest energy level ([`crate::model::regions::stuck_level`] units,
+/// w^2 - 2 (g/l) sin(theta)) of any release in the box, execution errors included. The energy is convex in the two velocities, so their
 /// corners bound it; the angle is scanned (257 points and the ends).
 pub fn box_level(rig: &Rig<f64>, release: &Release) -> f64 {
     let [e_th, e_w, e_v] = release.error;
